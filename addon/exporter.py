@@ -1,0 +1,364 @@
+"""Blender scene -> Specula core arrays, in one pass over the depsgraph.
+
+`export(depsgraph)` walks `depsgraph.object_instances` once. Each unique evaluated geometry
+(modifiers and geometry nodes applied) is read once with `foreach_get` into numpy and
+shared; every instance (the object itself, collection, particle and geometry-node
+instances) only records a copy of its world matrix and its material slots. `to_core`
+then applies each instance's matrix to the shared arrays in numpy and feeds the core's
+`SceneBuilder`. The result of `export` holds no bpy references, so it outlives the
+depsgraph and needs no core to inspect (the tests rely on that).
+"""
+
+from __future__ import annotations
+
+
+from dataclasses import dataclass, field
+
+import bpy
+import numpy as np
+
+from . import materials
+
+# Object types `Object.to_mesh()` can turn into triangles.
+GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
+# Types with geometry the core cannot render yet; each gets a warning, not silence.
+UNSUPPORTED_TYPES = {"CURVES": "hair curves", "POINTCLOUD": "point cloud", "VOLUME": "volume",
+                     "GREASEPENCIL": "grease pencil"}
+# Cycles writes this depth where a camera ray hits nothing; so do we.
+BACKGROUND_DEPTH = 1e10
+
+
+@dataclass
+class MeshData:
+    """One unique evaluated geometry, in object space.
+
+    vertices : (n, 3) float64
+    triangles : (t, 3) int64 vertex indices
+    material_index : (t,) int32 slot index
+    normals : (t, 3, 3) float64 per-corner shading normals (smooth, flat or custom)
+    smooth : (t,) bool, whether the triangle interpolates `normals`
+    material_lut : (s,) int32 exported material per mesh material slot (used when the
+        object has no slots, e.g. materials set by geometry nodes)
+    """
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    material_index: np.ndarray
+    normals: np.ndarray
+    smooth: np.ndarray
+    material_lut: np.ndarray
+
+
+@dataclass
+class Instance:
+    """One placement of a MeshData: its name, key, world matrix (4, 4) and slot table."""
+
+    name: str
+    mesh_key: tuple
+    matrix_world: np.ndarray
+    material_lut: np.ndarray
+    is_instance: bool = False
+
+
+@dataclass
+class ExportedScene:
+    meshes: dict = field(default_factory=dict)
+    instances: list = field(default_factory=list)
+    materials: list = field(default_factory=list)
+    camera: dict = field(default_factory=dict)
+    world_colour: tuple = (0.0, 0.0, 0.0)
+    warnings: list = field(default_factory=list)
+
+    @property
+    def num_triangles(self):
+        return sum(len(self.meshes[i.mesh_key].triangles) for i in self.instances)
+
+
+class ExportError(RuntimeError):
+    """The scene cannot be rendered at all (e.g. no camera); the message says why."""
+
+
+# ---------------------------------------------------------------------------------------
+# Meshes
+
+
+def _corner_normals(mesh, n_loops):
+    """(n_loops, 3) float32 corner normals, whichever API this Blender has."""
+    cn = np.zeros(n_loops * 3, np.float32)
+    if hasattr(mesh, "corner_normals"):  # 4.1+: always up to date, custom normals included
+        mesh.corner_normals.foreach_get("vector", cn)
+    else:  # 4.0 and older: split normals must be computed first
+        if hasattr(mesh, "calc_normals_split"):
+            mesh.calc_normals_split()
+        mesh.loops.foreach_get("normal", cn)
+    return cn.reshape(-1, 3)
+
+
+def read_mesh(mesh, material_lut) -> MeshData:
+    """Read a bpy Mesh into numpy with foreach_get (no per-triangle Python)."""
+    n_vert, n_loops = len(mesh.vertices), len(mesh.loops)
+    co = np.zeros(n_vert * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    tris = mesh.loop_triangles
+    t = len(tris)
+    tri_verts = np.zeros(t * 3, np.int32)
+    tri_loops = np.zeros(t * 3, np.int32)
+    mat_index = np.zeros(t, np.int32)
+    smooth = np.zeros(t, bool)
+    tris.foreach_get("vertices", tri_verts)
+    tris.foreach_get("loops", tri_loops)
+    tris.foreach_get("material_index", mat_index)
+    tris.foreach_get("use_smooth", smooth)
+    normals = _corner_normals(mesh, n_loops)[tri_loops.reshape(-1, 3)]
+    # Custom normals apply to flat faces too (4.1+ keeps them regardless of sharp_face).
+    if getattr(mesh, "has_custom_normals", False):
+        smooth[:] = True
+    return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
+                    mat_index, normals.astype(np.float64), smooth, material_lut)
+
+
+def to_world(mesh: MeshData, matrix_world):
+    """World-space (vertices (n, 3), triangles (t, 3), normals (t, 3, 3)) of one instance.
+
+    Normals use the inverse transpose; a mirroring matrix (det < 0) flips the winding so
+    the geometric normal keeps agreeing with the shading normals, as Cycles does.
+    """
+    m = np.asarray(matrix_world, dtype=np.float64)
+    linear = m[:3, :3]
+    vertices = mesh.vertices @ linear.T + m[:3, 3]
+    normals = mesh.normals @ np.linalg.pinv(linear)  # row vectors: (M^-T n)^T = n^T M^-1
+    triangles = mesh.triangles
+    if np.linalg.det(linear) < 0:
+        triangles = triangles[:, [0, 2, 1]]
+        normals = normals[:, [0, 2, 1]]
+    return vertices, triangles, normals
+
+
+# ---------------------------------------------------------------------------------------
+# Exporter
+
+
+class _Exporter:
+    def __init__(self, depsgraph):
+        self.depsgraph = depsgraph
+        self.scene = depsgraph.scene
+        self.out = ExportedScene()
+        self._material_index = {}  # material pointer (or None) -> index in out.materials
+        self._warned = set()
+
+    def warn(self, text):
+        if text not in self._warned:
+            self._warned.add(text)
+            self.out.warnings.append(text)
+
+    def material(self, mat):
+        key = None if mat is None else mat.original.as_pointer()
+        index = self._material_index.get(key)
+        if index is None:
+            spec, warnings = materials.convert(mat)
+            for w in warnings:
+                self.warn(w)
+            index = self._material_index[key] = len(self.out.materials)
+            self.out.materials.append(spec)
+        return index
+
+    def slot_lut(self, slots):
+        return np.array([self.material(s) for s in slots], np.int32)
+
+    def run(self):
+        for inst in self.depsgraph.object_instances:
+            obj = inst.object
+            if obj.type in GEOMETRY_TYPES:
+                self.geometry(inst, obj)
+            elif obj.type == "LIGHT":
+                self.warn(f"light '{obj.name}' ({obj.data.type}) not supported yet, skipped")
+            elif obj.type in UNSUPPORTED_TYPES:
+                self.warn(f"object '{obj.name}' ({UNSUPPORTED_TYPES[obj.type]}) not supported "
+                          f"yet, skipped")
+        self.out.camera = camera_settings(self.scene, self.depsgraph, self.warn)
+        self.out.world_colour = world_colour(self.scene.world, self.warn)
+        return self.out
+
+    def geometry(self, inst, obj):
+        # The render depsgraph already drops hide_render objects; a viewport depsgraph (the
+        # tests, or a future viewport render) does not, so check the original object too.
+        if not inst.is_instance and (obj.original.hide_render or not inst.show_self):
+            return
+        if inst.is_instance and not inst.show_self:
+            return
+        key = (obj.type, obj.data.as_pointer() if obj.data is not None else 0,
+               0 if obj.type == "MESH" else obj.original.as_pointer())
+        mesh_data = self.out.meshes.get(key)
+        if mesh_data is None:
+            mesh_data = self.read(obj, key)
+            if mesh_data is None:
+                return
+        if len(mesh_data.triangles) == 0:
+            return
+        lut = self.slot_lut(s.material for s in obj.material_slots)
+        if len(lut) == 0:
+            lut = mesh_data.material_lut
+        if len(lut) == 0:
+            lut = np.array([self.material(None)], np.int32)
+        name = obj.name if not inst.is_instance or inst.parent is None else \
+            f"{inst.parent.name}/{obj.name}"
+        self.out.instances.append(Instance(name, key, np.array(inst.matrix_world.copy()), lut,
+                                           bool(inst.is_instance)))
+
+    def read(self, obj, key):
+        try:
+            mesh = obj.to_mesh()
+        except RuntimeError as exc:
+            self.warn(f"object '{obj.name}': could not be converted to a mesh ({exc}), skipped")
+            return None
+        try:
+            if mesh is None:
+                data = MeshData(np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32),
+                                np.zeros((0, 3, 3)), np.zeros(0, bool), np.zeros(0, np.int32))
+            else:
+                data = read_mesh(mesh, self.slot_lut(mesh.materials))
+        finally:
+            obj.to_mesh_clear()
+        self.out.meshes[key] = data
+        return data
+
+
+def export(depsgraph) -> ExportedScene:
+    """Read the evaluated scene into an `ExportedScene` (raises ExportError if unrenderable)."""
+    return _Exporter(depsgraph).run()
+
+
+# ---------------------------------------------------------------------------------------
+# Camera and world
+
+
+def focus_distance(cam_obj, dof, depsgraph=None):
+    """Cycles' focal distance: along the view axis to the focus object, else the field."""
+    target = dof.focus_object
+    if target is None:
+        return float(dof.focus_distance)
+    if depsgraph is not None:
+        target = target.evaluated_get(depsgraph)
+    m = np.array(target.matrix_world)
+    subtarget = getattr(dof, "focus_subtarget", "")
+    if subtarget and target.type == "ARMATURE" and target.pose is not None:
+        bone = target.pose.bones.get(subtarget)
+        if bone is not None:
+            m = m @ np.array(bone.matrix)
+    cam_m = np.array(cam_obj.matrix_world)
+    view_dir = cam_m[:3, 2] / max(np.linalg.norm(cam_m[:3, 2]), 1e-300)
+    return float(abs(np.dot(view_dir, cam_m[:3, 3] - m[:3, 3])))
+
+
+def camera_settings(scene, depsgraph, warn) -> dict:
+    """Keyword arguments of the core's `Camera` for `scene.camera`."""
+    cam_obj = scene.camera
+    if cam_obj is None:
+        raise ExportError(f"scene '{scene.name}' has no active camera")
+    if cam_obj.type != "CAMERA":
+        raise ExportError(f"the active camera '{cam_obj.name}' is a {cam_obj.type}, not a camera")
+    cam_obj = cam_obj.evaluated_get(depsgraph)
+    cam = cam_obj.data
+    cam_type = cam.type
+    if cam_type not in ("PERSP", "ORTHO"):
+        warn(f"camera '{cam_obj.name}': {cam_type} cameras are not supported; rendered as "
+             f"perspective")
+        cam_type = "PERSP"
+    dof = cam.dof
+    render = scene.render
+    return dict(
+        world_from_camera=np.array(cam_obj.matrix_world), type=cam_type, lens_mm=float(cam.lens),
+        ortho_scale=float(cam.ortho_scale), sensor_width=float(cam.sensor_width),
+        sensor_height=float(cam.sensor_height), sensor_fit=cam.sensor_fit,
+        shift_x=float(cam.shift_x), shift_y=float(cam.shift_y),
+        clip_start=float(cam.clip_start), clip_end=float(cam.clip_end),
+        use_dof=bool(dof.use_dof), fstop=float(dof.aperture_fstop),
+        focus_distance=focus_distance(cam_obj, dof, depsgraph),
+        blades=int(dof.aperture_blades), rotation=float(dof.aperture_rotation),
+        ratio=float(dof.aperture_ratio), pixel_aspect_x=float(render.pixel_aspect_x),
+        pixel_aspect_y=float(render.pixel_aspect_y))
+
+
+def _uses_nodes(idblock):
+    # 5.0 always uses the node tree (use_nodes is deprecated there).
+    return idblock.node_tree is not None and (bpy.app.version >= (5, 0) or idblock.use_nodes)
+
+
+def world_colour(world, warn) -> tuple:
+    """Background radiance colour x strength; black without a world."""
+    if world is None:
+        return (0.0, 0.0, 0.0)
+    flat = tuple(float(c) for c in world.color[:3])
+    if not _uses_nodes(world):
+        return flat
+    out = world.node_tree.get_output_node('CYCLES')
+    if out is None:
+        warn(f"world '{world.name}': no active World Output node for Cycles; using its "
+             f"viewport colour")
+        return flat
+    surface = out.inputs.get("Surface")
+    if surface is None or not surface.is_linked:
+        return (0.0, 0.0, 0.0)  # Cycles renders an unlinked world black too
+    node = surface.links[0].from_node
+    if node.bl_idname != "ShaderNodeBackground":
+        warn(f"world '{world.name}': node '{node.name}' is not supported; using its viewport "
+             f"colour")
+        return flat
+    for sock in ("Color", "Strength"):
+        if node.inputs[sock].is_linked:
+            warn(f"world '{world.name}': node '{node.name}' input '{sock}' is driven by another "
+                 f"node, which is not supported; using the input's own value")
+    strength = float(node.inputs["Strength"].default_value)
+    return tuple(strength * float(c) for c in node.inputs["Color"].default_value[:3])
+
+
+# ---------------------------------------------------------------------------------------
+# Core objects
+
+
+def render_settings_kwargs(scene, width, height, samples=None):
+    """Keyword arguments of the core's `RenderSettings` from `scene.specula`."""
+    s = scene.specula
+    return dict(width=int(width), height=int(height),
+                samples=int(samples if samples is not None else s.samples),
+                time_limit=float(s.time_limit), target_error=float(s.target_error),
+                max_bounces=int(s.max_bounces), seed=int(s.seed), threads=int(s.threads),
+                fresnel=s.fresnel.lower(), filter_type=s.filter_type,
+                filter_width=float(s.filter_width))
+
+
+def resolution(scene):
+    """Render size in pixels, resolution_percentage applied as Blender does."""
+    r = scene.render
+    pct = r.resolution_percentage / 100.0
+    return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
+
+
+def to_core(exported: ExportedScene, core):
+    """Build the core's `Scene`; returns (scene, builder warnings)."""
+    builder = core.SceneBuilder()
+    for spec in exported.materials:
+        builder.add_material(spec.to_core(core))
+    for inst in exported.instances:
+        mesh = exported.meshes[inst.mesh_key]
+        vertices, triangles, normals = to_world(mesh, inst.matrix_world)
+        lut = inst.material_lut
+        # Blender clamps out-of-range material indices to the last slot.
+        mat_index = lut[np.clip(mesh.material_index, 0, len(lut) - 1)]
+        builder.add_mesh(inst.name, vertices, triangles, mat_index, corner_normals=normals,
+                         smooth=mesh.smooth)
+    scene = builder.build(core.Camera(**exported.camera), core.World(exported.world_colour))
+    return scene, list(builder.warnings)
+
+
+
+
+classes = ()
+
+
+def register():
+    pass
+
+
+def unregister():
+    pass

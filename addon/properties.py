@@ -1,0 +1,77 @@
+"""Specula's settings: one PropertyGroup per data type, stored in the .blend file."""
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+FRESNEL_ITEMS = (
+    ("EXACT", "Exact", "Exact unpolarised dielectric Fresnel, as Cycles' Glass BSDF uses"),
+    ("SCHLICK", "Schlick", "Schlick's approximation, as the course project used"),
+)
+
+FILTER_ITEMS = (
+    ("BLACKMAN_HARRIS", "Blackman-Harris", "Blackman-Harris window (Cycles' default)"),
+    ("BOX", "Box", "Box filter: each pixel averages its own square"),
+    ("GAUSSIAN", "Gaussian", "Gaussian filter, truncated at 1.5 x width"),
+)
+
+
+class SpeculaSceneSettings(bpy.types.PropertyGroup):
+    """Per-scene render settings, `scene.specula`."""
+
+    samples: IntProperty(
+        name="Samples", description="Samples per pixel to render (an upper bound when a time "
+        "limit or target error stops the render first)", default=64, min=1, max=1 << 20,
+        soft_max=4096)
+    time_limit: FloatProperty(
+        name="Time Limit", description="Stop after this many seconds (0 for no limit)",
+        default=0.0, min=0.0, max=86400.0 * 7, soft_max=3600.0, subtype='TIME_ABSOLUTE',
+        unit='TIME_ABSOLUTE')
+    target_error: FloatProperty(
+        name="Target Error", description="Stop once the estimated relative RMS error of the "
+        "image falls below this (0 to always render every sample)", default=0.0, min=0.0,
+        max=1.0, soft_max=0.2, precision=3, subtype='FACTOR')
+    max_bounces: IntProperty(
+        name="Max Bounces", description="Total bounces a path may take, counted as Cycles "
+        "does (0 shows direct lighting only)", default=12, min=0, max=1024, soft_max=128)
+    seed: IntProperty(
+        name="Seed", description="Seed of the sample sequence; the same seed renders the "
+        "same image", default=0, min=0, max=(1 << 31) - 1)
+    threads: IntProperty(
+        name="Threads", description="Worker threads (0 uses every core)", default=0, min=0,
+        max=1024, soft_max=64)
+    fresnel: EnumProperty(
+        name="Fresnel", description="Fresnel model for glass", items=FRESNEL_ITEMS,
+        default="EXACT")
+    filter_type: EnumProperty(
+        name="Pixel Filter", description="Pixel reconstruction filter, importance-sampled as "
+        "Cycles does", items=FILTER_ITEMS, default="BLACKMAN_HARRIS")
+    filter_width: FloatProperty(
+        name="Filter Width", description="Pixel filter width in pixels", default=1.5,
+        min=0.01, max=10.0, soft_max=3.0, subtype='PIXEL')
+
+
+class SpeculaViewLayerSettings(bpy.types.PropertyGroup):
+    """Per-view-layer pass settings, `view_layer.specula`."""
+
+    use_pass_error: BoolProperty(
+        name="Estimated Error", description="Write the 'Specula Error' pass: each pixel's "
+        "estimated standard error of luminance", default=True)
+
+
+classes = (SpeculaSceneSettings, SpeculaViewLayerSettings)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.specula = PointerProperty(
+        type=SpeculaSceneSettings, name="Specula", description="Specula render settings")
+    bpy.types.ViewLayer.specula = PointerProperty(
+        type=SpeculaViewLayerSettings, name="Specula", description="Specula pass settings")
+
+
+def unregister():
+    del bpy.types.ViewLayer.specula
+    del bpy.types.Scene.specula
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

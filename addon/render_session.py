@@ -1,0 +1,140 @@
+"""One render in Blender: export, run the core progressively, write passes back.
+
+`RenderSession` does the work behind `SpeculaRenderEngine`'s callbacks. Errors never
+escape into Blender's UI as a traceback: they end the render with `report({'ERROR'})` and
+`error_set`, keeping whatever passes were already written.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+
+import numpy as np
+
+from . import core, exporter
+
+ERROR_PASS = "Specula Error"
+# The summary of the most recent render, for the command line's JSON line.
+last_summary: dict = {}
+
+
+def _stats(samples, total, seconds, rel):
+    err = "-" if rel is None or not np.isfinite(rel) else f"{100.0 * rel:.2f}%"
+    return f"Sample {samples}/{total} | Time {seconds:.1f} s | Est. error {err}"
+
+
+class RenderSession:
+    def __init__(self, engine):
+        self.engine = engine
+
+    # -- Passes --------------------------------------------------------------------------
+
+    def update_render_passes(self, scene, view_layer):
+        """Tell Blender (and the compositor) which passes a render will produce."""
+        if scene is None or view_layer is None:
+            return
+        engine = self.engine
+        engine.register_pass(scene, view_layer, "Combined", 4, "RGBA", 'COLOR')
+        if view_layer.use_pass_z:
+            engine.register_pass(scene, view_layer, "Depth", 1, "Z", 'VALUE')
+        if view_layer.use_pass_normal:
+            engine.register_pass(scene, view_layer, "Normal", 3, "XYZ", 'VECTOR')
+        settings = getattr(view_layer, "specula", None)
+        if settings is None or settings.use_pass_error:
+            engine.register_pass(scene, view_layer, ERROR_PASS, 1, "X", 'VALUE')
+
+    def _write(self, layer, p):
+        """Copy one core Pass into the result layer's passes (foreach_set, no lists)."""
+        passes = layer.passes
+        passes["Combined"].rect.foreach_set(np.ascontiguousarray(p.combined, np.float32)
+                                            .reshape(-1))
+        depth = passes.get("Depth")
+        if depth is not None:
+            d = np.where(np.isfinite(p.depth), p.depth, exporter.BACKGROUND_DEPTH)
+            depth.rect.foreach_set(d.astype(np.float32).reshape(-1))
+        normal = passes.get("Normal")
+        if normal is not None:
+            normal.rect.foreach_set(np.nan_to_num(p.normal).astype(np.float32).reshape(-1))
+        err = passes.get(ERROR_PASS)
+        if err is not None:
+            err.rect.foreach_set(np.nan_to_num(p.error).astype(np.float32).reshape(-1))
+
+    # -- Render --------------------------------------------------------------------------
+
+    def fail(self, message):
+        global last_summary
+        last_summary = {"engine": "SPECULA", "error": message}
+        self.engine.report({'ERROR'}, message)
+        self.engine.error_set(message)
+
+    def render(self, depsgraph):
+        global last_summary
+        engine = self.engine
+        scene = depsgraph.scene
+        width, height = engine.resolution_x, engine.resolution_y
+        engine.update_stats("", "Specula | Exporting scene")
+        try:
+            specula = core.load()
+            exported = exporter.export(depsgraph)
+            core_scene, builder_warnings = exporter.to_core(exported, specula)
+            settings = specula.RenderSettings(**exporter.render_settings_kwargs(
+                scene, width, height))
+            settings.validate()
+        except (ImportError, exporter.ExportError, ValueError) as exc:
+            self.fail(f"Specula: {exc}")
+            return
+        except Exception as exc:  # noqa: BLE001 - never a traceback dialog
+            traceback.print_exc()
+            self.fail(f"Specula: export failed: {type(exc).__name__}: {exc}")
+            return
+        for warning in exported.warnings + builder_warnings:
+            engine.report({'WARNING'}, f"Specula: {warning}")
+
+        result = engine.begin_result(0, 0, width, height)
+        layer = result.layers[0]
+        total = settings.samples
+
+        def on_pass(p):
+            self._write(layer, p)
+            engine.update_result(result)
+            engine.update_progress(float(min(p.progress, 1.0)))
+            stats = _stats(p.samples, total, p.seconds, p.relative_error)
+            engine.update_stats("", f"Specula | {stats}")
+
+        t0 = time.perf_counter()
+        try:
+            out = specula.render(core_scene, settings, on_pass=on_pass,
+                                 should_stop=engine.test_break)
+        except Exception as exc:  # noqa: BLE001 - keep the partial image, report, no dialog
+            traceback.print_exc()
+            engine.end_result(result)
+            self.fail(f"Specula: render failed: {type(exc).__name__}: {exc}")
+            return
+        self._write(layer, out)
+        engine.end_result(result)
+        for warning in out.warnings or []:
+            if warning not in builder_warnings:
+                engine.report({'WARNING'}, f"Specula: {warning}")
+        plan = out.plan
+        last_summary = {
+            "engine": "SPECULA", "samples": int(out.samples), "seconds": float(out.seconds),
+            "relative_error": float(out.relative_error),
+            "stop_reason": out.stop_reason, "cancelled": bool(out.cancelled),
+            "plan": plan.as_dict() if hasattr(plan, "as_dict") else str(plan),
+            "triangles": int(core_scene.num_triangles),
+            "wall_seconds": time.perf_counter() - t0,
+        }
+        stats = _stats(out.samples, total, out.seconds, out.relative_error)
+        engine.update_stats("", f"Specula | {stats} | {out.stop_reason}")
+
+
+classes = ()
+
+
+def register():
+    pass
+
+
+def unregister():
+    pass

@@ -1,0 +1,10 @@
+"""Specula's rendering core: a wavefront path tracer on numpy and embreex.
+
+The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then call
+`render(scene, settings, on_pass=..., should_stop=...)`.
+"""
+
+from .scene import (Camera, Material, Materials, RenderSettings, Scene, SceneBuilder,  # noqa: F401
+                    World)
+from .render import Pass, RenderResult, render  # noqa: F401
+from .plan import Plan, make_plan  # noqa: F401

@@ -1,0 +1,142 @@
+"""Film: the pixel filter and the per-pixel running statistics.
+
+Cycles importance-samples its pixel filter instead of splatting: a sample's raster
+offset is drawn from the filter's density and the sample counts, with weight 1, in the
+pixel it was generated for. The pixel value is the mean of its samples, so every pixel
+carries a running mean and variance (Welford) from which the per-pixel standard error
+and the image's estimated relative error follow.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Rec.709 luminance weights, for the error estimate.
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+# Depth written where a camera ray escapes: finite, so no pass ever holds inf.
+BACKGROUND_DEPTH = 1e10
+_TABLE_SIZE = 1024
+
+
+class PixelFilter:
+    """A separable pixel filter sampled through its inverse CDF (Cycles' filter table).
+
+    kind : "BLACKMAN_HARRIS" (support +-width, Cycles doubles the width internally),
+    "BOX" (support +-width/2) or "GAUSSIAN" (sigma width/4, truncated at +-1.5 width).
+    `sample(u)` maps u (n, 2) in [0,1) to raster offsets from the pixel centre, (n, 2).
+    """
+
+    def __init__(self, kind: str = "BLACKMAN_HARRIS", width: float = 1.5):
+        self.kind, self.width = kind, float(width)
+        self.radius = {"BLACKMAN_HARRIS": self.width, "BOX": 0.5 * self.width,
+                       "GAUSSIAN": 1.5 * self.width}[kind]
+        x = np.linspace(-self.radius, self.radius, 8 * _TABLE_SIZE + 1)
+        pdf = self.density(x)
+        cdf = np.concatenate([[0.0], np.cumsum(0.5 * (pdf[1:] + pdf[:-1]) * np.diff(x))])
+        cdf /= cdf[-1]
+        # Inverse-CDF table, symmetric about 0 like Cycles' 1024-entry table.
+        self._u = np.linspace(0.0, 1.0, _TABLE_SIZE)
+        self._x = np.interp(self._u, cdf, x)
+        self._x = 0.5 * (self._x - self._x[::-1])
+
+    def density(self, d: np.ndarray) -> np.ndarray:
+        """Unnormalised 1D filter density at offset d from the pixel centre."""
+        d = np.asarray(d, np.float64)
+        inside = np.abs(d) <= self.radius
+        if self.kind == "BOX":
+            return inside.astype(np.float64)
+        if self.kind == "GAUSSIAN":
+            return np.where(inside, np.exp(-8.0 * d * d / (self.width * self.width)), 0.0)
+        phi = 2.0 * np.pi * (d / (2.0 * self.width) + 0.5)
+        bh = 0.35875 - 0.48829 * np.cos(phi) + 0.14128 * np.cos(2 * phi) - 0.01168 * np.cos(3 * phi)
+        return np.where(inside, np.maximum(bh, 0.0), 0.0)
+
+    def sample(self, u: np.ndarray) -> np.ndarray:
+        return np.interp(u, self._u, self._x)
+
+
+class Film:
+    """Per-pixel running mean and variance of radiance, plus Depth and Normal passes.
+
+    Pixels are indexed row-major from the bottom row (Blender's order): index = y * W + x.
+    `add` stores one pass's samples; `end_pass` folds them into the statistics.
+    """
+
+    def __init__(self, width: int, height: int):
+        self.width, self.height = width, height
+        n = width * height
+        self.count = np.zeros(n, np.int32)
+        self.mean = np.zeros((n, 3), np.float64)
+        self.m2 = np.zeros(n, np.float64)  # sum of squared deviations of luminance
+        self.depth = np.zeros(n, np.float32)
+        self.normal = np.zeros((n, 3), np.float32)
+        self._pass_l = np.zeros((n, 3), np.float64)
+        self._pass_depth = np.full(n, BACKGROUND_DEPTH, np.float32)
+        self._pass_normal = np.zeros((n, 3), np.float32)
+        self._pass_valid = np.zeros(n, bool)
+        self.rejected: list[str] = []
+
+    def add(self, pixels, radiance, depth, normal, rejected=None) -> None:
+        """Store one sample per pixel in `pixels` (n,) of radiance (n, 3) and first-hit
+        depth (n,) and normal (n, 3). Samples that are not finite are left out and
+        reported (the integrator names the stage in `rejected`)."""
+        ok = np.all(np.isfinite(radiance), axis=1)
+        self._pass_l[pixels] = radiance
+        self._pass_depth[pixels] = depth
+        self._pass_normal[pixels] = normal
+        self._pass_valid[pixels] = ok
+        if rejected:
+            self.rejected.extend(rejected)
+
+    def end_pass(self) -> None:
+        v = self._pass_valid
+        self.count += v
+        n = np.maximum(self.count, 1)[:, None]
+        delta = np.where(v[:, None], self._pass_l - self.mean, 0.0)
+        self.mean += delta / n
+        y_delta = delta @ LUMINANCE
+        y_after = np.where(v, (self._pass_l - self.mean) @ LUMINANCE, 0.0)
+        self.m2 += y_delta * y_after
+        w = (v / n[:, 0]).astype(np.float32)
+        self.depth += w * (self._pass_depth - self.depth)
+        self.normal += w[:, None] * (self._pass_normal - self.normal)
+        self._pass_valid[:] = False
+
+    def check_finite(self, sample: int) -> None:
+        """Raise if any pass holds NaN or inf, naming the first bad pixel."""
+        for name, arr in (("combined", self.mean), ("depth", self.depth),
+                          ("normal", self.normal), ("error", self.m2)):
+            bad = ~np.isfinite(arr.reshape(len(self.count), -1)).all(axis=1)
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise FloatingPointError(
+                    f"non-finite value in the {name} pass at pixel (x={i % self.width}, "
+                    f"y={i // self.width}) after sample {sample}")
+
+    def pixel_error(self) -> np.ndarray:
+        """(n,) estimated standard error of each pixel's mean luminance."""
+        n = self.count.astype(np.float64)
+        var_mean = np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), 0.0)
+        return np.sqrt(np.maximum(var_mean, 0.0))
+
+    def relative_error(self) -> float:
+        """Estimated relative RMS error of the image: RMS standard error / mean luminance."""
+        if self.count.max(initial=0) < 2:
+            return float("inf")
+        err = self.pixel_error()
+        mean_y = float(np.mean(self.mean @ LUMINANCE))
+        if mean_y <= 0:
+            return 0.0
+        return float(np.sqrt(np.mean(err * err)) / mean_y)
+
+    def snapshot(self, samples: int, seconds: float, rel: float, progress: float):
+        from .render import Pass
+
+        h, w = self.height, self.width
+        rgba = np.ones((h, w, 4), np.float32)
+        rgba[..., :3] = self.mean.reshape(h, w, 3)
+        return Pass(combined=rgba, depth=self.depth.reshape(h, w).copy(),
+                    normal=self.normal.reshape(h, w, 3).copy(),
+                    error=self.pixel_error().astype(np.float32).reshape(h, w),
+                    samples=samples, seconds=seconds,
+                    relative_error=rel if np.isfinite(rel) else -1.0, progress=min(progress, 1.0))

@@ -1,0 +1,85 @@
+"""The render plan: which stages a scene needs, derived before rendering.
+
+The integrator consults the plan and skips whatever a scene does not use: no lens
+sampling without depth of field, no glass code without glass, no light sampling
+without emitters, no normal interpolation for flat meshes, and so on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .scene import DIFFUSE, GLASS, KIND_NAMES, METAL, MIRROR, NONE, RenderSettings, Scene
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Features present in a scene; each flag gates a stage of the integrator."""
+
+    diffuse: bool
+    mirror: bool
+    metal: bool
+    glass: bool
+    absorber: bool
+    emitters: bool
+    num_emitters: int
+    dof: bool
+    polygon_aperture: bool
+    shading_normals: bool
+    world_light: bool
+    fresnel: str
+    max_bounces: int
+    triangles: int
+
+    @property
+    def light_sampling(self) -> bool:
+        """Next-event estimation runs only where a diffuse surface can see an emitter."""
+        return self.emitters and self.diffuse
+
+    def stages(self) -> list[str]:
+        s = ["generate camera rays"]
+        if self.dof:
+            s.append("sample lens (%s)" % ("polygon" if self.polygon_aperture else "disk"))
+        s.append("intersect")
+        s.append("handle escaped rays" + (" (world colour)" if self.world_light else " (black)"))
+        if self.shading_normals:
+            s.append("interpolate shading normals")
+        if self.emitters:
+            s.append("handle emission")
+        if self.light_sampling:
+            s += ["sample light", "trace shadow rays"]
+        kinds = [n for n, f in (("diffuse", self.diffuse), ("mirror", self.mirror),
+                                ("metal", self.metal), ("glass", self.glass)) if f]
+        if kinds:
+            s.append("sample BSDF (%s)" % ", ".join(kinds))
+        return s
+
+    def describe(self) -> str:
+        return (f"{self.triangles} triangles, max_bounces {self.max_bounces}, "
+                f"fresnel {self.fresnel}; stages: " + " -> ".join(self.stages()))
+
+    def as_dict(self) -> dict:
+        d = asdict(self)
+        d["stages"] = self.stages()
+        return d
+
+
+def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
+    used = np.unique(scene.material_index)
+    kinds = set(scene.materials.kind[used].tolist())
+    emission = scene.materials.emission[scene.material_index]
+    v = scene.vertices
+    area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    num_emitters = int(np.count_nonzero((emission.max(axis=1) > 0) & (area > 0)))
+    cam = scene.camera
+    dof = cam.aperture_radius > 0
+    assert all(k in KIND_NAMES for k in kinds)
+    return Plan(
+        diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
+        glass=GLASS in kinds, absorber=NONE in kinds, emitters=num_emitters > 0,
+        num_emitters=num_emitters, dof=dof, polygon_aperture=dof and cam.blades >= 3,
+        shading_normals=scene.normals is not None and bool(scene.smooth.any()),
+        world_light=bool(np.max(scene.world.colour) > 0), fresnel=settings.fresnel,
+        max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)

@@ -1,0 +1,406 @@
+"""Scene model: the plain arrays the core renders, and validation at this boundary.
+
+Everything the core needs arrives here as numpy arrays and small dataclasses; nothing
+in `engine/` knows about Blender. The add-on (or a test) fills a `SceneBuilder` object by
+object and calls `build()`, which validates, drops bad triangles with a warning that
+names the object, recentres the geometry and returns an immutable `Scene`.
+
+Conventions (Blender's): right-handed, z up, lengths in scene units, colours linear
+Rec.709 RGB, radiance in W/(sr m^2) per unit of Blender's "strength".
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# BSDF kinds of the materials table (`Materials.kind`).
+NONE, DIFFUSE, MIRROR, METAL, GLASS = 0, 1, 2, 3, 4
+KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass"}
+
+FRESNEL_MODELS = ("exact", "schlick")
+FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
+SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
+CAMERA_TYPES = ("PERSP", "ORTHO")
+
+
+def _colour(value, what: str) -> np.ndarray:
+    """Return `value` as a (3,) float64 RGB colour, raising ValueError when invalid."""
+    c = np.asarray(value, dtype=np.float64).reshape(-1)
+    if c.shape != (3,):
+        raise ValueError(f"{what} must be an RGB triple, got {value!r}")
+    if not np.all(np.isfinite(c)):
+        raise ValueError(f"{what} must be finite, got {tuple(c)}")
+    if np.any(c < 0):
+        raise ValueError(f"{what} must not be negative, got {tuple(c)}")
+    return c
+
+
+def _positive(value, what: str) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v <= 0:
+        raise ValueError(f"{what} must be a positive finite number, got {value!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class Material:
+    """One row of the materials table, with Cycles' semantics (roughness 0 throughout).
+
+    kind : "none", "diffuse", "mirror", "metal" or "glass".
+        - diffuse: Lambert, f = colour / pi (per-bounce weight = colour).
+        - mirror: Glossy BSDF at roughness 0: reflectance = colour at every angle.
+        - metal: Principled metallic at roughness 0: F82-tint with white tint, i.e.
+          Schlick's reflectance with F0 = colour.
+        - glass: smooth dielectric of index `ior` (outside medium 1, flipped on back
+          faces); reflection weighted by `reflection_tint` x F, transmission by
+          `transmission_tint` x (1 - F). Glass BSDF: both tints = colour. Principled
+          transmission: reflection untinted, transmission sqrt(base colour) per interface.
+        - none: no BSDF (a pure Emission shader): paths end here.
+    emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
+    """
+
+    name: str
+    kind: str = "diffuse"
+    colour: tuple = (0.8, 0.8, 0.8)
+    ior: float = 1.5
+    reflection_tint: tuple = (1.0, 1.0, 1.0)
+    transmission_tint: tuple = (1.0, 1.0, 1.0)
+    emission: tuple = (0.0, 0.0, 0.0)
+
+    @classmethod
+    def diffuse(cls, name, colour, emission=(0, 0, 0)):
+        return cls(name, "diffuse", tuple(colour), emission=tuple(emission))
+
+    @classmethod
+    def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0)):
+        return cls(name, "mirror", tuple(colour), emission=tuple(emission))
+
+    @classmethod
+    def metal(cls, name, base_colour, emission=(0, 0, 0)):
+        return cls(name, "metal", tuple(base_colour), emission=tuple(emission))
+
+    @classmethod
+    def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0)):
+        """Cycles' Glass BSDF: colour tints reflection and transmission alike."""
+        c = tuple(colour)
+        return cls(name, "glass", c, ior, c, c, tuple(emission))
+
+    @classmethod
+    def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0)):
+        """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
+        base = np.clip(np.asarray(base_colour, dtype=np.float64), 0.0, 1.0)
+        return cls(name, "glass", tuple(base_colour), ior, (1.0, 1.0, 1.0),
+                   tuple(np.sqrt(base)), tuple(emission))
+
+    @classmethod
+    def emission_only(cls, name, colour=(1, 1, 1), strength=1.0):
+        """Cycles' Emission shader alone: radiance = strength x colour, no BSDF."""
+        return cls(name, "none", (0, 0, 0), emission=tuple(float(strength) * np.asarray(colour)))
+
+
+@dataclass(frozen=True)
+class Materials:
+    """The materials table as arrays; row i describes material index i.
+
+    kind : (k,) int32, one of NONE, DIFFUSE, MIRROR, METAL, GLASS
+    colour, reflection_tint, transmission_tint, emission : (k, 3) float64
+    ior : (k,) float64
+    names : list of k str
+    """
+
+    kind: np.ndarray
+    colour: np.ndarray
+    ior: np.ndarray
+    reflection_tint: np.ndarray
+    transmission_tint: np.ndarray
+    emission: np.ndarray
+    names: list
+
+    @classmethod
+    def from_list(cls, materials: list[Material]) -> "Materials":
+        kinds = {v: k for k, v in KIND_NAMES.items()}
+        rows = []
+        for m in materials:
+            if m.kind not in kinds:
+                raise ValueError(f"material '{m.name}': unknown kind {m.kind!r}")
+            ior = float(m.ior)
+            if not math.isfinite(ior) or ior <= 0:
+                raise ValueError(f"material '{m.name}': IOR must be > 0 and finite, got {m.ior!r}")
+            rows.append((kinds[m.kind], _colour(m.colour, f"material '{m.name}' colour"), ior,
+                         _colour(m.reflection_tint, f"material '{m.name}' reflection tint"),
+                         _colour(m.transmission_tint, f"material '{m.name}' transmission tint"),
+                         _colour(m.emission, f"material '{m.name}' emission")))
+        if not rows:
+            rows.append((DIFFUSE, np.full(3, 0.8), 1.5, np.ones(3), np.ones(3), np.zeros(3)))
+            materials = [Material("default")]
+        k, c, i, rt, tt, e = zip(*rows)
+        return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
+                   np.array(e), [m.name for m in materials])
+
+    def __len__(self):
+        return len(self.kind)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A Blender camera as Cycles maps it (see cycles_conventions.md, section 1).
+
+    world_from_camera : (4, 4) float64, the camera object's matrix_world; its scale is
+        ignored and the camera looks down its local -Z with +Y up.
+    type : "PERSP" or "ORTHO".
+    lens_mm : focal length in mm (perspective). ortho_scale : view width (orthographic).
+    sensor_width, sensor_height : mm. sensor_fit : "AUTO", "HORIZONTAL" or "VERTICAL".
+    shift_x, shift_y : in units of the fit axis' full extent.
+    clip_start, clip_end : planar clip distances along the view axis.
+    use_dof, fstop, focus_distance : thin lens; radius = lens_mm * 1e-3 / (2 * fstop)
+        (1 / (2 * fstop) for orthographic), focus plane at focus_distance along the axis.
+    blades (< 3 means a round aperture), rotation (radians), ratio (anamorphic; lens x
+        is divided by it).
+    pixel_aspect_x, pixel_aspect_y : Blender's pixel aspect.
+    """
+
+    world_from_camera: np.ndarray = field(default_factory=lambda: np.eye(4))
+    type: str = "PERSP"
+    lens_mm: float = 50.0
+    ortho_scale: float = 6.0
+    sensor_width: float = 36.0
+    sensor_height: float = 24.0
+    sensor_fit: str = "AUTO"
+    shift_x: float = 0.0
+    shift_y: float = 0.0
+    clip_start: float = 0.1
+    clip_end: float = 1000.0
+    use_dof: bool = False
+    fstop: float = 2.8
+    focus_distance: float = 10.0
+    blades: int = 0
+    rotation: float = 0.0
+    ratio: float = 1.0
+    pixel_aspect_x: float = 1.0
+    pixel_aspect_y: float = 1.0
+
+    def validate(self) -> None:
+        m = np.asarray(self.world_from_camera, dtype=np.float64)
+        if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+            raise ValueError(f"camera matrix must be a finite 4x4 matrix, got {m!r}")
+        if self.type not in CAMERA_TYPES:
+            raise ValueError(f"camera type must be one of {CAMERA_TYPES}, got {self.type!r}")
+        if self.sensor_fit not in SENSOR_FITS:
+            raise ValueError(f"sensor fit must be one of {SENSOR_FITS}, got {self.sensor_fit!r}")
+        for name in ("lens_mm", "ortho_scale", "sensor_width", "sensor_height", "ratio",
+                     "pixel_aspect_x", "pixel_aspect_y"):
+            _positive(getattr(self, name), f"camera {name}")
+        if self.use_dof:
+            _positive(self.fstop, "camera fstop")
+            if not math.isfinite(float(self.focus_distance)) or self.focus_distance < 0:
+                raise ValueError(f"camera focus_distance must be >= 0, got {self.focus_distance!r}")
+            if not math.isfinite(float(self.rotation)):
+                raise ValueError(f"camera aperture rotation must be finite, got {self.rotation!r}")
+        for name in ("shift_x", "shift_y", "clip_start", "clip_end"):
+            if not math.isfinite(float(getattr(self, name))):
+                raise ValueError(f"camera {name} must be finite, got {getattr(self, name)!r}")
+        if self.clip_start < 0 or self.clip_end <= self.clip_start:
+            raise ValueError(f"camera clip range must satisfy 0 <= start < end, got "
+                             f"{self.clip_start!r}..{self.clip_end!r}")
+
+    @property
+    def aperture_radius(self) -> float:
+        """Lens radius in scene units, Cycles' `aperturesize` (0 without DOF)."""
+        if not self.use_dof:
+            return 0.0
+        fstop = max(float(self.fstop), 1e-5)
+        if self.type == "ORTHO":
+            return 1.0 / (2.0 * fstop)
+        return self.lens_mm * 1e-3 / (2.0 * fstop)
+
+
+@dataclass(frozen=True)
+class World:
+    """Background: escaped rays take radiance `colour` (colour x strength in Blender)."""
+
+    colour: tuple = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How to render.
+
+    width, height : pixels. samples : samples per pixel (upper bound).
+    time_limit : seconds, 0 for none. target_error : stop when the estimated relative
+        error falls below it, 0 for none. max_bounces : Blender's count (0 = direct light).
+    seed : sample-sequence seed. threads : worker threads (0 = all cores).
+    fresnel : "exact" or "schlick". filter_type, filter_width : pixel filter (px).
+    chunk_pixels : pixels traced at once per thread, bounding memory.
+    """
+
+    width: int = 480
+    height: int = 360
+    samples: int = 16
+    time_limit: float = 0.0
+    target_error: float = 0.0
+    max_bounces: int = 12
+    seed: int = 0
+    threads: int = 0
+    fresnel: str = "exact"
+    filter_type: str = "BLACKMAN_HARRIS"
+    filter_width: float = 1.5
+    chunk_pixels: int = 1 << 16
+
+    def validate(self) -> None:
+        for name in ("width", "height", "samples", "chunk_pixels"):
+            v = getattr(self, name)
+            if int(v) != v or v < 1:
+                raise ValueError(f"render {name} must be a positive integer, got {v!r}")
+        if int(self.max_bounces) != self.max_bounces or self.max_bounces < 0:
+            raise ValueError(f"max_bounces must be an integer >= 0, got {self.max_bounces!r}")
+        if not (self.time_limit >= 0) or not (self.target_error >= 0):
+            raise ValueError(f"time_limit and target_error must be >= 0, got "
+                             f"{self.time_limit!r}, {self.target_error!r}")
+        if self.threads < 0:
+            raise ValueError(f"threads must be >= 0, got {self.threads!r}")
+        if self.fresnel not in FRESNEL_MODELS:
+            raise ValueError(f"fresnel must be one of {FRESNEL_MODELS}, got {self.fresnel!r}")
+        if self.filter_type not in FILTER_TYPES:
+            raise ValueError(f"filter_type must be one of {FILTER_TYPES}, got {self.filter_type!r}")
+        _positive(self.filter_width, "filter_width")
+
+
+@dataclass
+class Scene:
+    """A validated scene, geometry recentred.
+
+    vertices : (t, 3, 3) float64, triangle corners relative to `origin` (world = origin + v)
+    origin : (3,) float64, the recentring offset; embree gets float32(vertices)
+    normals : (t, 3, 3) float64 unit per-corner shading normals, or None (flat everywhere)
+    smooth : (t,) bool, whether triangle t interpolates `normals`
+    material_index : (t,) int32 into `materials`
+    object_index : (t,) int32 into `object_names`
+    """
+
+    vertices: np.ndarray
+    origin: np.ndarray
+    normals: np.ndarray | None
+    smooth: np.ndarray
+    material_index: np.ndarray
+    object_index: np.ndarray
+    object_names: list
+    materials: Materials
+    camera: Camera
+    world: World
+    warnings: list = field(default_factory=list)
+
+    @property
+    def num_triangles(self) -> int:
+        return len(self.vertices)
+
+    @property
+    def extent(self) -> float:
+        """Largest coordinate magnitude of the recentred geometry (0 for an empty scene)."""
+        return float(np.abs(self.vertices).max()) if len(self.vertices) else 0.0
+
+
+class SceneBuilder:
+    """Collects objects and materials, then validates and builds a `Scene`.
+
+    >>> b = SceneBuilder()
+    >>> m = b.add_material(Material.diffuse("grey", (0.5, 0.5, 0.5)))
+    >>> b.add_mesh("floor", verts, tris, m)        # verts (n, 3), tris (t, 3)
+    >>> scene = b.build(Camera(...), World((0.1, 0.1, 0.1)))
+    """
+
+    def __init__(self):
+        self._materials: list[Material] = []
+        self._meshes: list[tuple] = []
+        self.warnings: list[str] = []
+
+    def add_material(self, material: Material) -> int:
+        self._materials.append(material)
+        return len(self._materials) - 1
+
+    def add_mesh(self, name: str, vertices, triangles, material_index=0,
+                 corner_normals=None, smooth=None) -> int:
+        """Add one object's triangles in world space; returns how many were kept.
+
+        vertices : (n, 3) float, world-space positions
+        triangles : (t, 3) int indices into vertices
+        material_index : int or (t,) int into the materials added so far
+        corner_normals : optional (t, 3, 3) per-corner shading normals (world space)
+        smooth : optional (t,) bool; triangles not smooth use their geometric normal
+        """
+        v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        tri = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+        t = len(tri)
+        if t and (tri.min() < 0 or tri.max() >= len(v)):
+            raise ValueError(f"object '{name}': triangle indices out of range 0..{len(v) - 1}")
+        mi = np.broadcast_to(np.asarray(material_index, dtype=np.int32), (t,)).copy()
+        corners = v[tri]  # (t, 3, 3)
+        normals = None
+        if corner_normals is not None:
+            normals = np.asarray(corner_normals, dtype=np.float64).reshape(t, 3, 3)
+        sm = (np.ones(t, bool) if smooth is None else
+              np.broadcast_to(np.asarray(smooth, bool), (t,)).copy())
+
+        # Drop NaN/inf and degenerate (zero-area) triangles, and say how many.
+        finite = np.all(np.isfinite(corners), axis=(1, 2))
+        safe = np.where(finite[:, None, None], corners, 0.0)
+        cross = np.cross(safe[:, 1] - safe[:, 0], safe[:, 2] - safe[:, 0])
+        area2 = np.linalg.norm(cross, axis=1)
+        scale = np.abs(safe).max(axis=(1, 2)) + np.finfo(np.float64).tiny
+        # Relative test: an edge cross product below float64 noise has no usable normal.
+        nondegenerate = area2 > 1e-24 * scale * scale
+        keep = finite & nondegenerate
+        if not np.all(keep):
+            n_bad = int((~finite).sum())
+            n_deg = int((finite & ~nondegenerate).sum())
+            msg = (f"object '{name}': dropped {n_bad + n_deg} of {t} triangles "
+                   f"({n_bad} with NaN/inf vertices, {n_deg} degenerate)")
+            self.warnings.append(msg)
+            warnings.warn(msg, stacklevel=2)
+        if normals is not None:
+            # Unusable shading normals fall back to the flat normal for that triangle.
+            ok = np.all(np.isfinite(normals), axis=(1, 2)) & (np.linalg.norm(normals, axis=2) > 0
+                                                              ).all(axis=1)
+            sm &= ok
+            normals = np.where(ok[:, None, None], normals, 0.0)
+        self._meshes.append((name, corners[keep], None if normals is None else normals[keep],
+                             sm[keep], mi[keep]))
+        return int(keep.sum())
+
+    def build(self, camera: Camera, world: World | None = None) -> Scene:
+        camera.validate()
+        world = world or World()
+        World(tuple(_colour(world.colour, "world colour")))
+        materials = Materials.from_list(self._materials)
+        names, corners, normals, smooth, mat, obj = [], [], [], [], [], []
+        any_normals = any(m[2] is not None for m in self._meshes)
+        for k, (name, c, n, s, mi) in enumerate(self._meshes):
+            if len(mi) and (mi.min() < 0 or mi.max() >= len(materials)):
+                raise ValueError(f"object '{name}': material index out of range "
+                                 f"0..{len(materials) - 1}")
+            names.append(name)
+            corners.append(c)
+            smooth.append(s if n is not None else np.zeros(len(c), bool))
+            normals.append(n if n is not None else np.zeros_like(c))
+            mat.append(mi)
+            obj.append(np.full(len(c), k, np.int32))
+        verts = np.concatenate(corners) if corners else np.zeros((0, 3, 3))
+        # Recentre before embree's float32 cast so far-from-origin scenes keep precision.
+        origin = (0.5 * (verts.reshape(-1, 3).min(0) + verts.reshape(-1, 3).max(0))
+                  if len(verts) else np.zeros(3))
+        smooth_all = np.concatenate(smooth) if smooth else np.zeros(0, bool)
+        norms = None
+        if any_normals and smooth_all.any():
+            norms = np.concatenate(normals)
+            norms /= np.maximum(np.linalg.norm(norms, axis=2, keepdims=True), 1e-300)
+        else:
+            smooth_all = np.zeros(len(verts), bool)
+        return Scene(
+            vertices=verts - origin, origin=origin, normals=norms, smooth=smooth_all,
+            material_index=(np.concatenate(mat) if mat else np.zeros(0, np.int32)).astype(np.int32),
+            object_index=np.concatenate(obj) if obj else np.zeros(0, np.int32),
+            object_names=names, materials=materials, camera=camera, world=world,
+            warnings=list(self.warnings))

@@ -1,0 +1,98 @@
+"""Scenes built directly as engine arrays (no bpy), shared by tests and benchmarks.
+
+The Cornell box follows the course project rebuilt in Blender's z-up frame: x in
+[-1, 1], depth y in [-1, 1] (front open at y = -1), height z in [0, 1.5].
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from engine import Camera, Material, RenderSettings, SceneBuilder, World
+
+
+def quad(p0, p1, p2, p3):
+    """Two triangles for a quad p0 p1 p2 p3 (counter-clockwise seen from the front)."""
+    return np.array([p0, p1, p2, p3], float), np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def uv_sphere(centre, radius, segments=48, rings=24):
+    """Vertices (n, 3), triangles (t, 3) and per-corner normals (t, 3, 3)."""
+    th = np.linspace(0, np.pi, rings + 1)
+    ph = np.linspace(0, 2 * np.pi, segments + 1)
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    n = np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)], -1).reshape(-1, 3)
+    idx = np.arange(len(n)).reshape(rings + 1, segments + 1)
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    tris = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    v = np.asarray(centre, float) + radius * n
+    # Drop the degenerate triangles at the poles (the builder would drop them anyway).
+    area = np.linalg.norm(np.cross(v[tris[:, 1]] - v[tris[:, 0]], v[tris[:, 2]] - v[tris[:, 0]]),
+                          axis=1)
+    tris = tris[area > 1e-12 * radius * radius]
+    return v, tris, n[tris]
+
+
+def look_at(eye, target, up=(0, 0, 1)):
+    """A Blender camera matrix_world: local -Z toward target, +Y up."""
+    eye, target, up = (np.asarray(x, float) for x in (eye, target, up))
+    fwd = target - eye
+    fwd /= np.linalg.norm(fwd)
+    right = np.cross(fwd, up)
+    right /= np.linalg.norm(right)
+    true_up = np.cross(right, fwd)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = right, true_up, -fwd, eye
+    return m
+
+
+def lens_for_fov(fov_deg, sensor=36.0):
+    return sensor / (2 * math.tan(math.radians(fov_deg) / 2))
+
+
+def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, spheres=True,
+                glass_ior=1.45, mirror=True, glass=True):
+    b = builder or SceneBuilder()
+    grey = b.add_material(Material.diffuse("white", (0.6, 0.6, 0.6)))
+    red = b.add_material(Material.diffuse("red", (0.6, 0.2, 0.2)))
+    blue = b.add_material(Material.diffuse("blue", (0.2, 0.2, 0.6)))
+    light = b.add_material(Material.emission_only("light", (1, 1, 1), emitter_radiance))
+    walls = [
+        ("floor", quad((-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)), grey),
+        ("ceiling", quad((-1, -1, 1.5), (-1, 1, 1.5), (1, 1, 1.5), (1, -1, 1.5)), grey),
+        ("back", quad((-1, 1, 0), (1, 1, 0), (1, 1, 1.5), (-1, 1, 1.5)), grey),
+        ("left", quad((-1, -1, 0), (-1, 1, 0), (-1, 1, 1.5), (-1, -1, 1.5)), red),
+        ("right", quad((1, -1, 0), (1, -1, 1.5), (1, 1, 1.5), (1, 1, 0)), blue),
+        ("light", quad((-0.4, -0.3, 1.49), (-0.4, 0.3, 1.49), (0.4, 0.3, 1.49), (0.4, -0.3, 1.49)),
+         light),
+    ]
+    for name, (v, t), m in walls:
+        b.add_mesh(name, v, t, m)
+    if spheres:
+        if mirror:
+            mm = b.add_material(Material.mirror("mirror", (1, 1, 1)))
+            v, t, n = uv_sphere((-0.45, 0.2, 0.3), 0.3)
+            b.add_mesh("mirror sphere", v, t, mm, corner_normals=n)
+        if glass:
+            gm = b.add_material(Material.glass("glass", (1, 1, 1), glass_ior))
+            v, t, n = uv_sphere((0.45, -0.2, 0.3), 0.3)
+            b.add_mesh("glass sphere", v, t, gm, corner_normals=n)
+    return b
+
+
+def cornell_camera(**kw):
+    return Camera(world_from_camera=look_at((0, -3, 0.75), (0, 0, 0.75)), lens_mm=lens_for_fov(49.13),
+                  sensor_fit="HORIZONTAL", **kw)
+
+
+def cbspheres(**kw):
+    return cornell_box(**kw).build(cornell_camera(), World((0, 0, 0)))
+
+
+def settings(**kw):
+    base = dict(width=96, height=72, samples=8, max_bounces=8, seed=1)
+    base.update(kw)
+    return RenderSettings(**base)
