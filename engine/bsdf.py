@@ -32,6 +32,17 @@ def reflect(wo: np.ndarray, n: np.ndarray) -> np.ndarray:
     return 2.0 * dot(n, wo)[:, None] * n - wo
 
 
+def _transmitted_cosine(cos_i: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos_theta_t from Snell's law and the total-internal-reflection mask.
+
+    Written as sqrt(eta^2 - 1 + cos_i^2) / eta rather than sqrt(1 - sin_t^2), which keeps
+    cos_t == cos_i exactly at eta = 1 (an IOR-1 object must be invisible).
+    """
+    disc = eta * eta - 1.0 + cos_i * cos_i
+    tir = disc <= 0.0
+    return np.sqrt(np.maximum(disc, 0.0)) / eta, tir
+
+
 def fresnel_dielectric(cos_theta_i: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Exact unpolarised Fresnel reflectance for a smooth dielectric.
 
@@ -41,9 +52,7 @@ def fresnel_dielectric(cos_theta_i: np.ndarray, eta: np.ndarray) -> tuple[np.nda
     Returns (F, cos_theta_t): F = 1 under total internal reflection (cos_theta_t = 0).
     """
     cos_i = np.clip(np.abs(cos_theta_i), 0.0, 1.0)
-    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
-    tir = sin2_t >= 1.0
-    cos_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
+    cos_t, tir = _transmitted_cosine(cos_i, eta)
     # Handle grazing incidence with eta = 1, where both denominators vanish: F = 1.
     d_par = eta * cos_i + cos_t
     d_perp = cos_i + eta * cos_t
@@ -64,9 +73,7 @@ def fresnel_schlick_dielectric(cos_theta_i: np.ndarray, eta: np.ndarray
     reflection gives 1.
     """
     cos_i = np.clip(np.abs(cos_theta_i), 0.0, 1.0)
-    sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
-    tir = sin2_t >= 1.0
-    cos_t = np.sqrt(np.maximum(1.0 - sin2_t, 0.0))
+    cos_t, tir = _transmitted_cosine(cos_i, eta)
     r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
     c = np.where(eta >= 1.0, cos_i, cos_t)
     f = r0 + (1.0 - r0) * (1.0 - c) ** 5

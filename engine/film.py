@@ -30,14 +30,16 @@ class PixelFilter:
         self.kind, self.width = kind, float(width)
         self.radius = {"BLACKMAN_HARRIS": self.width, "BOX": 0.5 * self.width,
                        "GAUSSIAN": 1.5 * self.width}[kind]
-        x = np.linspace(-self.radius, self.radius, 8 * _TABLE_SIZE + 1)
+        # Tabulate the CDF finely and invert it by linear interpolation. Cycles uses a
+        # 1024-entry inverse-CDF table, whose first and last intervals flatten the tails;
+        # inverting a fine CDF keeps the density right there too.
+        x = np.linspace(-self.radius, self.radius, 16 * _TABLE_SIZE + 1)
         pdf = self.density(x)
         cdf = np.concatenate([[0.0], np.cumsum(0.5 * (pdf[1:] + pdf[:-1]) * np.diff(x))])
         cdf /= cdf[-1]
-        # Inverse-CDF table, symmetric about 0 like Cycles' 1024-entry table.
-        self._u = np.linspace(0.0, 1.0, _TABLE_SIZE)
-        self._x = np.interp(self._u, cdf, x)
-        self._x = 0.5 * (self._x - self._x[::-1])
+        cdf = 0.5 * (cdf + (1.0 - cdf[::-1]))  # exactly symmetric about the centre
+        keep = np.concatenate([[True], np.diff(cdf) > 0])  # strictly increasing for interp
+        self._cdf, self._x = cdf[keep], x[keep]
 
     def density(self, d: np.ndarray) -> np.ndarray:
         """Unnormalised 1D filter density at offset d from the pixel centre."""
@@ -52,7 +54,7 @@ class PixelFilter:
         return np.where(inside, np.maximum(bh, 0.0), 0.0)
 
     def sample(self, u: np.ndarray) -> np.ndarray:
-        return np.interp(u, self._u, self._x)
+        return np.interp(u, self._cdf, self._x)
 
 
 class Film:

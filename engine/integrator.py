@@ -169,7 +169,7 @@ class Integrator:
             wi, weight, pdf = self.sample_bsdf(hits, stream, live, depth)
             self._check("sample BSDF", live, pixels, weight, wi)
             throughput = throughput * weight
-            alive = throughput.max(axis=1) > 0
+            alive = max3(throughput) > 0
             live, throughput, prev_pdf = live[alive], throughput[alive], pdf[alive]
             o, d = self.spawn_rays(_take(hits, alive), wi[alive])
             tmax = np.full(len(live), np.inf)
@@ -233,7 +233,7 @@ class Integrator:
         if self.plan.shading_normals:
             ns = self.interpolate_normals(prim, w0, bu, bv, ng, sign)
         wo = -d
-        scale = np.maximum(self.tri_scale[prim], np.abs(p).max(axis=1))
+        scale = np.maximum(self.tri_scale[prim], max3(np.abs(p)))
         self._count("surface interaction", time.perf_counter() - t0)
         return Hits(p, ng, ns, wo, front, prim, self.scene.material_index[prim], t, scale)
 
@@ -252,7 +252,7 @@ class Integrator:
     def handle_emission(self, radiance, live, throughput, hits: Hits, prev_pdf):
         """Add emitted radiance (two-sided), MIS-weighted after non-delta bounces."""
         le = self.emission[hits.mat]
-        emissive = le.max(axis=1) > 0
+        emissive = max3(le) > 0
         if not emissive.any():
             return
         w = np.ones(len(live))
@@ -269,7 +269,7 @@ class Integrator:
     def russian_roulette(self, throughput, stream, live, depth):
         if depth < ROULETTE_MIN_BOUNCE:
             return None
-        q = np.minimum(np.sqrt(throughput.max(axis=1)), 1.0)
+        q = np.minimum(np.sqrt(max3(throughput)), 1.0)
         u = stream.get_1d(Dim.bounce(depth, Dim.ROULETTE), rows=live)
         keep = u < q
         # Survivors are divided by q; since q >= sqrt(throughput), the result is at most
@@ -295,7 +295,7 @@ class Integrator:
         cos_l = np.abs(bsdf.dot(self.tri_normal[tri], wi))
         f_cos, pdf_bsdf = bsdf.eval_diffuse(wi, ns, ng, self.colour[hits.mat[diffuse]])
         pdf_l = pdf_area * dist * dist / np.maximum(cos_l, 1e-300)
-        ok &= (cos_l > 0) & (f_cos.max(axis=1) > 0) & (pdf_area > 0)
+        ok &= (cos_l > 0) & (max3(f_cos) > 0) & (pdf_area > 0)
         if not ok.any():
             return
         w = power_heuristic(pdf_l[ok], pdf_bsdf[ok])
@@ -306,7 +306,7 @@ class Integrator:
         origin = offset_ray_origin(p[ok], ng[ok], wi[ok], hits.scale[diffuse[ok]])
         seg = y[ok] - origin
         seg_len = np.linalg.norm(seg, axis=1)
-        light_eps = RAY_EPSILON * np.maximum(self.tri_scale[tri[ok]], np.abs(y[ok]).max(axis=1))
+        light_eps = RAY_EPSILON * np.maximum(self.tri_scale[tri[ok]], max3(np.abs(y[ok])))
         blocked = self.accel.occluded(origin, seg / np.maximum(seg_len, 1e-300)[:, None],
                                       seg_len - light_eps)
         self._count("trace shadow rays", time.perf_counter() - t1)
@@ -375,6 +375,11 @@ def power_heuristic(pdf_a: np.ndarray, pdf_b: np.ndarray) -> np.ndarray:
     m = np.maximum(np.maximum(a, b), 1e-300)
     a2, b2 = (a / m) ** 2, (b / m) ** 2
     return np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
+
+
+def max3(a: np.ndarray) -> np.ndarray:
+    """Per-row maximum of an (n, 3) array (faster than a reduction over a short axis)."""
+    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
 
 
 def _take(hits: Hits, sel) -> Hits:

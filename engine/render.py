@@ -93,9 +93,11 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     integrator = Integrator(scene, settings, plan, accel, emitters, camera, pixel_filter,
                             debug=debug)
     n_pixels = settings.width * settings.height
-    chunk = int(settings.chunk_pixels)
-    starts = list(range(0, n_pixels, chunk))
     threads = _thread_count(settings)
+    # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
+    n_chunks = threads * max(1, -(-n_pixels // (threads * int(settings.chunk_pixels))))
+    chunk = -(-n_pixels // n_chunks)
+    starts = list(range(0, n_pixels, chunk))
     stop_reason, cancelled, first = "samples", False, 0.0
     sample = 0
     with ThreadPoolExecutor(max_workers=threads) as pool:

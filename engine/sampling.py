@@ -39,35 +39,40 @@ def reverse_bits(x: np.ndarray) -> np.ndarray:
 
 
 def _sobol_dim1_tables() -> np.ndarray:
-    """Byte tables for the second Sobol dimension (primitive polynomial x + 1).
+    """Byte tables for the second Sobol dimension (primitive polynomial x + 1), in the
+    bit-reversed domain.
 
-    Direction numbers m_k = m_{k-1} xor 2 m_{k-1}, m_1 = 1, v_k = m_k << (32 - k). The
-    tables give, for byte b of the index at byte position j, the xor of the v_k of its
-    set bits, so the whole generator-matrix product is four lookups.
+    Direction numbers m_k = m_{k-1} xor 2 m_{k-1}, m_1 = 1, v_k = m_k << (32 - k), and
+    y = xor of v_k over the set bits k of the index. The tables take bytes of the
+    *reversed* index and give the *reversed* y, so the whole generator-matrix product is
+    four lookups and the Owen scramble that follows needs no extra bit reversal.
     """
-    v = np.zeros(32, np.uint64)
+    v = []
     m = 1
     for k in range(1, 33):
         if k > 1:
             m = m ^ (m << 1)
-        v[k - 1] = (m << (32 - k)) & 0xFFFFFFFF
+        v.append((m << (32 - k)) & 0xFFFFFFFF)
+    rev_v = [int(f"{x:032b}"[::-1], 2) for x in v]
     tables = np.zeros((4, 256), np.uint32)
     for j in range(4):
         for b in range(256):
             acc = 0
             for bit in range(8):
                 if b >> bit & 1:
-                    acc ^= int(v[8 * j + bit])
+                    # Bit (8j + bit) of the reversed index is bit 31 - (8j + bit) of the index.
+                    acc ^= rev_v[31 - (8 * j + bit)]
             tables[j, b] = acc
     return tables
 
 
-_SOBOL1 = _sobol_dim1_tables()
+_SOBOL1_REV = _sobol_dim1_tables()
 
 
-def _sobol_dim1(i: np.ndarray) -> np.ndarray:
-    t = _SOBOL1
-    return (t[0][i & 0xFF] ^ t[1][(i >> 8) & 0xFF] ^ t[2][(i >> 16) & 0xFF] ^ t[3][i >> 24])
+def _sobol_dim1_reversed(r: np.ndarray) -> np.ndarray:
+    """reverse_bits(sobol_dim1(i)) from r = reverse_bits(i)."""
+    t = _SOBOL1_REV
+    return (t[0][r & 0xFF] ^ t[1][(r >> 8) & 0xFF] ^ t[2][(r >> 16) & 0xFF] ^ t[3][r >> 24])
 
 
 def hash_u32(x: np.ndarray) -> np.ndarray:
@@ -121,24 +126,29 @@ class SampleStream:
                                        U32(seed & 0xFFFFFFFF) ^ U32(0x5BD1E995))
         self.sample = U32(sample)
 
-    def _index(self, dim: int, rows) -> tuple[np.ndarray, np.ndarray]:
+    def _shuffled_index(self, dim: int, rows) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The per-pixel shuffled sample index i' = rev(LK(rev(i))) (an Owen scramble of
+        the index), its bit reversal r = rev(i'), and the dimension's seed."""
         seed = self.pixel_seed if rows is None else self.pixel_seed[rows]
         dim_seed = hash_combine(seed, U32(dim))
-        index = nested_uniform_scramble(np.full(len(dim_seed), self.sample, U32), dim_seed)
-        return index, dim_seed
+        rev_sample = reverse_bits(np.array([self.sample], U32))[0]
+        r = _laine_karras(np.full(len(dim_seed), rev_sample, U32), dim_seed)
+        return reverse_bits(r), r, dim_seed
 
     def get_2d(self, dim: int, rows=None) -> np.ndarray:
         """(n, 2) float64 in [0, 1): a 2D point of a shuffled, scrambled Sobol sequence."""
-        index, dim_seed = self._index(dim, rows)
-        x = nested_uniform_scramble(reverse_bits(index), hash_combine(dim_seed, U32(0xA511E9B3)))
-        y = nested_uniform_scramble(_sobol_dim1(index), hash_combine(dim_seed, U32(0x63D83595)))
+        index, r, dim_seed = self._shuffled_index(dim, rows)
+        # Owen scramble is rev(LK(rev(y))). Dimension 0 is y = rev(i'), so rev(y) = i';
+        # dimension 1's table already returns rev(y) from r.
+        x = reverse_bits(_laine_karras(index, hash_combine(dim_seed, U32(0xA511E9B3))))
+        y = reverse_bits(_laine_karras(_sobol_dim1_reversed(r),
+                                       hash_combine(dim_seed, U32(0x63D83595))))
         return np.stack([_to_unit(x), _to_unit(y)], axis=1)
 
     def get_1d(self, dim: int, rows=None) -> np.ndarray:
         """(n,) float64 in [0, 1): a scrambled van der Corput point."""
-        index, dim_seed = self._index(dim, rows)
-        return _to_unit(nested_uniform_scramble(reverse_bits(index),
-                                                hash_combine(dim_seed, U32(0x1B873593))))
+        index, _, dim_seed = self._shuffled_index(dim, rows)
+        return _to_unit(reverse_bits(_laine_karras(index, hash_combine(dim_seed, U32(0x1B873593)))))
 
 
 class Dim:

@@ -1,0 +1,147 @@
+"""Scenes with known answers: furnace, invisible glass, mirrors; Blender's bounce count."""
+
+import numpy as np
+import pytest
+
+from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from tests.scenes import look_at, uv_sphere
+
+pytestmark = pytest.mark.slow
+
+
+def cube(b: SceneBuilder, name: str, material: int, half=1.0):
+    """A closed axis-aligned cube of half-size `half` around the origin."""
+    v = np.array([[x, y, z] for x in (-half, half) for y in (-half, half) for z in (-half, half)])
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = [t for a, b_, c, d in faces for t in ((a, b_, c), (a, c, d))]
+    b.add_mesh(name, v, np.array(tris), material)
+
+
+def image_mean_and_error(result):
+    """Mean luminance over the image and its standard error (pixels independent)."""
+    lum = result.combined[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    return float(lum.mean()), float(np.sqrt(np.sum(result.error.astype(float) ** 2)) / lum.size)
+
+
+def furnace(albedo: float, max_bounces: int, samples=32, seed=3):
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("furnace", (albedo,) * 3, emission=(1.0, 1.0, 1.0)))
+    cube(b, "enclosure", m)
+    cam = Camera(world_from_camera=look_at((0, 0, 0), (0, 1, 0)), lens_mm=20)
+    scene = b.build(cam, World((0, 0, 0)))
+    return render(scene, RenderSettings(width=24, height=24, samples=samples,
+                                        max_bounces=max_bounces, seed=seed))
+
+
+@pytest.mark.parametrize("max_bounces", [0, 1, 2, 5])
+def test_white_furnace_is_the_truncated_geometric_series(max_bounces):
+    """Emission 1 and albedo a everywhere: L = sum_{k=0}^{N+1} a^k with max_bounces = N
+    (camera hit, then direct light at N+1 vertices)."""
+    a = 0.5
+    r = furnace(a, max_bounces, samples=128 if max_bounces >= 5 else 32)
+    mean, err = image_mean_and_error(r)
+    expected = sum(a**k for k in range(max_bounces + 2))
+    assert err < 0.004
+    assert abs(mean - expected) < 5 * err + 1e-9, (mean, expected, err)
+    # Power: one bounce fewer or more would be caught.
+    for wrong in (max_bounces + 1, max_bounces + 3):
+        assert abs(mean - sum(a**k for k in range(wrong))) > 5 * err
+
+
+def test_furnace_with_many_bounces_converges_to_one_over_one_minus_a():
+    a = 0.8
+    r = furnace(a, 200, samples=64)
+    mean, err = image_mean_and_error(r)
+    assert abs(mean - 1 / (1 - a)) < 5 * err, (mean, err)
+
+
+def sphere_in_environment(material: Material, world=(0.5, 0.7, 0.9), max_bounces=64, samples=8):
+    b = SceneBuilder()
+    m = b.add_material(material)
+    v, t, n = uv_sphere((0, 0, 0), 1.0, segments=64, rings=32)
+    b.add_mesh("sphere", v, t, m, corner_normals=n)
+    cam = Camera(world_from_camera=look_at((0, -4, 0), (0, 0, 0)), lens_mm=50)
+    scene = b.build(cam, World(world))
+    return render(scene, RenderSettings(width=40, height=30, samples=samples,
+                                        max_bounces=max_bounces, seed=7))
+
+
+@pytest.mark.parametrize("ior", [1.0, 1.33, 1.5, 2.4])
+def test_glass_sphere_in_uniform_environment_is_invisible(ior):
+    world = np.array([0.5, 0.7, 0.9])
+    r = sphere_in_environment(Material.glass("glass", (1, 1, 1), ior), world)
+    img = r.combined[..., :3]
+    assert np.abs(img - world).max() < 1e-6
+
+
+def test_glass_sphere_with_eta_squared_scaling_would_be_visible(monkeypatch):
+    """Power for the test above: a renderer that scaled refracted radiance by 1/eta^2
+    (the course's convention) would not pass it."""
+    from engine import bsdf
+
+    original = bsdf.sample_dielectric
+
+    def scaled(wo, n, eta, rt, tt, u, fresnel="exact"):
+        wi, w, pdf, transmitted = original(wo, n, eta, rt, tt, u, fresnel)
+        return wi, np.where(transmitted[:, None], w / (eta * eta)[:, None], w), pdf, transmitted
+
+    monkeypatch.setattr(bsdf, "sample_dielectric", scaled)
+    world = np.array([0.5, 0.7, 0.9])
+    r = sphere_in_environment(Material.glass("glass", (1, 1, 1), 1.5), world)
+    assert np.abs(r.combined[..., :3] - world).max() > 0.05
+
+
+def test_mirror_of_colour_c_in_uniform_environment_returns_c():
+    c = np.array([0.3, 0.6, 0.9])
+    r = sphere_in_environment(Material.mirror("mirror", c), world=(1, 1, 1), max_bounces=4)
+    centre = r.combined[12:18, 17:23, :3]
+    assert np.allclose(centre, c, atol=1e-9)
+
+
+def test_metal_reflects_base_colour_at_normal_incidence():
+    base = np.array([1.0, 0.8, 0.4])
+    r = sphere_in_environment(Material.metal("gold", base), world=(1, 1, 1), max_bounces=4)
+    assert np.allclose(r.combined[15, 20, :3], base, atol=2e-3)
+
+
+def test_emitter_is_two_sided_and_seen_at_depth_zero():
+    """A camera sees L = strength x colour on both faces of an emitter, even with
+    max_bounces = 0."""
+    for eye in ((0, -3, 0), (0, 3, 0)):
+        b = SceneBuilder()
+        m = b.add_material(Material.emission_only("panel", (1.0, 0.5, 0.25), 4.0))
+        b.add_mesh("panel", np.array([[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2.0]]),
+                   np.array([[0, 1, 2], [0, 2, 3]]), m)
+        scene = b.build(Camera(world_from_camera=look_at(eye, (0, 0, 0)), lens_mm=50), World())
+        r = render(scene, RenderSettings(width=8, height=8, samples=2, max_bounces=0))
+        assert np.allclose(r.combined[2:6, 2:6, :3], [4.0, 2.0, 1.0])
+
+
+def test_escaped_rays_take_the_world_colour_and_alpha_is_one():
+    b = SceneBuilder()
+    scene = b.build(Camera(), World((0.2, 0.3, 0.4)))
+    r = render(scene, RenderSettings(width=5, height=3, samples=2))
+    assert np.allclose(r.combined[..., :3], [0.2, 0.3, 0.4]) and np.all(r.combined[..., 3] == 1)
+
+
+def test_direct_light_on_a_diffuse_plane_matches_the_closed_form():
+    """A small emitting square of radiance L and area A at height h above a Lambert plane
+    of albedo rho: the point below sees E ~= L A / h^2, so L_out = rho E / pi."""
+    L, side, h, rho = 50.0, 0.05, 1.0, 0.5
+    b = SceneBuilder()
+    lm = b.add_material(Material.emission_only("lamp", (1, 1, 1), L))
+    pm = b.add_material(Material.diffuse("plane", (rho,) * 3))
+    s = side / 2
+    b.add_mesh("lamp", np.array([[-s, -s, h], [s, -s, h], [s, s, h], [-s, s, h]]),
+               np.array([[0, 2, 1], [0, 3, 2]]), lm)
+    b.add_mesh("plane", np.array([[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0.0]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), pm)
+    cam = Camera(type="ORTHO", ortho_scale=0.002, world_from_camera=look_at((0, 0, 0.5), (0, 0, 0),
+                                                                           up=(0, 1, 0)))
+    scene = b.build(cam, World())
+    r = render(scene, RenderSettings(width=8, height=8, samples=64, max_bounces=0, seed=5))
+    mean, err = image_mean_and_error(r)
+    # Exact irradiance below the centre of a square: solid-angle integral of cos.
+    a = s / h
+    e_exact = L * 4 * (a / np.sqrt(1 + a * a)) * np.arctan(a / np.sqrt(1 + a * a))
+    assert abs(mean - rho * e_exact / np.pi) < 5 * err + 1e-6, (mean, rho * e_exact / np.pi, err)
