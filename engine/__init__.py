@@ -6,5 +6,6 @@ The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then ca
 
 from .scene import (Camera, Material, Materials, RenderSettings, Scene, SceneBuilder,  # noqa: F401
                     World)
-from .render import Pass, RenderResult, render  # noqa: F401
+from .renderer import Pass, RenderResult, render  # noqa: F401
 from .plan import Plan, make_plan  # noqa: F401
+from . import bsdf, camera  # noqa: F401

@@ -132,7 +132,7 @@ class Film:
         return float(np.sqrt(np.mean(err * err)) / mean_y)
 
     def snapshot(self, samples: int, seconds: float, rel: float, progress: float):
-        from .render import Pass
+        from .renderer import Pass
 
         h, w = self.height, self.width
         rgba = np.ones((h, w, 4), np.float32)

@@ -1,0 +1,116 @@
+"""Progressive execution: determinism, threads, stopping rules, cancellation, memory."""
+
+import numpy as np
+import pytest
+
+from engine import render
+from engine.film import Film
+from tests import scenes
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def cbspheres():
+    return scenes.cbspheres()
+
+
+def test_same_seed_same_image(cbspheres):
+    st = scenes.settings(width=48, height=36, samples=3)
+    a, b = render(cbspheres, st), render(cbspheres, st)
+    assert np.array_equal(a.combined, b.combined)
+
+
+def test_thread_count_and_chunking_do_not_change_the_image(cbspheres):
+    """Samples depend on (seed, pixel, index) only, so the image is bit-identical for
+    any thread count or chunk size (stronger than statistical equality)."""
+    base = dict(width=48, height=36, samples=3)
+    one = render(cbspheres, scenes.settings(threads=1, **base))
+    two = render(cbspheres, scenes.settings(threads=2, chunk_pixels=500, **base))
+    assert np.array_equal(one.combined, two.combined)
+
+
+def test_different_seeds_agree_statistically(cbspheres):
+    st = dict(width=32, height=24, samples=16)
+    a = render(cbspheres, scenes.settings(seed=1, **st))
+    b = render(cbspheres, scenes.settings(seed=2, **st))
+    assert not np.array_equal(a.combined, b.combined)
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    diff = (a.combined[..., :3] - b.combined[..., :3]) @ lum
+    se = np.sqrt(a.error.astype(float) ** 2 + b.error.astype(float) ** 2)
+    z = diff.sum() / np.sqrt((se ** 2).sum())
+    assert abs(z) < 4
+
+
+def test_progressive_callbacks_and_sample_limit(cbspheres):
+    seen = []
+    r = render(cbspheres, scenes.settings(width=24, height=18, samples=4),
+               on_pass=lambda p: seen.append((p.samples, p.progress, p.combined.shape)))
+    assert [s for s, _, _ in seen] == [1, 2, 3, 4]
+    assert seen[-1][1] == 1.0 and seen[0][2] == (18, 24, 4)
+    assert r.samples == 4 and r.stop_reason == "samples" and not r.cancelled
+
+
+def test_cancel_keeps_the_finished_passes(cbspheres):
+    passes = []
+    r = render(cbspheres, scenes.settings(width=24, height=18, samples=100),
+               on_pass=lambda p: passes.append(p.combined.copy()),
+               should_stop=lambda: len(passes) >= 3)
+    assert r.cancelled and r.samples == 3 and r.stop_reason == "cancelled"
+    assert np.array_equal(r.combined, passes[-1]) and r.combined[..., :3].mean() > 0
+
+
+def test_time_limit_and_target_error_stop_the_render(cbspheres):
+    r = render(cbspheres, scenes.settings(width=24, height=18, samples=10_000, time_limit=0.5))
+    assert r.stop_reason == "time limit" and r.samples < 10_000
+    r = render(cbspheres, scenes.settings(width=24, height=18, samples=10_000, target_error=0.3))
+    assert r.stop_reason == "target error" and r.relative_error <= 0.3
+
+
+def test_output_layout_and_passes(cbspheres):
+    r = render(cbspheres, scenes.settings(width=40, height=30, samples=2))
+    assert r.combined.dtype == np.float32 and r.combined.shape == (30, 40, 4)
+    assert np.all(r.combined[..., 3] == 1.0)
+    for a in (r.combined, r.depth, r.normal, r.error):
+        assert np.isfinite(a).all()
+    # Row 0 is the bottom: the floor (near, bright-ish) is low, the emitter high.
+    assert r.depth[0].mean() < r.depth[-1].mean() or r.combined[-3:, :, :3].max() > 5
+    assert r.combined[-6:, 15:25, :3].max() >= 5.0  # the ceiling emitter shows near the top
+    # Normals average across edges; away from them they are unit vectors.
+    assert np.median(np.linalg.norm(r.normal[r.depth < 1e9], axis=-1)) == pytest.approx(1.0)
+
+
+def test_film_welford_matches_numpy():
+    rng = np.random.default_rng(4)
+    film = Film(3, 2)
+    samples = rng.random((7, 6, 3))
+    for s in samples:
+        film.add(np.arange(6), s, np.ones(6), np.zeros((6, 3)))
+        film.end_pass()
+    assert np.allclose(film.mean, samples.mean(axis=0))
+    lum = samples @ np.array([0.2126, 0.7152, 0.0722])
+    assert np.allclose(film.pixel_error(), lum.std(axis=0, ddof=1) / np.sqrt(7))
+
+
+def test_non_finite_samples_are_rejected_and_reported(cbspheres, monkeypatch):
+    """A NaN produced by a stage is not written: it is left out and traced to the stage."""
+    from engine import integrator
+
+    original = integrator.Integrator.handle_emission
+
+    def poisoned(self, radiance, live, throughput, hits, prev_pdf):
+        original(self, radiance, live, throughput, hits, prev_pdf)
+        radiance[live[:1]] = np.nan
+
+    monkeypatch.setattr(integrator.Integrator, "handle_emission", poisoned)
+    r = render(cbspheres, scenes.settings(width=16, height=12, samples=2, threads=1))
+    assert np.isfinite(r.combined).all()
+    assert any("stage 'handle emission'" in w and "pixel (x=" in w for w in r.warnings)
+
+
+def test_large_image_memory_is_bounded():
+    """A 3840x2160 render keeps its working set in chunks: the film's own arrays plus
+    a chunk's rays. We check the film footprint stays far below 2 GB."""
+    film = Film(3840, 2160)
+    nbytes = sum(a.nbytes for a in film.__dict__.values() if isinstance(a, np.ndarray))
+    assert nbytes < 1.0e9
