@@ -105,3 +105,21 @@ def test_aperture_radius_mapping():
     assert Camera(use_dof=True, fstop=2.0, lens_mm=50).aperture_radius == pytest.approx(0.0125)
     assert Camera(use_dof=False, fstop=2.0).aperture_radius == 0.0
     assert Camera(type="ORTHO", use_dof=True, fstop=4.0).aperture_radius == pytest.approx(0.125)
+
+
+def test_fstop_to_infinity_converges_to_the_pinhole_image():
+    """As fstop grows the thin-lens image approaches the pinhole one: the mean absolute
+    difference shrinks with the aperture, and at fstop 1e6 it is at round-off level
+    (both use the same filter samples; the lens offset is ~1e-8 units)."""
+    from engine import World, render
+    from tests import scenes
+
+    def image(**kw):
+        sc = scenes.cornell_box().build(scenes.cornell_camera(**kw), World())
+        return render(sc, scenes.settings(width=32, height=24, samples=4, seed=2)).combined
+
+    pinhole = image()
+    diffs = [np.abs(image(use_dof=True, fstop=f, focus_distance=3.0) - pinhole).mean()
+             for f in (0.5, 8.0, 1e6)]
+    assert diffs[0] > diffs[1] > diffs[2]
+    assert diffs[2] < 1e-4 * pinhole.mean()

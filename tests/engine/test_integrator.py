@@ -145,3 +145,64 @@ def test_direct_light_on_a_diffuse_plane_matches_the_closed_form():
     a = s / h
     e_exact = L * 4 * (a / np.sqrt(1 + a * a)) * np.arctan(a / np.sqrt(1 + a * a))
     assert abs(mean - rho * e_exact / np.pi) < 5 * err + 1e-6, (mean, rho * e_exact / np.pi, err)
+
+
+def scaled_cbspheres(scale, offset=(0.0, 0.0, 0.0)):
+    """CBspheres with every length (geometry, camera position, clip planes) scaled."""
+    from tests import scenes
+
+    b = scenes.cornell_box()
+    for i, (name, corners, normals, smooth, mi) in enumerate(b._meshes):
+        b._meshes[i] = (name, corners * scale + np.asarray(offset), normals, smooth, mi)
+    cam = scenes.cornell_camera(clip_start=0.1 * scale, clip_end=100.0 * scale)
+    m = np.array(cam.world_from_camera)
+    m[:3, 3] = m[:3, 3] * scale + np.asarray(offset)
+    return b.build(Camera(**{**cam.__dict__, "world_from_camera": m}), World((0, 0, 0)))
+
+
+def max_block_z(ref, other, block=6):
+    """Largest |z| of block sums of the luminance difference, and the Sidak-corrected
+    two-sided critical value at family-wise level 1%."""
+    from scipy import stats
+
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    h, w = ref.error.shape
+
+    def blocks(a):
+        return a.reshape(h // block, block, w // block, block).sum(axis=(1, 3))
+
+    d = blocks((ref.combined[..., :3] - other.combined[..., :3]) @ lum)
+    v = blocks(ref.error.astype(float) ** 2 + other.error.astype(float) ** 2)
+    z = np.abs(d) / np.sqrt(np.maximum(v, 1e-30))
+    alpha = 1 - (1 - 0.01) ** (1 / z.size)
+    return z.max(), stats.norm.isf(alpha / 2)
+
+
+@pytest.mark.parametrize("scale,offset", [(1e-3, 0), (1e3, 0), (1.0, 1e5)])
+def test_same_image_at_any_scale_and_position(scale, offset):
+    """Scaled by 1e-3 or 1e3, or moved to (1e5, 1e5, 1e5), CBspheres renders the same
+    image within noise (block-wise z-scores, Sidak-corrected)."""
+    st = RenderSettings(width=48, height=36, samples=16, max_bounces=6, seed=11)
+    ref = render(scaled_cbspheres(1.0), st)
+    other = render(scaled_cbspheres(scale, (offset,) * 3), RenderSettings(**{**st.__dict__,
+                                                                             "seed": 12}))
+    z, critical = max_block_z(ref, other)
+    assert z < critical, z
+    assert np.isfinite(other.combined).all()
+
+
+def test_scale_comparison_rejects_a_fixed_epsilon(monkeypatch):
+    """Power: with a fixed absolute ray offset (1e-6) the 1e3-scaled scene self-intersects
+    and the comparison above fails."""
+    from engine import bsdf, integrator
+
+    def fixed_offset(p, ng, wi, scale):
+        side = np.where(bsdf.dot(wi, ng) >= 0.0, 1.0, -1.0)
+        return p + (side * 1e-6)[:, None] * ng
+
+    st = RenderSettings(width=48, height=36, samples=16, max_bounces=6, seed=11)
+    ref = render(scaled_cbspheres(1.0), st)
+    monkeypatch.setattr(integrator, "offset_ray_origin", fixed_offset)
+    other = render(scaled_cbspheres(1e3), RenderSettings(**{**st.__dict__, "seed": 12}))
+    z, critical = max_block_z(ref, other)
+    assert z > critical

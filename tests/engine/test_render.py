@@ -114,3 +114,22 @@ def test_large_image_memory_is_bounded():
     film = Film(3840, 2160)
     nbytes = sum(a.nbytes for a in film.__dict__.values() if isinstance(a, np.ndarray))
     assert nbytes < 1.0e9
+
+
+def test_4k_render_peak_memory_under_2gb(tmp_path):
+    """A 3840x2160 render at 1 sample, in its own process: peak RSS under 2 GB."""
+    import subprocess
+    import sys
+
+    code = (
+        "import resource, numpy as np\n"
+        "from engine import render, World\n"
+        "from tests import scenes\n"
+        "sc = scenes.cornell_box().build(scenes.cornell_camera(), World())\n"
+        "r = render(sc, scenes.settings(width=3840, height=2160, samples=1, max_bounces=2))\n"
+        "assert np.isfinite(r.combined).all()\n"
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         cwd=str(__import__("pathlib").Path(__file__).parents[2]))
+    peak_kb = int(out.stdout.strip().splitlines()[-1])
+    assert peak_kb * 1024 < 2e9, f"peak RSS {peak_kb / 1e6:.2f} GB"

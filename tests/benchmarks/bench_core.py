@@ -1,0 +1,105 @@
+"""Core throughput benchmark (a benchmark, not a test: it reports, never asserts).
+
+CBspheres (Cornell box, mirror and glass sphere) at 480x360: ray segments per second,
+path samples per second and the fraction of wall time inside embreex calls, beside the
+raw embreex throughput on the very same rays (recorded during one pass, replayed alone).
+
+    make bench            # or: .venv/bin/python -m tests.benchmarks.bench_core
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from engine import render
+from engine.accel import Accel
+from tests import scenes
+
+
+class RecordingAccel(Accel):
+    """Accel that keeps a copy of every batch it traces, for the raw replay."""
+
+    def __init__(self, scene):
+        super().__init__(scene)
+        self.batches = []
+
+    def intersect(self, o, d, tmax):
+        self.batches.append(("intersect", o.copy(), d.copy(), np.asarray(tmax).copy()))
+        return super().intersect(o, d, tmax)
+
+    def occluded(self, o, d, tmax):
+        self.batches.append(("occluded", o.copy(), d.copy(), np.asarray(tmax).copy()))
+        return super().occluded(o, d, tmax)
+
+
+def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
+    import engine.renderer as renderer
+
+    scene = scenes.cbspheres()
+    settings = scenes.settings(width=width, height=height, samples=samples, threads=threads,
+                               max_bounces=max_bounces)
+    accels = []
+    original = renderer.Accel
+
+    def tracking(scene_):
+        a = original(scene_)
+        accels.append(a)
+        return a
+
+    renderer.Accel = tracking
+    try:
+        t0 = time.perf_counter()
+        result = render(scene, settings)
+        wall = time.perf_counter() - t0
+    finally:
+        renderer.Accel = original
+    accel = accels[0]
+    threads_used = settings.threads or os.cpu_count()
+
+    # Replay one pass's rays through embreex alone, single-threaded.
+    rec = RecordingAccel(scene)
+    renderer.Accel = lambda s: rec
+    try:
+        render(scene, scenes.settings(width=width, height=height, samples=1, threads=1,
+                                      max_bounces=max_bounces))
+    finally:
+        renderer.Accel = original
+    raw = Accel(scene)
+    t0 = time.perf_counter()
+    for kind, o, d, tmax in rec.batches:
+        (raw.intersect if kind == "intersect" else raw.occluded)(o, d, tmax)
+    raw_seconds = time.perf_counter() - t0
+    return {
+        "scene": "CBspheres", "resolution": f"{width}x{height}", "samples": result.samples,
+        "threads": threads_used, "wall_seconds": round(wall, 3),
+        "ray_segments": accel.rays,
+        "ray_segments_per_second": round(accel.rays / wall),
+        "path_samples_per_second": round(width * height * result.samples / wall),
+        # Summed over threads, divided by threads: the share of the cores' time in embree.
+        "fraction_in_embree": round(accel.seconds / (wall * threads_used), 3),
+        "raw_embree_rays_per_second_1_thread": round(raw.rays / raw_seconds),
+        "time_to_first_pass": round(result.time_to_first_pass, 3),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=8)
+    ap.add_argument("--threads", type=int, default=0)
+    ap.add_argument("--out", default="out/bench")
+    args = ap.parse_args()
+    report = run(samples=args.samples, threads=args.threads)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "core.json"), "w") as f:
+        json.dump(report, f, indent=2)
+    for k, v in report.items():
+        print(f"{k:40s} {v}")
+
+
+if __name__ == "__main__":
+    main()
