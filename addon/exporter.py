@@ -11,7 +11,6 @@ depsgraph and needs no core to inspect (the tests rely on that).
 
 from __future__ import annotations
 
-
 from dataclasses import dataclass, field
 
 import bpy
@@ -334,23 +333,69 @@ def resolution(scene):
     return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
 
 
+# Instances of one mesh are transformed together, in groups of at most this many triangles
+# (bounds the temporary arrays; particle systems can have millions of instances).
+BATCH_TRIANGLES = 1 << 20
+
+
+def to_world_batch(mesh: MeshData, matrices):
+    """World-space arrays of k instances of `mesh` at once (all with the same det sign).
+
+    matrices : (k, 4, 4). Returns vertices (k * n, 3), triangles (k * t, 3) into them and
+    normals (k * t, 3, 3), instance-major.
+    """
+    m = np.asarray(matrices, dtype=np.float64)
+    linear = m[:, :3, :3]
+    vertices = np.einsum("kij,nj->kni", linear, mesh.vertices) + m[:, None, :3, 3]
+    normals = np.einsum("tcj,kji->ktci", mesh.normals, np.linalg.pinv(linear))
+    triangles = mesh.triangles
+    if np.linalg.det(linear[0]) < 0:
+        triangles = triangles[:, [0, 2, 1]]
+        normals = normals[:, :, [0, 2, 1]]
+    offsets = np.arange(len(m), dtype=np.int64)[:, None, None] * len(mesh.vertices)
+    return (vertices.reshape(-1, 3), (triangles[None] + offsets).reshape(-1, 3),
+            normals.reshape(-1, 3, 3))
+
+
+def _group_instances(exported: ExportedScene):
+    """Yield (name, mesh, lut, [instances]): objects alone, instances grouped by mesh."""
+    groups = {}
+    for inst in exported.instances:
+        mesh = exported.meshes[inst.mesh_key]
+        if not inst.is_instance:
+            yield inst.name, mesh, inst.material_lut, [inst]
+            continue
+        mirrored = bool(np.linalg.det(inst.matrix_world[:3, :3]) < 0)
+        key = (inst.mesh_key, inst.material_lut.tobytes(), mirrored)
+        groups.setdefault(key, []).append(inst)
+    for insts in groups.values():
+        mesh = exported.meshes[insts[0].mesh_key]
+        step = max(1, BATCH_TRIANGLES // max(1, len(mesh.triangles)))
+        for start in range(0, len(insts), step):
+            chunk = insts[start:start + step]
+            name = chunk[0].name if len(chunk) == 1 else \
+                f"{chunk[0].name} (+{len(chunk) - 1} instances)"
+            yield name, mesh, chunk[0].material_lut, chunk
+
+
 def to_core(exported: ExportedScene, core):
     """Build the core's `Scene`; returns (scene, builder warnings)."""
     builder = core.SceneBuilder()
     for spec in exported.materials:
         builder.add_material(spec.to_core(core))
-    for inst in exported.instances:
-        mesh = exported.meshes[inst.mesh_key]
-        vertices, triangles, normals = to_world(mesh, inst.matrix_world)
-        lut = inst.material_lut
+    for name, mesh, lut, insts in _group_instances(exported):
+        if len(insts) == 1:
+            vertices, triangles, normals = to_world(mesh, insts[0].matrix_world)
+        else:
+            vertices, triangles, normals = to_world_batch(
+                mesh, np.stack([i.matrix_world for i in insts]))
         # Blender clamps out-of-range material indices to the last slot.
         mat_index = lut[np.clip(mesh.material_index, 0, len(lut) - 1)]
-        builder.add_mesh(inst.name, vertices, triangles, mat_index, corner_normals=normals,
-                         smooth=mesh.smooth)
+        k = len(insts)
+        builder.add_mesh(name, vertices, triangles, np.tile(mat_index, k),
+                         corner_normals=normals, smooth=np.tile(mesh.smooth, k))
     scene = builder.build(core.Camera(**exported.camera), core.World(exported.world_colour))
     return scene, list(builder.warnings)
-
-
 
 
 classes = ()

@@ -19,8 +19,13 @@ ERROR_PASS = "Specula Error"
 last_summary: dict = {}
 
 
+def _unknown(rel):
+    # The core reports a negative error before it has two samples to estimate it from.
+    return rel is None or not np.isfinite(rel) or rel < 0
+
+
 def _stats(samples, total, seconds, rel):
-    err = "-" if rel is None or not np.isfinite(rel) else f"{100.0 * rel:.2f}%"
+    err = "-" if _unknown(rel) else f"{100.0 * rel:.2f}%"
     return f"Sample {samples}/{total} | Time {seconds:.1f} s | Est. error {err}"
 
 
@@ -60,6 +65,10 @@ class RenderSession:
         if err is not None:
             err.rect.foreach_set(np.nan_to_num(p.error).astype(np.float32).reshape(-1))
 
+    def should_stop(self):
+        """Esc in Blender (checked by the core between passes)."""
+        return self.engine.test_break()
+
     # -- Render --------------------------------------------------------------------------
 
     def fail(self, message):
@@ -91,7 +100,8 @@ class RenderSession:
         for warning in exported.warnings + builder_warnings:
             engine.report({'WARNING'}, f"Specula: {warning}")
 
-        result = engine.begin_result(0, 0, width, height)
+        # Blender calls render() once per view layer; write into that layer's result.
+        result = engine.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         layer = result.layers[0]
         total = settings.samples
 
@@ -105,7 +115,7 @@ class RenderSession:
         t0 = time.perf_counter()
         try:
             out = specula.render(core_scene, settings, on_pass=on_pass,
-                                 should_stop=engine.test_break)
+                                 should_stop=self.should_stop)
         except Exception as exc:  # noqa: BLE001 - keep the partial image, report, no dialog
             traceback.print_exc()
             engine.end_result(result)
@@ -119,7 +129,7 @@ class RenderSession:
         plan = out.plan
         last_summary = {
             "engine": "SPECULA", "samples": int(out.samples), "seconds": float(out.seconds),
-            "relative_error": float(out.relative_error),
+            "relative_error": None if _unknown(out.relative_error) else float(out.relative_error),
             "stop_reason": out.stop_reason, "cancelled": bool(out.cancelled),
             "plan": plan.as_dict() if hasattr(plan, "as_dict") else str(plan),
             "triangles": int(core_scene.num_triangles),

@@ -61,7 +61,7 @@ class Film:
     """Per-pixel running mean and variance of radiance, plus Depth and Normal passes.
 
     Pixels are indexed row-major from the bottom row (Blender's order): index = y * W + x.
-    `add` stores one pass's samples; `end_pass` folds them into the statistics.
+    `add` folds one sample per pixel of a chunk into the statistics.
     """
 
     def __init__(self, width: int, height: int):
@@ -72,37 +72,28 @@ class Film:
         self.m2 = np.zeros(n, np.float64)  # sum of squared deviations of luminance
         self.depth = np.zeros(n, np.float32)
         self.normal = np.zeros((n, 3), np.float32)
-        self._pass_l = np.zeros((n, 3), np.float64)
-        self._pass_depth = np.full(n, BACKGROUND_DEPTH, np.float32)
-        self._pass_normal = np.zeros((n, 3), np.float32)
-        self._pass_valid = np.zeros(n, bool)
         self.rejected: list[str] = []
 
     def add(self, pixels, radiance, depth, normal, rejected=None) -> None:
-        """Store one sample per pixel in `pixels` (n,) of radiance (n, 3) and first-hit
-        depth (n,) and normal (n, 3). Samples that are not finite are left out and
-        reported (the integrator names the stage in `rejected`)."""
+        """Fold one sample for each pixel in `pixels` (n,) into the running statistics
+        (Welford): radiance (n, 3), first-hit depth (n,) and normal (n, 3). Updating per
+        chunk keeps temporaries the size of a chunk, not of the image. Samples that are
+        not finite are left out; the integrator names their stage in `rejected`."""
         ok = np.all(np.isfinite(radiance), axis=1)
-        self._pass_l[pixels] = radiance
-        self._pass_depth[pixels] = depth
-        self._pass_normal[pixels] = normal
-        self._pass_valid[pixels] = ok
+        if not ok.all():
+            pixels, radiance, depth, normal = pixels[ok], radiance[ok], depth[ok], normal[ok]
         if rejected:
             self.rejected.extend(rejected)
-
-    def end_pass(self) -> None:
-        v = self._pass_valid
-        self.count += v
-        n = np.maximum(self.count, 1)[:, None]
-        delta = np.where(v[:, None], self._pass_l - self.mean, 0.0)
-        self.mean += delta / n
-        y_delta = delta @ LUMINANCE
-        y_after = np.where(v, (self._pass_l - self.mean) @ LUMINANCE, 0.0)
-        self.m2 += y_delta * y_after
-        w = (v / n[:, 0]).astype(np.float32)
-        self.depth += w * (self._pass_depth - self.depth)
-        self.normal += w[:, None] * (self._pass_normal - self.normal)
-        self._pass_valid[:] = False
+        n = self.count[pixels] + 1
+        self.count[pixels] = n
+        mean = self.mean[pixels]
+        delta = radiance - mean
+        mean += delta / n[:, None]
+        self.mean[pixels] = mean
+        self.m2[pixels] += (delta @ LUMINANCE) * ((radiance - mean) @ LUMINANCE)
+        w = (1.0 / n).astype(np.float32)
+        self.depth[pixels] += w * (depth.astype(np.float32) - self.depth[pixels])
+        self.normal[pixels] += w[:, None] * (normal.astype(np.float32) - self.normal[pixels])
 
     def check_finite(self, sample: int) -> None:
         """Raise if any pass holds NaN or inf, naming the first bad pixel."""

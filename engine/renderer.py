@@ -107,7 +107,6 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                                 sample) for s in starts]
             for job in jobs:
                 film.add(*job.result())
-            film.end_pass()
             sample += 1
             film.check_finite(sample)
             elapsed = time.perf_counter() - t0

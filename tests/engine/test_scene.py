@@ -84,3 +84,18 @@ def test_bad_shading_normals_fall_back_to_flat():
         b.add_mesh("flat", v, TRI, 0, corner_normals=normals)
     s = b.build(Camera(), World())
     assert not s.smooth.any() and s.normals is None
+
+
+def test_core_never_imports_bpy():
+    """The core runs without Blender: importing and rendering pulls in no bpy."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import sys\nsys.modules['bpy'] = None  # any import of bpy now fails\n"
+            "from engine import render, World\nfrom tests import scenes\n"
+            "render(scenes.cbspheres(), scenes.settings(width=8, height=6, samples=1))\n"
+            "print('ok')")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=str(Path(__file__).parents[2]))
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr

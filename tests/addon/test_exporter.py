@@ -1,0 +1,357 @@
+"""The exporter's arrays against Blender's own data: triangles, normals, materials,
+instances, transforms, visibility, camera, world."""
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Matrix, Vector
+
+from addon import exporter
+from addon_helpers import camera_object, cube_object, depsgraph, link, node_material, sphere_object
+
+
+def export(scene):
+    if scene.camera is None:
+        camera_object(location=(0, -10, 0), rotation=(math.pi / 2, 0, 0))
+    return exporter.export(depsgraph())
+
+
+def world_triangles(exp, name):
+    """(t, 3, 3) world corners and (t, 3, 3) normals of the instance called `name`."""
+    inst = next(i for i in exp.instances if i.name == name)
+    mesh = exp.meshes[inst.mesh_key]
+    v, tri, n = exporter.to_world(mesh, inst.matrix_world)
+    return v[tri], n, inst, mesh
+
+
+def blender_triangles(obj):
+    """Blender's own world-space triangle corners, the slow obvious way."""
+    ev = obj.evaluated_get(depsgraph())
+    me = ev.to_mesh()
+    m = ev.matrix_world
+    out = np.array([[tuple(m @ me.vertices[i].co) for i in t.vertices] for t in me.loop_triangles])
+    ev.to_mesh_clear()
+    return out
+
+
+def test_triangles_match_blender_with_transform(fresh):
+    obj = cube_object()
+    obj.location = (1.0, -2.0, 0.5)
+    obj.rotation_euler = (0.3, -0.7, 1.1)
+    obj.scale = (1.0, 2.0, 0.5)
+    exp = export(fresh)
+    corners, _, inst, mesh = world_triangles(exp, "Cube")
+    np.testing.assert_allclose(corners, blender_triangles(obj), atol=1e-5)
+    assert len(mesh.triangles) == 12
+    np.testing.assert_allclose(inst.matrix_world, np.array(obj.matrix_world), atol=1e-6)
+
+
+def test_modifiers_are_applied(fresh):
+    obj = cube_object()
+    mod = obj.modifiers.new("Subdivision", "SUBSURF")
+    mod.levels = 2
+    exp = export(fresh)
+    corners, _, _, _ = world_triangles(exp, "Cube")
+    assert len(corners) == 12 * 16  # 6 quads -> 96 quads -> 192 triangles
+    np.testing.assert_allclose(corners, blender_triangles(obj), atol=1e-5)
+
+
+def test_smooth_normals_match_corner_normals(fresh):
+    obj = sphere_object()
+    obj.scale = (1.0, 1.0, 3.0)  # non-uniform: normals need the inverse transpose
+    exp = export(fresh)
+    _, normals, _, mesh = world_triangles(exp, "Sphere")
+    assert mesh.smooth.all()
+    ev = obj.evaluated_get(depsgraph())
+    me = ev.data
+    loops = np.array([tuple(t.loops) for t in me.loop_triangles])
+    local = np.array([tuple(c.vector) for c in me.corner_normals])[loops]
+    inv_t = np.array(ev.matrix_world.to_3x3().inverted().transposed())
+    expected = local @ inv_t.T
+    unit = normals / np.linalg.norm(normals, axis=2, keepdims=True)
+    np.testing.assert_allclose(unit, expected / np.linalg.norm(expected, axis=2, keepdims=True),
+                               atol=1e-5)
+
+
+def test_flat_normals_are_perpendicular_to_faces_after_shear(fresh):
+    obj = cube_object(smooth=False)
+    obj.matrix_world = Matrix(((1, 0.5, 0, 0), (0, 1, 0, 0), (0, 0.3, 2, 0), (0, 0, 0, 1)))
+    exp = export(fresh)
+    corners, normals, _, mesh = world_triangles(exp, "Cube")
+    assert not mesh.smooth.any()
+    e1 = corners[:, 1] - corners[:, 0]
+    e2 = corners[:, 2] - corners[:, 0]
+    for k in range(3):
+        n = normals[:, k]
+        assert np.abs(np.einsum("ij,ij->i", n, e1)).max() < 1e-5
+        assert np.abs(np.einsum("ij,ij->i", n, e2)).max() < 1e-5
+    # Outward cube normals agree with the winding's geometric normal.
+    assert (np.einsum("ij,ij->i", np.cross(e1, e2), normals[:, 0]) > 0).all()
+
+
+def test_custom_normals_are_used(fresh):
+    obj = cube_object(smooth=False)
+    me = obj.data
+    custom = [(0.0, 0.0, 1.0)] * len(me.loops)
+    me.normals_split_custom_set(custom)
+    exp = export(fresh)
+    _, normals, _, mesh = world_triangles(exp, "Cube")
+    assert mesh.smooth.all()
+    np.testing.assert_allclose(normals.reshape(-1, 3), np.tile([0.0, 0.0, 1.0], (36, 1)),
+                               atol=1e-3)  # custom normals are stored compressed
+
+
+def test_negative_scale_keeps_winding_consistent(fresh):
+    obj = cube_object()
+    obj.scale = (-1.0, 1.0, 1.0)
+    exp = export(fresh)
+    corners, normals, _, _ = world_triangles(exp, "Cube")
+    geometric = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert (np.einsum("ij,ij->i", geometric, normals[:, 0]) > 0).all()
+
+
+def test_material_indices_follow_slots(fresh):
+    obj = cube_object()
+    red, _ = node_material("Red", "ShaderNodeBsdfDiffuse", Color=(1, 0, 0, 1))
+    blue, _ = node_material("Blue", "ShaderNodeBsdfDiffuse", Color=(0, 0, 1, 1))
+    obj.data.materials.append(red)
+    obj.data.materials.append(blue)
+    for poly in obj.data.polygons:
+        poly.material_index = 1 if poly.normal.z > 0.5 else 0
+    exp = export(fresh)
+    inst = exp.instances[0]
+    mesh = exp.meshes[inst.mesh_key]
+    names = [exp.materials[i].name for i in inst.material_lut[mesh.material_index]]
+    ev = obj.evaluated_get(depsgraph()).data
+    expected = [ev.materials[t.material_index].name for t in ev.loop_triangles]
+    assert names == expected
+    assert names.count("Blue") == 2
+    assert exp.materials[inst.material_lut[1]].kwargs["colour"] == (0.0, 0.0, 1.0)
+
+
+def test_object_without_material_is_default_grey(fresh):
+    cube_object()
+    exp = export(fresh)
+    spec = exp.materials[exp.instances[0].material_lut[0]]
+    assert (spec.ctor, spec.kwargs["colour"]) == ("diffuse", (0.8, 0.8, 0.8))
+    assert not exp.warnings
+
+
+def test_linked_duplicates_share_one_mesh(fresh):
+    a = cube_object("A")
+    b = link(bpy.data.objects.new("B", a.data))
+    b.location = (3.0, 0.0, 0.0)
+    exp = export(fresh)
+    assert len(exp.instances) == 2
+    assert len(exp.meshes) == 1
+    ca, _, _, _ = world_triangles(exp, "A")
+    cb, _, _, _ = world_triangles(exp, "B")
+    np.testing.assert_allclose(cb - ca, np.broadcast_to([3.0, 0, 0], ca.shape), atol=1e-6)
+
+
+def test_collection_instances(fresh):
+    coll = bpy.data.collections.new("Props")
+    src = cube_object("Prop", size=0.5)
+    fresh.collection.objects.unlink(src)
+    coll.objects.link(src)
+    src.location = (0.0, 0.0, 1.0)
+    matrices = []
+    for k in range(3):
+        empty = link(bpy.data.objects.new(f"Inst{k}", None))
+        empty.instance_type = "COLLECTION"
+        empty.instance_collection = coll
+        empty.location = (2.0 * k, 1.0, 0.0)
+        empty.rotation_euler = (0.0, 0.0, 0.4 * k)
+        matrices.append(Matrix.LocRotScale(Vector((2.0 * k, 1.0, 0.0)),
+                                           empty.rotation_euler.to_quaternion(), None))
+    exp = export(fresh)
+    instances = [i for i in exp.instances if i.is_instance]
+    assert len(instances) == 3
+    assert len({i.mesh_key for i in instances}) == 1
+    got = sorted((tuple(np.round(i.matrix_world[:3, 3], 6)) for i in instances))
+    want = sorted(tuple(np.round(np.array(m @ src.matrix_world)[:3, 3], 6)) for m in matrices)
+    assert got == want
+
+
+def test_geometry_node_instances(fresh):
+    src = cube_object("Src", size=0.2)
+    src.hide_render = True  # the source is hidden; its instances still render
+    host = link(bpy.data.objects.new("Host", bpy.data.meshes.new("HostMesh")))
+    ng = bpy.data.node_groups.new("Scatter", "GeometryNodeTree")
+    ng.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    ng.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    ng.nodes.new("NodeGroupInput")
+    out = ng.nodes.new("NodeGroupOutput")
+    line = ng.nodes.new("GeometryNodeMeshLine")
+    line.inputs["Count"].default_value = 4
+    iop = ng.nodes.new("GeometryNodeInstanceOnPoints")
+    info = ng.nodes.new("GeometryNodeObjectInfo")
+    info.inputs["Object"].default_value = src
+    ng.links.new(line.outputs[0], iop.inputs["Points"])
+    ng.links.new(info.outputs["Geometry"], iop.inputs["Instance"])
+    ng.links.new(iop.outputs[0], out.inputs[0])
+    host.modifiers.new("GN", "NODES").node_group = ng
+    exp = export(fresh)
+    instances = [i for i in exp.instances if i.is_instance]
+    assert len(instances) == 4
+    assert len({i.mesh_key for i in instances}) == 1  # read once, shared
+    zs = sorted(float(i.matrix_world[2, 3]) for i in instances)
+    np.testing.assert_allclose(zs, [0.0, 1.0, 2.0, 3.0], atol=1e-6)  # Mesh Line: 1 m offsets
+    assert "Src" not in [i.name for i in exp.instances]
+
+
+def test_particle_instances(fresh):
+    emitter = cube_object("Emitter")
+    src = sphere_object("Pebble", radius=0.05)
+    src.location = (0, 0, 10)
+    emitter.modifiers.new("Particles", "PARTICLE_SYSTEM")
+    psys = emitter.particle_systems[0].settings
+    psys.type = "HAIR"
+    psys.count = 5
+    psys.render_type = "OBJECT"
+    psys.instance_object = src
+    exp = export(fresh)
+    pebbles = [i for i in exp.instances if i.is_instance]
+    assert len(pebbles) == 5
+    assert len({i.mesh_key for i in pebbles}) == 1
+
+
+def test_hidden_from_render_is_skipped(fresh):
+    cube_object("Visible")
+    cube_object("Hidden").hide_render = True
+    exp = export(fresh)
+    assert [i.name for i in exp.instances] == ["Visible"]
+
+
+def test_point_light_is_warned_and_skipped(fresh):
+    cube_object()
+    light = link(bpy.data.objects.new("Light", bpy.data.lights.new("Light", "POINT")))
+    light.location = (0, 0, 3)
+    exp = export(fresh)
+    assert "light 'Light' (POINT) not supported yet, skipped" in exp.warnings
+    assert len(exp.instances) == 1
+
+
+def test_no_camera_is_an_export_error(fresh):
+    cube_object()
+    with pytest.raises(exporter.ExportError, match="no active camera"):
+        exporter.export(depsgraph())
+
+
+def test_camera_fields(fresh):
+    cam = camera_object(location=(1, 2, 3), rotation=(1.0, 0.2, 0.3))
+    data = cam.data
+    data.lens, data.sensor_width, data.sensor_height = 35.0, 32.0, 18.0
+    data.sensor_fit = "VERTICAL"
+    data.shift_x, data.shift_y = 0.1, -0.2
+    data.clip_start, data.clip_end = 0.5, 250.0
+    dof = data.dof
+    dof.use_dof = True
+    dof.focus_distance = 7.5
+    dof.aperture_fstop = 1.4
+    dof.aperture_blades = 6
+    dof.aperture_rotation = 0.25
+    dof.aperture_ratio = 1.5
+    fresh.render.pixel_aspect_x = 2.0
+    c = export(fresh).camera
+    np.testing.assert_allclose(c["world_from_camera"], np.array(cam.matrix_world), atol=1e-6)
+    assert c["type"] == "PERSP"
+    assert (c["lens_mm"], c["sensor_width"], c["sensor_height"], c["sensor_fit"]) == \
+        (35.0, 32.0, 18.0, "VERTICAL")
+    assert c["shift_x"] == pytest.approx(0.1) and c["shift_y"] == pytest.approx(-0.2)
+    assert (c["clip_start"], c["clip_end"]) == (0.5, 250.0)
+    assert c["use_dof"] and c["focus_distance"] == 7.5
+    assert c["fstop"] == pytest.approx(1.4)
+    assert (c["blades"], c["rotation"], c["ratio"]) == (6, pytest.approx(0.25), 1.5)
+    assert c["pixel_aspect_x"] == 2.0
+
+
+@pytest.mark.parametrize("rotation", [(0.0, 0.0, 0.0), (0.4, -0.3, 1.2)])
+def test_focus_object_is_measured_along_the_view_axis(fresh, rotation):
+    cam = camera_object(location=(0.5, -1.0, 2.0), rotation=rotation)
+    cam.data.dof.use_dof = True
+    cam.data.dof.focus_distance = 99.0  # ignored when there is a focus object
+    bpy.context.view_layer.update()  # matrix_world is stale until the scene is evaluated
+    m = cam.matrix_world
+    forward = -(m.to_3x3() @ Vector((0, 0, 1))).normalized()
+    side = (m.to_3x3() @ Vector((1, 0, 0))).normalized()
+    target = link(bpy.data.objects.new("Target", None))
+    target.location = m.translation + 5.0 * forward + 3.0 * side  # off-axis
+    cam.data.dof.focus_object = target
+    c = export(fresh).camera
+    assert c["focus_distance"] == pytest.approx(5.0, abs=1e-5)  # not sqrt(34)
+
+
+def test_orthographic_and_panoramic_cameras(fresh):
+    cam = camera_object()
+    cam.data.type = "ORTHO"
+    cam.data.ortho_scale = 4.0
+    c = export(fresh).camera
+    assert (c["type"], c["ortho_scale"]) == ("ORTHO", 4.0)
+    cam.data.type = "PANO"
+    exp = export(fresh)
+    assert exp.camera["type"] == "PERSP"
+    assert any("PANO" in w for w in exp.warnings)
+
+
+def test_world_background_colour_times_strength(fresh):
+    world = bpy.data.worlds.new("W")
+    if bpy.app.version < (5, 0):
+        world.use_nodes = True
+    bg = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.2, 0.4, 0.5, 1.0)
+    bg.inputs["Strength"].default_value = 2.0
+    fresh.world = world
+    np.testing.assert_allclose(export(fresh).world_colour, (0.4, 0.8, 1.0), atol=1e-6)
+    fresh.world = None
+    assert export(fresh).world_colour == (0.0, 0.0, 0.0)
+
+
+def test_resolution_percentage(fresh):
+    fresh.render.resolution_x, fresh.render.resolution_y = 640, 480
+    fresh.render.resolution_percentage = 50
+    assert exporter.resolution(fresh) == (320, 240)
+
+
+def test_to_core_builds_the_scene(fresh, core):
+    obj = cube_object()
+    glass, _ = node_material("Glass", "ShaderNodeBsdfGlass", Roughness=0.0, IOR=1.45)
+    obj.data.materials.append(glass)
+    b = link(bpy.data.objects.new("B", obj.data))
+    b.location = (5, 0, 0)
+    exp = export(fresh)
+    scene, warnings = exporter.to_core(exp, core)
+    assert scene.num_triangles == 24
+    assert warnings == []
+    assert list(scene.materials.names) == ["Glass"]
+    assert scene.materials.ior[0] == pytest.approx(1.45)
+    world = scene.vertices.reshape(-1, 3) + scene.origin
+    assert world[:, 0].max() == pytest.approx(6.0)
+
+
+@pytest.mark.parametrize("mirror", [False, True])
+def test_batched_instances_match_one_by_one(rng, mirror):
+    n, t, k = 10, 6, 5
+    mesh = exporter.MeshData(rng.normal(size=(n, 3)), rng.integers(0, n, (t, 3)),
+                             np.zeros(t, np.int32), rng.normal(size=(t, 3, 3)), np.ones(t, bool),
+                             np.zeros(1, np.int32))
+    mats = np.tile(np.eye(4), (k, 1, 1))
+    mats[:, :3, :3] = rng.normal(size=(k, 3, 3))
+    mats[:, :3, 3] = rng.normal(size=(k, 3))
+    sign = -1.0 if mirror else 1.0
+    mats[:, :3, :3] *= (sign * np.sign(np.linalg.det(mats[:, :3, :3])))[:, None, None]
+    v, tri, nrm = exporter.to_world_batch(mesh, mats)
+    for i in range(k):
+        vi, ti, ni = exporter.to_world(mesh, mats[i])
+        np.testing.assert_allclose(v[tri[i * t:(i + 1) * t]], vi[ti], atol=1e-9)
+        np.testing.assert_allclose(nrm[i * t:(i + 1) * t], ni, atol=1e-9)
+
+
+def test_to_core_groups_instances(fresh, core):
+    test_geometry_node_instances(fresh)
+    exp = export(fresh)
+    scene, _ = exporter.to_core(exp, core)
+    assert scene.num_triangles == 4 * 12
+    assert any("(+3 instances)" in name for name in scene.object_names)
