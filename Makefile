@@ -20,8 +20,8 @@ scenes: $(STAMP)
 
 render: $(STAMP)
 	mkdir -p out
-	$(PY) -m addon render blend_scenes/default.blend --output out/default.exr
-	$(PY) -m addon render blend_scenes/default.blend --output out/default.png
+	$(PY) -m addon render blend_scenes/default.blend --samples 16 \
+		--output out/default.exr --output out/default.png
 
 test: $(STAMP)
 	$(PY) -m pytest -q tests

@@ -80,9 +80,9 @@ def build_parser():
     r.add_argument("--max-bounces", type=_non_negative_int, help="total bounce limit")
     r.add_argument("--resolution", type=_resolution, help="WIDTHxHEIGHT at 100%%")
     r.add_argument("--seed", type=_non_negative_int, help="sample-sequence seed")
-    r.add_argument("--output", type=_output,
-                   help="image path, .exr (linear float) or .png (view transform); default "
-                   "out/<scene>.exr")
+    r.add_argument("--output", type=_output, action="append",
+                   help="image path, .exr (linear float) or .png (view transform); repeat to "
+                   "save one render in several files; default out/<scene>.exr")
     return parser
 
 
@@ -129,14 +129,36 @@ def _fail(message, code=1):
     return code
 
 
+def _save(bpy, scene, output):
+    """Save the Render Result through Blender's image pipeline; returns an error or None.
+
+    EXR is written as linear 32-bit float; PNG gets the scene's view transform."""
+    image = scene.render.image_settings
+    ext = os.path.splitext(output)[1].lower()
+    image.file_format = FORMATS[ext]
+    image.color_mode = "RGBA"
+    image.color_depth = "32" if ext == ".exr" else "8"
+    os.makedirs(os.path.dirname(output), exist_ok=True)
+    result = bpy.data.images.get("Render Result")
+    if result is None:
+        return "the render produced no image"
+    try:
+        result.save_render(output, scene=scene)
+    except RuntimeError as exc:
+        return f"cannot write {output}: {str(exc).strip()}"
+    if not os.path.isfile(output):
+        return f"Blender did not write {output}"
+    return None
+
+
 def render(args):
     path = os.path.abspath(args.scene)
     if not os.path.isfile(path):
         return _fail(f"scene file not found: {args.scene}")
     if not os.access(path, os.R_OK):
         return _fail(f"scene file is not readable: {args.scene}")
-    output = os.path.abspath(args.output or os.path.join(
-        "out", os.path.splitext(os.path.basename(path))[0] + ".exr"))
+    outputs = [os.path.abspath(o) for o in (args.output or [os.path.join(
+        "out", os.path.splitext(os.path.basename(path))[0] + ".exr")])]
 
     import bpy  # after argument checks: importing bpy takes a second
 
@@ -155,23 +177,10 @@ def render(args):
         _configure_specula(scene, args)
     else:
         _configure_cycles(scene, args)
-    image = scene.render.image_settings
-    ext = os.path.splitext(output)[1].lower()
-    image.file_format = FORMATS[ext]
-    if ext == ".exr":
-        image.color_depth = "32"
-        image.color_mode = "RGBA"
-    else:
-        image.color_mode = "RGBA"
-        image.color_depth = "8"
-    os.makedirs(os.path.dirname(output), exist_ok=True)
-    scene.render.filepath = output
-    scene.render.use_file_extension = False
-
     render_session.last_summary = {}
     t0 = time.perf_counter()
     try:
-        bpy.ops.render.render(write_still=True)
+        bpy.ops.render.render()
     except RuntimeError as exc:
         return _fail(f"render failed: {str(exc).strip()}")
     seconds = time.perf_counter() - t0
@@ -182,9 +191,11 @@ def render(args):
     else:
         summary = {"engine": "CYCLES", "samples": int(scene.cycles.samples),
                    "seconds": seconds, "relative_error": None, "plan": None}
-    if not os.path.isfile(output):
-        return _fail(f"Blender did not write {output}")
-    summary["output"] = output
+    for output in outputs:
+        error = _save(bpy, scene, output)
+        if error:
+            return _fail(error)
+    summary["output"] = outputs[0] if len(outputs) == 1 else outputs
     summary["scene"] = path
     print(json.dumps(summary, default=str))
     return 0

@@ -55,6 +55,18 @@ def test_render_png_and_time_limit(tmp_path):
 
 
 @pytest.mark.slow
+def test_one_render_saved_as_exr_and_png(tmp_path):
+    exr, png = tmp_path / "a.exr", tmp_path / "a.png"
+    proc = run("render", CBSPHERES, "--samples", 2, "--resolution", "40x30", "--output", exr,
+               "--output", png)
+    assert proc.returncode == 0, proc.stderr
+    assert last_json(proc.stdout)["output"] == [str(exr), str(png)]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    image = bpy.data.images.load(str(exr))
+    assert image.is_float and tuple(image.size) == (40, 30)
+
+
+@pytest.mark.slow
 def test_render_with_cycles(tmp_path):
     out = tmp_path / "cycles.exr"
     proc = run("render", CBSPHERES, "--engine", "CYCLES", "--samples", 1, "--resolution",
