@@ -69,7 +69,9 @@ class Film:
         n = width * height
         self.count = np.zeros(n, np.int32)
         self.mean = np.zeros((n, 3), np.float64)
-        self.m2 = np.zeros(n, np.float64)  # sum of squared deviations of luminance
+        # Sums of squared deviations per channel (Welford); float32 keeps a 4K film small.
+        self.m2 = np.zeros((n, 3), np.float32)
+        self.m2_luminance = np.zeros(n, np.float64)
         self.depth = np.zeros(n, np.float32)
         self.normal = np.zeros((n, 3), np.float32)
         self.rejected: list[str] = []
@@ -90,7 +92,9 @@ class Film:
         delta = radiance - mean
         mean += delta / n[:, None]
         self.mean[pixels] = mean
-        self.m2[pixels] += (delta @ LUMINANCE) * ((radiance - mean) @ LUMINANCE)
+        after = radiance - mean
+        self.m2[pixels] += (delta * after).astype(np.float32)
+        self.m2_luminance[pixels] += (delta @ LUMINANCE) * (after @ LUMINANCE)
         w = (1.0 / n).astype(np.float32)
         self.depth[pixels] += w * (depth.astype(np.float32) - self.depth[pixels])
         self.normal[pixels] += w[:, None] * (normal.astype(np.float32) - self.normal[pixels])
@@ -106,11 +110,16 @@ class Film:
                     f"non-finite value in the {name} pass at pixel (x={i % self.width}, "
                     f"y={i // self.width}) after sample {sample}")
 
+    def variance(self) -> np.ndarray:
+        """(n, 3) estimated variance of each pixel's mean, per channel (0 below 2 samples)."""
+        n = self.count.astype(np.float64)[:, None]
+        return np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), 0.0)
+
     def pixel_error(self) -> np.ndarray:
         """(n,) estimated standard error of each pixel's mean luminance."""
         n = self.count.astype(np.float64)
-        var_mean = np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), 0.0)
-        return np.sqrt(np.maximum(var_mean, 0.0))
+        var = np.where(n > 1, self.m2_luminance / np.maximum(n * (n - 1), 1.0), 0.0)
+        return np.sqrt(np.maximum(var, 0.0))
 
     def relative_error(self) -> float:
         """Estimated relative RMS error of the image: RMS standard error / mean luminance."""
@@ -131,5 +140,6 @@ class Film:
         return Pass(combined=rgba, depth=self.depth.reshape(h, w).copy(),
                     normal=self.normal.reshape(h, w, 3).copy(),
                     error=self.pixel_error().astype(np.float32).reshape(h, w),
+                    variance=self.variance().astype(np.float32).reshape(h, w, 3),
                     samples=samples, seconds=seconds,
                     relative_error=rel if np.isfinite(rel) else -1.0, progress=min(progress, 1.0))

@@ -38,6 +38,7 @@ class Pass:
     depth : (H, W) float32 mean camera z-depth of the first hit (inf where nothing is hit)
     normal : (H, W, 3) float32 mean world-space shading normal of the first hit
     error : (H, W) float32 estimated standard error of each pixel's luminance
+    variance : (H, W, 3) float32 estimated variance of each pixel's mean, per channel
     samples : samples per pixel so far; seconds : wall time since the render began
     relative_error : estimated relative RMS error of the image (see Film)
     progress : fraction of the sample budget done
@@ -47,6 +48,7 @@ class Pass:
     depth: np.ndarray
     normal: np.ndarray
     error: np.ndarray
+    variance: np.ndarray
     samples: int
     seconds: float
     relative_error: float
