@@ -112,8 +112,8 @@ class Film:
 
     def variance(self) -> np.ndarray:
         """(n, 3) estimated variance of each pixel's mean, per channel (0 below 2 samples)."""
-        n = self.count.astype(np.float64)[:, None]
-        return np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), 0.0)
+        n = self.count.astype(np.float32)[:, None]
+        return np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), np.float32(0.0))
 
     def pixel_error(self) -> np.ndarray:
         """(n,) estimated standard error of each pixel's mean luminance."""

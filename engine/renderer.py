@@ -91,10 +91,18 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     emitters = EmitterSet(scene) if plan.emitters else None
     camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
     pixel_filter = PixelFilter(settings.filter_type, settings.filter_width)
-    film = Film(settings.width, settings.height)
+    x0, y0, x1, y1 = settings.window
+    film = Film(x1 - x0, y1 - y0)
     integrator = Integrator(scene, settings, plan, accel, emitters, camera, pixel_filter,
                             debug=debug)
-    n_pixels = settings.width * settings.height
+    n_pixels = (x1 - x0) * (y1 - y0)
+
+    def frame_ids(local: np.ndarray) -> np.ndarray:
+        """Full-frame ids of window pixels: sampling and camera rays use the full frame's
+        numbering, so a region renders exactly the pixels a whole-frame render would."""
+        ly, lx = np.divmod(local, x1 - x0)
+        return (ly + y0) * settings.width + lx + x0
+
     threads = _thread_count(settings)
     # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
     n_chunks = threads * max(1, -(-n_pixels // (threads * int(settings.chunk_pixels))))
@@ -105,10 +113,11 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     with ThreadPoolExecutor(max_workers=threads) as pool:
         while sample < settings.samples:
             # Trace one sample per pixel, chunk by chunk, chunks spread over the pool.
-            jobs = [pool.submit(integrator.trace_pixels, np.arange(s, min(s + chunk, n_pixels)),
-                                sample) for s in starts]
-            for job in jobs:
-                film.add(*job.result())
+            chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
+            jobs = [pool.submit(integrator.trace_pixels, frame_ids(c), sample) for c in chunks]
+            for local, job in zip(chunks, jobs):
+                _, radiance, depth, normal, rejected = job.result()
+                film.add(local, radiance, depth, normal, rejected)
             sample += 1
             film.check_finite(sample)
             elapsed = time.perf_counter() - t0

@@ -235,6 +235,9 @@ class RenderSettings:
     seed : sample-sequence seed. threads : worker threads (0 = all cores).
     fresnel : "exact" or "schlick". filter_type, filter_width : pixel filter (px).
     chunk_pixels : pixels traced at once per thread, bounding memory.
+    region : optional (x0, y0, x1, y1) in full-frame pixels (row 0 at the bottom, x1 and
+        y1 exclusive): render only that rectangle (Blender's render border). Pixels are
+        sampled exactly as in a whole-frame render, so regions stitch into the same image.
     """
 
     width: int = 480
@@ -249,6 +252,7 @@ class RenderSettings:
     filter_type: str = "BLACKMAN_HARRIS"
     filter_width: float = 1.5
     chunk_pixels: int = 1 << 16
+    region: tuple | None = None
 
     def validate(self) -> None:
         for name in ("width", "height", "samples", "chunk_pixels"):
@@ -267,6 +271,19 @@ class RenderSettings:
         if self.filter_type not in FILTER_TYPES:
             raise ValueError(f"filter_type must be one of {FILTER_TYPES}, got {self.filter_type!r}")
         _positive(self.filter_width, "filter_width")
+        if self.region is not None:
+            x0, y0, x1, y1 = (int(v) for v in self.region)
+            if not (0 <= x0 < x1 <= self.width and 0 <= y0 < y1 <= self.height):
+                raise ValueError(f"region must satisfy 0 <= x0 < x1 <= width and "
+                                 f"0 <= y0 < y1 <= height, got {self.region!r} for "
+                                 f"{self.width}x{self.height}")
+
+    @property
+    def window(self) -> tuple[int, int, int, int]:
+        """The rendered rectangle (x0, y0, x1, y1): the region, or the whole frame."""
+        if self.region is None:
+            return 0, 0, int(self.width), int(self.height)
+        return tuple(int(v) for v in self.region)
 
 
 @dataclass

@@ -131,3 +131,21 @@ def test_4k_render_peak_memory_under_2gb(tmp_path):
                          cwd=str(__import__("pathlib").Path(__file__).parents[2]))
     peak_kb = int(out.stdout.strip().splitlines()[-1])
     assert peak_kb * 1024 < 2e9, f"peak RSS {peak_kb / 1e6:.2f} GB"
+
+
+def test_regions_stitch_into_the_whole_frame(cbspheres):
+    """Render borders (region) sample exactly as the whole frame does: four quadrants
+    rendered separately stitch into the identical image."""
+    st = dict(width=40, height=30, samples=2)
+    whole = render(cbspheres, scenes.settings(**st)).combined
+    stitched = np.zeros_like(whole)
+    for x0, y0, x1, y1 in ((0, 0, 17, 13), (17, 0, 40, 13), (0, 13, 17, 30), (17, 13, 40, 30)):
+        part = render(cbspheres, scenes.settings(region=(x0, y0, x1, y1), **st))
+        assert part.combined.shape == (y1 - y0, x1 - x0, 4)
+        stitched[y0:y1, x0:x1] = part.combined
+    assert np.array_equal(stitched, whole)
+
+
+def test_invalid_region_is_refused():
+    with pytest.raises(ValueError, match="region"):
+        render(scenes.cbspheres(), scenes.settings(width=10, height=10, region=(5, 0, 20, 10)))
