@@ -129,6 +129,11 @@ class Integrator:
                 break
             prim, t, bu, bv = self.intersect(o, d, tmax)
 
+            # Handle light objects the rays pass through (lights are transparent).
+            if self.plan.light_hits or self.plan.sun_discs:
+                self.handle_light_hits(radiance, live, throughput, o, d,
+                                       np.where(prim < 0, tmax, t), prim < 0, prev_pdf)
+
             # Handle escaped rays.
             miss = prim < 0
             if miss.any():
@@ -142,7 +147,7 @@ class Integrator:
                 depth_pass[live] = self.camera.z_depth(hits.p)
                 normal_pass[live] = hits.ns  # Cycles' N: the shading normal facing the viewer
 
-            if self.plan.emitters:
+            if self.plan.num_emitters:
                 self.handle_emission(radiance, live, throughput, hits, prev_pdf)
                 self._check("handle emission", live, pixels, radiance[live])
 
@@ -259,7 +264,7 @@ class Integrator:
         soft = emissive & np.isfinite(prev_pdf)
         if soft.any() and self.plan.light_sampling:
             cos_l = np.abs(bsdf.dot(hits.ng[soft], hits.wo[soft]))
-            pdf_l = (self.emitters.pdf_area(hits.prim[soft]) * hits.t[soft] ** 2
+            pdf_l = (self.emitters.pdf_triangle_area(hits.prim[soft]) * hits.t[soft] ** 2
                      / np.maximum(cos_l, 1e-300))
             pb = prev_pdf[soft]
             w[soft] = power_heuristic(pb, pdf_l)
@@ -277,8 +282,44 @@ class Integrator:
         throughput[keep] /= q[keep, None]
         return keep
 
+    def handle_light_hits(self, radiance, live, throughput, o, d, t_surface, escaped,
+                          prev_pdf):
+        """Add the radiance of light objects crossed before the surface hit (and of sun
+        discs for escaped rays), MIS-weighted after non-delta bounces."""
+        t0 = time.perf_counter()
+        objects = self.emitters.objects
+        soft = np.isfinite(prev_pdf)
+        mis = soft.any() and self.plan.light_sampling
+        for j in np.nonzero(objects.intersectable & (objects.power.max(axis=1) > 0))[0]:
+            t, le = objects.intersect(j, o, d, t_surface)
+            hit = np.isfinite(t)
+            if not hit.any():
+                continue
+            w = np.ones(len(live))
+            if mis:
+                sel = hit & soft
+                pdf_l = self.emitters.pmf_by_light[j] * objects.pdf(
+                    np.full(int(sel.sum()), j), o[sel], d[sel], t[sel])
+                w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
+            radiance[live[hit]] += throughput[hit] * le[hit] * w[hit, None]
+        if self.plan.sun_discs and escaped.any():
+            for j in np.nonzero((objects.type == 2) & (objects.cos_half_angle < 1.0))[0]:
+                inside = escaped & (d @ -objects.direction[j] >= objects.cos_half_angle[j])
+                if not inside.any():
+                    continue
+                w = np.ones(len(live))
+                if mis:
+                    sel = inside & soft
+                    pdf_l = self.emitters.pmf_by_light[j] / (
+                        2.0 * np.pi * (1.0 - objects.cos_half_angle[j]))
+                    w[sel] = power_heuristic(prev_pdf[sel], np.full(int(sel.sum()), pdf_l))
+                le = objects.power[j] * objects.sun_radiance[j]
+                radiance[live[inside]] += throughput[inside] * le * w[inside, None]
+        self._count("handle light hits", time.perf_counter() - t0)
+
     def sample_light(self, radiance, live, throughput, hits: Hits, stream, depth):
-        """Next-event estimation on emissive triangles at diffuse vertices, MIS-weighted."""
+        """Next-event estimation at diffuse vertices: one emitter (triangle or light
+        object) chosen by power, MIS-weighted against BSDF sampling."""
         t0 = time.perf_counter()
         diffuse = np.nonzero(self.kind[hits.mat] == DIFFUSE)[0]
         if len(diffuse) == 0:
@@ -286,29 +327,24 @@ class Integrator:
         rows = live[diffuse]
         u_sel = stream.get_1d(Dim.bounce(depth, Dim.LIGHT_SELECT), rows=rows)
         u_pt = stream.get_2d(Dim.bounce(depth, Dim.LIGHT_POINT), rows=rows)
-        tri, y, pdf_area, le = self.emitters.sample(u_sel, u_pt)
         p, ng, ns = hits.p[diffuse], hits.ng[diffuse], hits.ns[diffuse]
-        to_light = y - p
-        dist = np.linalg.norm(to_light, axis=1)
-        ok = dist > 0
-        wi = to_light / np.where(ok, dist, 1.0)[:, None]
-        cos_l = np.abs(bsdf.dot(self.tri_normal[tri], wi))
+        wi, dist, value, pdf_l, light_scale = self.emitters.sample(p, u_sel, u_pt)
         f_cos, pdf_bsdf = bsdf.eval_diffuse(wi, ns, ng, self.colour[hits.mat[diffuse]])
-        pdf_l = pdf_area * dist * dist / np.maximum(cos_l, 1e-300)
-        ok &= (cos_l > 0) & (max3(f_cos) > 0) & (pdf_area > 0)
+        ok = (max3(f_cos) > 0) & (max3(value) > 0) & (dist > 0)
         if not ok.any():
             return
-        w = power_heuristic(pdf_l[ok], pdf_bsdf[ok])
-        contrib = throughput[diffuse[ok]] * f_cos[ok] * le[ok] * (w / pdf_l[ok])[:, None]
+        # Delta lights (pdf inf) cannot be hit by BSDF sampling: weight 1.
+        w = np.where(np.isinf(pdf_l[ok]), 1.0, power_heuristic(pdf_l[ok], pdf_bsdf[ok]))
+        contrib = throughput[diffuse[ok]] * f_cos[ok] * value[ok] * w[:, None]
         self._count("sample light", time.perf_counter() - t0)
         # Trace shadow rays: from the offset surface point to just short of the light.
         t1 = time.perf_counter()
         origin = offset_ray_origin(p[ok], ng[ok], wi[ok], hits.scale[diffuse[ok]])
-        seg = y[ok] - origin
-        seg_len = np.linalg.norm(seg, axis=1)
-        light_eps = RAY_EPSILON * np.maximum(self.tri_scale[tri[ok]], max3(np.abs(y[ok])))
-        blocked = self.accel.occluded(origin, seg / np.maximum(seg_len, 1e-300)[:, None],
-                                      seg_len - light_eps)
+        finite = np.isfinite(dist[ok])
+        target = p[ok] + wi[ok] * np.where(finite, dist[ok], 0.0)[:, None]
+        seg_len = np.where(finite, np.linalg.norm(target - origin, axis=1), 3e38)
+        light_eps = RAY_EPSILON * np.maximum(light_scale[ok], 1e-30)
+        blocked = self.accel.occluded(origin, wi[ok], np.where(finite, seg_len - light_eps, 3e38))
         self._count("trace shadow rays", time.perf_counter() - t1)
         vis = ~blocked
         radiance[rows[ok][vis]] += contrib[vis]
@@ -369,12 +405,16 @@ def offset_ray_origin(p: np.ndarray, ng: np.ndarray, wi: np.ndarray, scale: np.n
 
 
 def power_heuristic(pdf_a: np.ndarray, pdf_b: np.ndarray) -> np.ndarray:
-    """MIS weight of strategy a against b (beta = 2), safe for zero and huge pdfs."""
+    """MIS weight of strategy a against b (beta = 2), safe for zero and infinite pdfs
+    (an infinite pdf is a delta strategy: it takes the whole weight)."""
     a = np.asarray(pdf_a, np.float64)
     b = np.asarray(pdf_b, np.float64)
     m = np.maximum(np.maximum(a, b), 1e-300)
-    a2, b2 = (a / m) ** 2, (b / m) ** 2
-    return np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
+    m = np.where(np.isinf(m), 1.0, m)
+    with np.errstate(invalid="ignore"):
+        a2, b2 = (a / m) ** 2, (b / m) ** 2
+    w = np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
+    return np.where(np.isinf(a), 1.0, np.where(np.isinf(b), 0.0, w))
 
 
 def max3(a: np.ndarray) -> np.ndarray:

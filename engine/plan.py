@@ -25,6 +25,9 @@ class Plan:
     absorber: bool
     emitters: bool
     num_emitters: int
+    light_objects: int
+    light_hits: bool
+    sun_discs: bool
     dof: bool
     polygon_aperture: bool
     shading_normals: bool
@@ -46,7 +49,9 @@ class Plan:
         s.append("handle escaped rays" + (" (world colour)" if self.world_light else " (black)"))
         if self.shading_normals:
             s.append("interpolate shading normals")
-        if self.emitters:
+        if self.light_hits or self.sun_discs:
+            s.append("handle light hits")
+        if self.num_emitters:
             s.append("handle emission")
         if self.light_sampling:
             s += ["sample light", "trace shadow rays"]
@@ -57,7 +62,8 @@ class Plan:
         return s
 
     def describe(self) -> str:
-        return (f"{self.triangles} triangles, max_bounces {self.max_bounces}, "
+        return (f"{self.triangles} triangles, {self.num_emitters} emissive, "
+                f"{self.light_objects} lights, max_bounces {self.max_bounces}, "
                 f"fresnel {self.fresnel}; stages: " + " -> ".join(self.stages()))
 
     def as_dict(self) -> dict:
@@ -73,13 +79,18 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     v = scene.vertices
     area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
     num_emitters = int(np.count_nonzero((emission.max(axis=1) > 0) & (area > 0)))
+    lights = [light for light in scene.lights if max(light.power) > 0]
+    light_hits = any((light.type == "AREA" and light.size_x > 0) or
+                     (light.type in ("POINT", "SPOT") and light.radius > 0) for light in lights)
+    sun_discs = any(light.type == "SUN" and light.angle > 0 for light in lights)
     cam = scene.camera
     dof = cam.aperture_radius > 0
     assert all(k in KIND_NAMES for k in kinds)
     return Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
-        glass=GLASS in kinds, absorber=NONE in kinds, emitters=num_emitters > 0,
-        num_emitters=num_emitters, dof=dof, polygon_aperture=dof and cam.blades >= 3,
+        glass=GLASS in kinds, absorber=NONE in kinds, emitters=num_emitters + len(lights) > 0,
+        num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,
+        sun_discs=sun_discs, dof=dof, polygon_aperture=dof and cam.blades >= 3,
         shading_normals=scene.normals is not None and bool(scene.smooth.any()),
         world_light=bool(np.max(scene.world.colour) > 0), fresnel=settings.fresnel,
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)

@@ -23,7 +23,7 @@ from .accel import Accel
 from .camera import CameraModel
 from .film import Film, PixelFilter
 from .integrator import Integrator
-from .lights import EmitterSet
+from .lights import LightSampler
 from .plan import Plan, make_plan
 from .scene import RenderSettings, Scene
 
@@ -88,7 +88,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     plan = make_plan(scene, settings)
     log.info("specula plan: %s", plan.describe())
     accel = Accel(scene)
-    emitters = EmitterSet(scene) if plan.emitters else None
+    emitters = LightSampler(scene) if plan.emitters else None
     camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
     pixel_filter = PixelFilter(settings.filter_type, settings.filter_width)
     x0, y0, x1, y1 = settings.window

@@ -218,6 +218,57 @@ class Camera:
         return self.lens_mm * 1e-3 / (2.0 * fstop)
 
 
+LIGHT_TYPES = ("POINT", "SPOT", "SUN", "AREA")
+AREA_SHAPES = ("SQUARE", "RECTANGLE", "DISK", "ELLIPSE")
+
+
+@dataclass(frozen=True)
+class Light:
+    """A Blender light object, in Cycles' units (see engine/lights.py for the radiometry).
+
+    type : "POINT", "SPOT", "SUN" or "AREA".
+    power : (3,) colour x power in W (Cycles' strength); for a sun, irradiance in W/m^2.
+    matrix : (4, 4) the object's matrix_world (the light emits along local -Z; area size
+        and spot cone follow the object's scale).
+    radius : point/spot radius (Blender's shadow_soft_size); soft_falloff : Blender 4.1+'s
+        "Soft Falloff" (on: a disk facing the shading point; off: a sphere).
+    spot_size, spot_blend : full cone angle (radians) and blend of a spot.
+    angle : a sun's angular diameter (radians).
+    shape, size_x, size_y, spread, normalize : area light shape, size, spread (radians)
+        and whether power is normalised by area (Blender 4.5+; default on).
+    """
+
+    name: str
+    type: str
+    power: tuple
+    matrix: np.ndarray = field(default_factory=lambda: np.eye(4))
+    radius: float = 0.0
+    soft_falloff: bool = True
+    spot_size: float = math.pi / 4
+    spot_blend: float = 0.15
+    angle: float = 0.0
+    shape: str = "SQUARE"
+    size_x: float = 1.0
+    size_y: float = 1.0
+    spread: float = math.pi
+    normalize: bool = True
+
+    def validate(self) -> None:
+        who = f"light '{self.name}'"
+        if self.type not in LIGHT_TYPES:
+            raise ValueError(f"{who}: type must be one of {LIGHT_TYPES}, got {self.type!r}")
+        _colour(self.power, f"{who} power")
+        m = np.asarray(self.matrix, dtype=np.float64)
+        if m.shape != (4, 4) or not np.all(np.isfinite(m)):
+            raise ValueError(f"{who}: matrix must be a finite 4x4 matrix")
+        for name in ("radius", "spot_size", "spot_blend", "angle", "size_x", "size_y", "spread"):
+            v = float(getattr(self, name))
+            if not math.isfinite(v) or v < 0:
+                raise ValueError(f"{who}: {name} must be a finite number >= 0, got {v!r}")
+        if self.type == "AREA" and self.shape not in AREA_SHAPES:
+            raise ValueError(f"{who}: shape must be one of {AREA_SHAPES}, got {self.shape!r}")
+
+
 @dataclass(frozen=True)
 class World:
     """Background: escaped rays take radiance `colour` (colour x strength in Blender)."""
@@ -309,6 +360,7 @@ class Scene:
     camera: Camera
     world: World
     warnings: list = field(default_factory=list)
+    lights: list = field(default_factory=list)
 
     @property
     def num_triangles(self) -> int:
@@ -330,6 +382,7 @@ class SceneBuilder:
     """
 
     def __init__(self):
+        self._lights: list[Light] = []
         self._materials: list[Material] = []
         self._meshes: list[tuple] = []
         self.warnings: list[str] = []
@@ -337,6 +390,11 @@ class SceneBuilder:
     def add_material(self, material: Material) -> int:
         self._materials.append(material)
         return len(self._materials) - 1
+
+    def add_light(self, light: Light) -> None:
+        """Add a light object; invalid parameters raise ValueError naming the light."""
+        light.validate()
+        self._lights.append(light)
 
     def add_mesh(self, name: str, vertices, triangles, material_index=0,
                  corner_normals=None, smooth=None) -> int:
@@ -420,4 +478,4 @@ class SceneBuilder:
             material_index=(np.concatenate(mat) if mat else np.zeros(0, np.int32)).astype(np.int32),
             object_index=np.concatenate(obj) if obj else np.zeros(0, np.int32),
             object_names=names, materials=materials, camera=camera, world=world,
-            warnings=list(self.warnings))
+            warnings=list(self.warnings), lights=list(self._lights))

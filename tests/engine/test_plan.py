@@ -48,7 +48,7 @@ def test_no_emitters_means_no_light_sampling(monkeypatch):
     from engine import integrator
     monkeypatch.setattr(integrator.Integrator, "sample_light", boom)
     monkeypatch.setattr(integrator.Integrator, "handle_emission", boom)
-    monkeypatch.setattr(engine.renderer, "EmitterSet", boom)
+    monkeypatch.setattr(engine.renderer, "LightSampler", boom)
     b = scenes.cornell_box(spheres=False, emitter_radiance=0.0)
     scene = b.build(scenes.cornell_camera(), World((1, 1, 1)))
     r = render(scene, scenes.settings(width=16, height=12, samples=2))
