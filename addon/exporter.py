@@ -67,6 +67,7 @@ class ExportedScene:
     camera: dict = field(default_factory=dict)
     world_colour: tuple = (0.0, 0.0, 0.0)
     warnings: list = field(default_factory=list)
+    lights: list = field(default_factory=list)  # keyword dicts for core.Light
 
     @property
     def num_triangles(self):
@@ -170,7 +171,7 @@ class _Exporter:
             if obj.type in GEOMETRY_TYPES:
                 self.geometry(inst, obj)
             elif obj.type == "LIGHT":
-                self.warn(f"light '{obj.name}' ({obj.data.type}) not supported yet, skipped")
+                self.light(inst, obj)
             elif obj.type in UNSUPPORTED_TYPES:
                 self.warn(f"object '{obj.name}' ({UNSUPPORTED_TYPES[obj.type]}) not supported "
                           f"yet, skipped")
@@ -204,6 +205,13 @@ class _Exporter:
         self.out.instances.append(Instance(name, key, np.array(inst.matrix_world.copy()), lut,
                                            bool(inst.is_instance)))
 
+    def light(self, inst, obj):
+        if not inst.is_instance and (obj.original.hide_render or not inst.show_self):
+            return
+        spec = light_settings(obj.data, np.array(inst.matrix_world.copy()), obj.name, self.warn)
+        if spec is not None:
+            self.out.lights.append(spec)
+
     def read(self, obj, key):
         try:
             mesh = obj.to_mesh()
@@ -220,6 +228,37 @@ class _Exporter:
             obj.to_mesh_clear()
         self.out.meshes[key] = data
         return data
+
+
+def light_settings(light, matrix_world, name, warn):
+    """Keyword arguments for the core's `Light` from a Blender light datablock, with
+    Cycles' strength: colour (x blackbody colour) x power x 2^exposure (4.5+)."""
+    if getattr(getattr(light, "cycles", None), "is_portal", False):
+        return None  # a portal guides sampling in Cycles; it emits nothing
+    colour = np.array(light.color[:3], np.float64)
+    if getattr(light, "use_temperature", False):
+        colour = colour * np.array(light.temperature_color[:3])
+    power = colour * float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
+    spec = dict(name=name, type=light.type, power=tuple(power), matrix=matrix_world,
+                normalize=bool(getattr(light, "normalize", True)))
+    if light.type in ("POINT", "SPOT"):
+        spec.update(radius=float(light.shadow_soft_size),
+                    soft_falloff=bool(getattr(light, "use_soft_falloff", True)))
+        if not spec["normalize"]:
+            warn(f"light '{name}': Normalize off is supported for area lights only; "
+                 f"rendered normalized")
+    if light.type == "SPOT":
+        spec.update(spot_size=float(light.spot_size), spot_blend=float(light.spot_blend))
+        if getattr(light, "use_square", False):
+            warn(f"light '{name}': square spot cones are not supported; rendered round")
+    elif light.type == "SUN":
+        spec.update(angle=float(light.angle))
+    elif light.type == "AREA":
+        spec.update(shape=light.shape, size_x=float(light.size), size_y=float(light.size_y),
+                    spread=float(getattr(light, "spread", np.pi)))
+    if getattr(light, "use_nodes", False) and getattr(light, "node_tree", None) is not None:
+        warn(f"light '{name}': light node trees are not supported; using its colour and power")
+    return spec
 
 
 def export(depsgraph) -> ExportedScene:
@@ -333,6 +372,27 @@ def resolution(scene):
     return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
 
 
+def border_region(scene, width, height):
+    """Blender's render border in full-frame pixels, (x0, y0, x1, y1) with x1, y1 exclusive
+    and row 0 at the bottom, or None when the whole frame is rendered.
+
+    Blender (render_init_from_main) truncates border fraction x size computed in float32;
+    the same arithmetic here gives the same rectangle (3.4 - 5.0), whether or not the image
+    is then cropped to the border.
+    """
+    r = scene.render
+    if not r.use_border:
+        return None
+    f32 = np.float32
+    x0, x1 = (int(f32(v) * f32(width)) for v in (r.border_min_x, r.border_max_x))
+    y0, y1 = (int(f32(v) * f32(height)) for v in (r.border_min_y, r.border_max_y))
+    x0, x1 = min(max(x0, 0), width), min(max(x1, 0), width)
+    y0, y1 = min(max(y0, 0), height), min(max(y1, 0), height)
+    if (x0, y0, x1, y1) == (0, 0, width, height) or x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1, y1
+
+
 # Instances of one mesh are transformed together, in groups of at most this many triangles
 # (bounds the temporary arrays; particle systems can have millions of instances).
 BATCH_TRIANGLES = 1 << 20
@@ -394,6 +454,8 @@ def to_core(exported: ExportedScene, core):
         k = len(insts)
         builder.add_mesh(name, vertices, triangles, np.tile(mat_index, k),
                          corner_normals=normals, smooth=np.tile(mesh.smooth, k))
+    for spec in exported.lights:
+        builder.add_light(core.Light(**spec))
     scene = builder.build(core.Camera(**exported.camera), core.World(exported.world_colour))
     return scene, list(builder.warnings)
 

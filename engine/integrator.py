@@ -413,7 +413,7 @@ def power_heuristic(pdf_a: np.ndarray, pdf_b: np.ndarray) -> np.ndarray:
     m = np.where(np.isinf(m), 1.0, m)
     with np.errstate(invalid="ignore"):
         a2, b2 = (a / m) ** 2, (b / m) ** 2
-    w = np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
+        w = np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
     return np.where(np.isinf(a), 1.0, np.where(np.isinf(b), 0.0, w))
 
 

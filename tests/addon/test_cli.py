@@ -35,7 +35,7 @@ def test_render_exr_is_linear_float(tmp_path):
     assert summary["engine"] == "SPECULA" and summary["samples"] == 2
     assert {"seconds", "relative_error", "plan"} <= summary.keys()
     assert summary["plan"]["max_bounces"] == 2
-    assert "light 'Light' (POINT) not supported yet, skipped" in proc.stdout + proc.stderr
+    assert summary["plan"]["light_objects"] == 1  # the factory scene's point light
     image = bpy.data.images.load(str(out))
     assert image.is_float and tuple(image.size) == (64, 36)
     px = np.zeros(64 * 36 * 4, np.float32)

@@ -225,13 +225,48 @@ def test_hidden_from_render_is_skipped(fresh):
     assert [i.name for i in exp.instances] == ["Visible"]
 
 
-def test_point_light_is_warned_and_skipped(fresh):
+def test_lights_are_exported_with_cycles_strength(fresh):
     cube_object()
-    light = link(bpy.data.objects.new("Light", bpy.data.lights.new("Light", "POINT")))
-    light.location = (0, 0, 3)
+    point = bpy.data.lights.new("Key", "POINT")
+    point.energy, point.color, point.shadow_soft_size = 250.0, (1.0, 0.5, 0.25), 0.2
+    point.use_soft_falloff = False
+    if hasattr(point, "exposure"):
+        point.exposure = 1.0
+    key = link(bpy.data.objects.new("Key", point))
+    key.location = (1, 2, 3)
+    spot = bpy.data.lights.new("Spot", "SPOT")
+    spot.spot_size, spot.spot_blend = 0.7, 0.3
+    link(bpy.data.objects.new("Spot", spot))
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy, sun.angle = 3.0, 0.1
+    link(bpy.data.objects.new("Sun", sun))
+    area = bpy.data.lights.new("Panel", "AREA")
+    area.shape, area.size, area.size_y, area.spread = "RECTANGLE", 2.0, 0.5, 1.0
+    panel = link(bpy.data.objects.new("Panel", area))
+    panel.scale = (2, 1, 1)
+    hidden = link(bpy.data.objects.new("Hidden", bpy.data.lights.new("Hidden", "POINT")))
+    hidden.hide_render = True
     exp = export(fresh)
-    assert "light 'Light' (POINT) not supported yet, skipped" in exp.warnings
-    assert len(exp.instances) == 1
+    by_name = {spec["name"]: spec for spec in exp.lights}
+    assert set(by_name) == {"Key", "Spot", "Sun", "Panel"}
+    gain = 2.0 if hasattr(point, "exposure") else 1.0
+    assert np.allclose(by_name["Key"]["power"], np.array([1.0, 0.5, 0.25]) * 250 * gain)
+    assert by_name["Key"]["radius"] == pytest.approx(0.2)
+    assert by_name["Key"]["soft_falloff"] is False
+    assert np.allclose(by_name["Key"]["matrix"][:3, 3], (1, 2, 3))
+    assert by_name["Spot"]["spot_size"] == pytest.approx(0.7)
+    assert by_name["Spot"]["spot_blend"] == pytest.approx(0.3)
+    assert by_name["Sun"]["angle"] == pytest.approx(0.1)
+    assert by_name["Panel"]["shape"] == "RECTANGLE" and by_name["Panel"]["size_y"] == 0.5
+    assert np.allclose(by_name["Panel"]["matrix"][:3, 0], (2, 0, 0))
+    assert not any("not supported" in w for w in exp.warnings)
+
+
+def test_lights_reach_the_core(fresh, core):
+    cube_object()
+    link(bpy.data.objects.new("Key", bpy.data.lights.new("Key", "POINT"))).location = (0, 0, 3)
+    scene, _ = exporter.to_core(export(fresh), core)
+    assert len(scene.lights) == 1 and scene.lights[0].type == "POINT"
 
 
 def test_no_camera_is_an_export_error(fresh):
