@@ -68,6 +68,7 @@ class ExportedScene:
     world_colour: tuple = (0.0, 0.0, 0.0)
     warnings: list = field(default_factory=list)
     lights: list = field(default_factory=list)  # keyword dicts for core.Light
+    environment: dict | None = None  # keyword arguments for core.World's map, if any
 
     @property
     def num_triangles(self):
@@ -177,6 +178,7 @@ class _Exporter:
                           f"yet, skipped")
         self.out.camera = camera_settings(self.scene, self.depsgraph, self.warn)
         self.out.world_colour = world_colour(self.scene.world, self.warn)
+        self.out.environment = world_environment(self.scene.world, self.warn)
         return self.out
 
     def geometry(self, inst, obj):
@@ -342,12 +344,94 @@ def world_colour(world, warn) -> tuple:
         warn(f"world '{world.name}': node '{node.name}' is not supported; using its viewport "
              f"colour")
         return flat
+    colour = node.inputs["Color"]
+    if colour.is_linked and colour.links[0].from_node.bl_idname == "ShaderNodeTexEnvironment":
+        # The map itself is read by world_environment; this constant is its fallback.
+        return flat
     for sock in ("Color", "Strength"):
         if node.inputs[sock].is_linked:
             warn(f"world '{world.name}': node '{node.name}' input '{sock}' is driven by another "
                  f"node, which is not supported; using the input's own value")
     strength = float(node.inputs["Strength"].default_value)
     return tuple(strength * float(c) for c in node.inputs["Color"].default_value[:3])
+
+
+def _background_node(world):
+    if world is None or not _uses_nodes(world):
+        return None
+    out = world.node_tree.get_output_node('CYCLES')
+    surface = None if out is None else out.inputs.get("Surface")
+    if surface is None or not surface.is_linked:
+        return None
+    node = surface.links[0].from_node
+    return node if node.bl_idname == "ShaderNodeBackground" else None
+
+
+def _srgb_to_linear(c):
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def _euler_xyz(rx, ry, rz):
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return z @ y @ x
+
+
+def world_environment(world, warn):
+    """The world's equirectangular Environment Texture as keyword arguments of the core's
+    World (environment = image x strength, texture_from_world = a Mapping node's rotation),
+    or None. A missing or unreadable image warns and leaves the constant world colour."""
+    bg = _background_node(world)
+    if bg is None or not bg.inputs["Color"].is_linked:
+        return None
+    tex = bg.inputs["Color"].links[0].from_node
+    if tex.bl_idname != "ShaderNodeTexEnvironment":
+        return None
+    where = f"world '{world.name}': node '{tex.name}'"
+    fallback = "; rendering the world's viewport colour instead"
+    if tex.projection != "EQUIRECTANGULAR":
+        warn(f"{where}: {tex.projection} projection is not supported{fallback}")
+        return None
+    image = tex.image
+    if image is None:
+        warn(f"{where} has no image{fallback}")
+        return None
+    try:
+        w, h = (int(v) for v in image.size)
+        if w * h == 0:
+            raise RuntimeError("no pixels (file missing or not an image)")
+        px = np.empty(w * h * image.channels, np.float32)
+        image.pixels.foreach_get(px)
+    except (RuntimeError, ValueError) as exc:
+        warn(f"{where}: image '{image.name}' ({image.filepath}) cannot be read: {exc}{fallback}")
+        return None
+    rgb = px.reshape(h, w, image.channels)[..., :3].astype(np.float64)
+    if image.channels < 3:
+        rgb = np.repeat(px.reshape(h, w, image.channels)[..., :1], 3, axis=2)
+    if not image.is_float and image.colorspace_settings.name == "sRGB":
+        rgb = _srgb_to_linear(rgb)
+    if not np.all(np.isfinite(rgb)):
+        warn(f"{where}: image '{image.name}' has NaN/inf pixels; they are rendered black")
+        rgb = np.nan_to_num(rgb, nan=0.0, posinf=0.0, neginf=0.0)
+    rgb = np.maximum(rgb, 0.0)
+    strength = bg.inputs["Strength"]
+    if strength.is_linked:
+        warn(f"world '{world.name}': Background Strength is driven by another node, which is "
+             f"not supported; using its own value")
+    rotation = np.eye(3)
+    vector = tex.inputs.get("Vector")
+    if vector is not None and vector.is_linked:
+        mapping = vector.links[0].from_node
+        if mapping.bl_idname == "ShaderNodeMapping":
+            r = _euler_xyz(*mapping.inputs["Rotation"].default_value[:3])
+            # POINT and VECTOR rotate the lookup vector; TEXTURE applies the inverse.
+            rotation = r.T if mapping.vector_type == "TEXTURE" else r
+        elif mapping.bl_idname != "ShaderNodeTexCoord":
+            warn(f"{where}: its Vector input comes from '{mapping.name}', which is not "
+                 f"supported; using the view direction")
+    return dict(environment=rgb * float(strength.default_value), texture_from_world=rotation)
 
 
 # ---------------------------------------------------------------------------------------
@@ -456,7 +540,8 @@ def to_core(exported: ExportedScene, core):
                          corner_normals=normals, smooth=np.tile(mesh.smooth, k))
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
-    scene = builder.build(core.Camera(**exported.camera), core.World(exported.world_colour))
+    world = core.World(exported.world_colour, **(exported.environment or {}))
+    scene = builder.build(core.Camera(**exported.camera), world)
     return scene, list(builder.warnings)
 
 

@@ -137,7 +137,8 @@ class Integrator:
             # Handle escaped rays.
             miss = prim < 0
             if miss.any():
-                self.handle_escaped(radiance, live[miss], throughput[miss])
+                self.handle_escaped(radiance, live[miss], throughput[miss], d[miss],
+                                    prev_pdf[miss])
             hit = ~miss
             live, throughput, prev_pdf = live[hit], throughput[hit], prev_pdf[hit]
             if len(live) == 0:
@@ -221,8 +222,19 @@ class Integrator:
         self._count("intersect", time.perf_counter() - t0)
         return out
 
-    def handle_escaped(self, radiance, idx, throughput):
-        if self.plan.world_light:
+    def handle_escaped(self, radiance, idx, throughput, d, prev_pdf):
+        """Escaped rays take the world: a constant colour (found by BSDF sampling only, as
+        in Cycles) or the environment map, MIS-weighted against its light sampling."""
+        if self.plan.environment:
+            env = self.emitters.environment
+            le = env.lookup(d)
+            w = np.ones(len(idx))
+            soft = np.isfinite(prev_pdf)
+            if soft.any() and self.plan.light_sampling:
+                w[soft] = power_heuristic(prev_pdf[soft],
+                                          self.emitters.pmf_environment * env.pdf(d[soft]))
+            radiance[idx] += throughput * le * w[:, None]
+        elif self.plan.world_light:
             radiance[idx] += throughput * self.world
 
     def surface_interaction(self, o, d, prim, t, bu, bv) -> Hits:

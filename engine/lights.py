@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import sampling
+from .environment import EnvironmentMap
 from .scene import Scene
 
 POINT, SPOT, SUN, AREA = 0, 1, 2, 3
@@ -345,14 +346,24 @@ class LightSampler:
         self.radiance = emission[self.index]
         self.area = area[self.index]
         self.corners = v[self.index]
-        self.objects = LightObjects(scene.lights, scene.origin, max(scene.extent, 1e-3) * 2.0)
-        weights = np.concatenate([tri_power[self.index], self.objects.selection_power()])
+        radius = max(scene.extent, 1e-3) * 2.0
+        self.objects = LightObjects(scene.lights, scene.origin, radius)
+        env = scene.world.environment
+        self.environment = None if env is None else EnvironmentMap(env,
+                                                                   scene.world.texture_from_world)
+        # The world's flux through the scene's cross-section, to weigh it against lights.
+        env_power = [] if self.environment is None else \
+            [np.pi * self.environment.mean_radiance * np.pi * radius**2]
+        weights = np.concatenate([tri_power[self.index], self.objects.selection_power(),
+                                  env_power])
         self.distribution = sampling.Distribution1D(weights)
         k = len(self.index)
         self.num_triangles = k
         self.pmf_by_triangle = np.zeros(scene.num_triangles)
         self.pmf_by_triangle[self.index] = self.distribution.pmf[:k]
-        self.pmf_by_light = self.distribution.pmf[k:]
+        self.pmf_by_light = self.distribution.pmf[k:k + self.objects.count]
+        self.pmf_environment = float(self.distribution.pmf[-1]) if env is not None else 0.0
+        self.environment_index = len(weights) - 1 if env is not None else -1
         self.area_by_triangle = np.where(area > 0, area, 1.0)
 
     def __len__(self):
@@ -394,7 +405,14 @@ class LightSampler:
                                   0.0)
             pdf[tri] = pdf_sa
             scale[tri] = np.abs(c).max(axis=(1, 2))
-        obj = np.nonzero(~is_tri)[0]
+        is_env = k_all == self.environment_index
+        env = np.nonzero(is_env)[0]
+        if len(env):
+            w, pdf_sa = self.environment.sample(u_point[env])
+            wi[env] = w
+            value[env] = self.environment.lookup(w) / np.maximum(pdf_sa, 1e-300)[:, None]
+            pdf[env] = pdf_sa
+        obj = np.nonzero(~is_tri & ~is_env)[0]
         if len(obj):
             j = k_all[obj] - self.num_triangles
             w, d, val, pdf_sa = self.objects.sample(j, p[obj], u_point[obj])

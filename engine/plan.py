@@ -32,6 +32,7 @@ class Plan:
     polygon_aperture: bool
     shading_normals: bool
     world_light: bool
+    environment: bool
     fresnel: str
     max_bounces: int
     triangles: int
@@ -46,7 +47,8 @@ class Plan:
         if self.dof:
             s.append("sample lens (%s)" % ("polygon" if self.polygon_aperture else "disk"))
         s.append("intersect")
-        s.append("handle escaped rays" + (" (world colour)" if self.world_light else " (black)"))
+        s.append("handle escaped rays" + (" (environment map)" if self.environment else
+                                          " (world colour)" if self.world_light else " (black)"))
         if self.shading_normals:
             s.append("interpolate shading normals")
         if self.light_hits or self.sun_discs:
@@ -82,15 +84,18 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     lights = [light for light in scene.lights if max(light.power) > 0]
     light_hits = any((light.type == "AREA" and light.size_x > 0) or
                      (light.type in ("POINT", "SPOT") and light.radius > 0) for light in lights)
+    environment = scene.world.environment is not None
     sun_discs = any(light.type == "SUN" and light.angle > 0 for light in lights)
     cam = scene.camera
     dof = cam.aperture_radius > 0
     assert all(k in KIND_NAMES for k in kinds)
     return Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
-        glass=GLASS in kinds, absorber=NONE in kinds, emitters=num_emitters + len(lights) > 0,
+        glass=GLASS in kinds, absorber=NONE in kinds,
+        emitters=num_emitters + len(lights) > 0 or environment,
         num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,
         sun_discs=sun_discs, dof=dof, polygon_aperture=dof and cam.blades >= 3,
         shading_normals=scene.normals is not None and bool(scene.smooth.any()),
-        world_light=bool(np.max(scene.world.colour) > 0), fresnel=settings.fresnel,
+        world_light=bool(np.max(scene.world.colour) > 0) or environment,
+        environment=environment, fresnel=settings.fresnel,
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)

@@ -271,9 +271,27 @@ class Light:
 
 @dataclass(frozen=True)
 class World:
-    """Background: escaped rays take radiance `colour` (colour x strength in Blender)."""
+    """Background: escaped rays take radiance `colour` (colour x strength in Blender), or,
+    with `environment` (H, W, 3) float radiance (strength applied, row 0 at the bottom),
+    an equirectangular map looked up in the frame `texture_from_world` (3, 3), which is
+    importance-sampled as a light."""
 
     colour: tuple = (0.0, 0.0, 0.0)
+    environment: np.ndarray | None = None
+    texture_from_world: np.ndarray | None = None
+
+    def validate(self) -> None:
+        _colour(self.colour, "world colour")
+        if self.environment is not None:
+            env = np.asarray(self.environment)
+            if env.ndim != 3 or env.shape[2] != 3 or env.shape[0] < 1 or env.shape[1] < 1:
+                raise ValueError(f"world environment must be an (H, W, 3) image, got {env.shape}")
+            if not np.all(np.isfinite(env)) or env.min() < 0:
+                raise ValueError("world environment must be finite and non-negative")
+        if self.texture_from_world is not None:
+            m = np.asarray(self.texture_from_world, np.float64)
+            if m.shape != (3, 3) or not np.all(np.isfinite(m)) or abs(np.linalg.det(m)) < 1e-12:
+                raise ValueError("world texture_from_world must be an invertible 3x3 matrix")
 
 
 @dataclass(frozen=True)
@@ -448,7 +466,7 @@ class SceneBuilder:
     def build(self, camera: Camera, world: World | None = None) -> Scene:
         camera.validate()
         world = world or World()
-        World(tuple(_colour(world.colour, "world colour")))
+        world.validate()
         materials = Materials.from_list(self._materials)
         names, corners, normals, smooth, mat, obj = [], [], [], [], [], []
         any_normals = any(m[2] is not None for m in self._meshes)

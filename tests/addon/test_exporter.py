@@ -390,3 +390,47 @@ def test_to_core_groups_instances(fresh, core):
     scene, _ = exporter.to_core(exp, core)
     assert scene.num_triangles == 4 * 12
     assert any("(+3 instances)" in name for name in scene.object_names)
+
+
+def _environment_world(image, rotation=None, strength=2.0):
+    world = bpy.data.worlds.new("Sky")
+    world.use_nodes = True
+    nt = world.node_tree
+    bg = nt.nodes["Background"]
+    bg.inputs["Strength"].default_value = strength
+    tex = nt.nodes.new("ShaderNodeTexEnvironment")
+    tex.image = image
+    nt.links.new(tex.outputs["Color"], bg.inputs["Color"])
+    if rotation is not None:
+        mapping = nt.nodes.new("ShaderNodeMapping")
+        mapping.inputs["Rotation"].default_value = rotation
+        coords = nt.nodes.new("ShaderNodeTexCoord")
+        nt.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+        nt.links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    world.color = (0.1, 0.2, 0.3)
+    return world
+
+
+def test_environment_texture_is_exported_with_strength_and_rotation(fresh, tmp_path, rng):
+    cube_object()
+    pixels = rng.random((6, 10, 4)).astype(np.float32)
+    image = bpy.data.images.new("sky", 10, 6, float_buffer=True)
+    image.pixels.foreach_set(pixels.ravel())
+    fresh.world = _environment_world(image, rotation=(0.0, 0.0, np.pi / 2))
+    exp = export(fresh)
+    env = exp.environment
+    assert np.allclose(env["environment"], 2.0 * pixels[..., :3], atol=1e-6)
+    assert np.allclose(env["texture_from_world"] @ [1, 0, 0], [0, 1, 0], atol=1e-6)
+    assert not any("Sky" in w for w in exp.warnings)
+
+
+def test_missing_environment_image_warns_and_uses_a_constant_world(fresh, tmp_path):
+    cube_object()
+    image = bpy.data.images.new("gone", 4, 4)
+    image.source = "FILE"  # now backed by a file that does not exist
+    image.filepath = str(tmp_path / "nowhere.hdr")
+    fresh.world = _environment_world(image)
+    exp = export(fresh)
+    assert exp.environment is None
+    assert any("world 'Sky'" in w and "cannot be read" in w for w in exp.warnings)
+    assert np.allclose(exp.world_colour, (0.1, 0.2, 0.3))

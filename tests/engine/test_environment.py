@@ -1,0 +1,91 @@
+"""Environment-map world light: mapping, importance sampling, known answers."""
+
+import numpy as np
+import pytest
+
+from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from engine.environment import EnvironmentMap
+from tests.scenes import look_at, uv_sphere
+from tests.stats import SIGNIFICANCE, chi2_test
+
+
+def test_equirectangular_mapping_follows_blender():
+    env = EnvironmentMap(np.ones((8, 16, 3)))
+    d = np.array([[1.0, 0, 0], [0, 1.0, 0], [-1.0, 0, 0], [0, 0, 1.0], [0, 0, -1.0]])
+    u, v = env.to_uv(d)
+    assert np.allclose(u[:3], [0.5, 0.25, 0.0]) and np.allclose(v, [0.5, 0.5, 0.5, 1.0, 0.0])
+    assert np.allclose(env.from_uv(u, v), d, atol=1e-12)
+
+
+def test_rotation_turns_the_lookup(rng):
+    img = rng.random((9, 17, 3))
+    rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # 90 deg about z
+    d = rng.normal(size=(100, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    assert np.allclose(EnvironmentMap(img, rot).lookup(d), EnvironmentMap(img).lookup(d @ rot.T))
+
+
+def test_sampling_follows_luminance_and_pdf_is_consistent(rng):
+    """Chi-square over the map's pixels: counts in proportion to luminance x cos(elev)."""
+    h, w, n = 9, 17, 200_000
+    img = rng.random((h, w, 3)) ** 3
+    env = EnvironmentMap(img)
+    d, pdf = env.sample(rng.random((n, 2)))
+    u, v = env.to_uv(d)
+    cells = np.minimum((v * h).astype(int), h - 1) * w + np.minimum((u * w).astype(int), w - 1)
+    observed = np.bincount(cells, minlength=h * w)
+    p, dof = chi2_test(observed, n * env.distribution.pmf)
+    assert dof > 100 and p > SIGNIFICANCE / 10, p
+    assert np.allclose(env.pdf(d), pdf, rtol=1e-6)
+    # The density integrates to one over the sphere (Monte Carlo with uniform directions).
+    z = rng.uniform(-1, 1, 400_000)
+    phi = rng.uniform(0, 2 * np.pi, 400_000)
+    s = np.sqrt(1 - z * z)
+    dirs = np.column_stack([s * np.cos(phi), s * np.sin(phi), z])
+    assert np.mean(env.pdf(dirs)) * 4 * np.pi == pytest.approx(1.0, rel=0.01)
+
+
+def test_uniform_map_equals_a_constant_world():
+    """A diffuse sphere lit by a uniform map of radiance L reflects albedo x L, like the
+    constant world (here found through light sampling and MIS as well)."""
+    L, a = 0.7, 0.5
+    out = []
+    for world in (World((L, L, L)), World((0, 0, 0), environment=np.full((16, 32, 3), L))):
+        b = SceneBuilder()
+        m = b.add_material(Material.diffuse("ball", (a, a, a)))
+        v, t, n = uv_sphere((0, 0, 0), 1.0, 48, 24)
+        b.add_mesh("ball", v, t, m, corner_normals=n)
+        scene = b.build(Camera(world_from_camera=look_at((0, -4, 0), (0, 0, 0)), lens_mm=50),
+                        world)
+        r = render(scene, RenderSettings(width=24, height=18, samples=32, max_bounces=2, seed=3))
+        out.append(r)
+    const, env = out
+    centre = env.combined[7:11, 10:14, :3]
+    assert np.allclose(centre, a * L, atol=5 * np.sqrt(env.variance[7:11, 10:14].max()) + 1e-6)
+    assert np.allclose(env.combined[0, 0, :3], L)  # background pixels see the map
+    assert "handle escaped rays (environment map)" in env.plan.stages()
+
+
+@pytest.mark.slow
+def test_upper_hemisphere_sky_on_a_plane():
+    """Sky of radiance 1 above the horizon, black below: a Lambert plane facing up gets
+    E = pi, so it reflects albedo x 1, whatever mix of light and BSDF sampling finds it."""
+    h, w = 32, 64
+    img = np.zeros((h, w, 3))
+    img[h // 2:] = 1.0
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("ground", (0.5, 0.5, 0.5)))
+    b.add_mesh("ground", np.array([[-1e3, -1e3, 0], [1e3, -1e3, 0], [1e3, 1e3, 0], [-1e3, 1e3, 0]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), m)
+    cam = Camera(type="ORTHO", ortho_scale=0.01,
+                 world_from_camera=look_at((0, 0, 1), (0, 0, 0), up=(0, 1, 0)))
+    r = render(b.build(cam, World((0, 0, 0), environment=img)),
+               RenderSettings(width=8, height=8, samples=64, max_bounces=0, seed=2))
+    mean = r.combined[..., 0].mean()
+    err = np.sqrt(r.variance[..., 0].astype(float).sum()) / 64
+    assert abs(mean - 0.5) < 5 * err + 1e-6, (mean, err)
+
+
+def test_invalid_environment_is_refused():
+    with pytest.raises(ValueError, match="environment"):
+        SceneBuilder().build(Camera(), World((0, 0, 0), environment=np.full((4, 8, 3), -1.0)))
