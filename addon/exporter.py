@@ -212,6 +212,7 @@ class _Exporter:
             return
         spec = light_settings(obj.data, np.array(inst.matrix_world.copy()), obj.name, self.warn)
         if spec is not None:
+            spec["visible_camera"] = bool(getattr(obj, "visible_camera", False))
             self.out.lights.append(spec)
 
     def read(self, obj, key):
@@ -242,7 +243,9 @@ def light_settings(light, matrix_world, name, warn):
         colour = colour * np.array(light.temperature_color[:3])
     power = colour * float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
     spec = dict(name=name, type=light.type, power=tuple(power), matrix=matrix_world,
-                normalize=bool(getattr(light, "normalize", True)))
+                normalize=bool(getattr(light, "normalize", True)),
+                use_mis=bool(getattr(getattr(light, "cycles", None),
+                                     "use_multiple_importance_sampling", True)))
     if light.type in ("POINT", "SPOT"):
         spec.update(radius=float(light.shadow_soft_size),
                     soft_falloff=bool(getattr(light, "use_soft_falloff", True)))

@@ -132,7 +132,8 @@ class Integrator:
             # Handle light objects the rays pass through (lights are transparent).
             if self.plan.light_hits or self.plan.sun_discs:
                 self.handle_light_hits(radiance, live, throughput, o, d,
-                                       np.where(prim < 0, tmax, t), prim < 0, prev_pdf)
+                                       np.where(prim < 0, tmax, t), prim < 0, prev_pdf,
+                                       camera=depth == 0)
 
             # Handle escaped rays.
             miss = prim < 0
@@ -295,14 +296,17 @@ class Integrator:
         return keep
 
     def handle_light_hits(self, radiance, live, throughput, o, d, t_surface, escaped,
-                          prev_pdf):
+                          prev_pdf, camera):
         """Add the radiance of light objects crossed before the surface hit (and of sun
-        discs for escaped rays), MIS-weighted after non-delta bounces."""
+        discs for escaped rays), MIS-weighted after non-delta bounces. Camera rays see
+        only lights visible to the camera; other rays only lights with MIS on (Cycles)."""
         t0 = time.perf_counter()
         objects = self.emitters.objects
         soft = np.isfinite(prev_pdf)
         mis = soft.any() and self.plan.light_sampling
-        for j in np.nonzero(objects.intersectable & (objects.power.max(axis=1) > 0))[0]:
+        seen = (objects.visible_camera if camera else objects.use_mis) & \
+            (objects.power.max(axis=1) > 0)
+        for j in np.nonzero(objects.intersectable & seen)[0]:
             t, le = objects.intersect(j, o, d, t_surface)
             hit = np.isfinite(t)
             if not hit.any():
@@ -315,7 +319,7 @@ class Integrator:
                 w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
             radiance[live[hit]] += throughput[hit] * le[hit] * w[hit, None]
         if self.plan.sun_discs and escaped.any():
-            for j in np.nonzero((objects.type == 2) & (objects.cos_half_angle < 1.0))[0]:
+            for j in np.nonzero((objects.type == 2) & (objects.cos_half_angle < 1.0) & seen)[0]:
                 inside = escaped & (d @ -objects.direction[j] >= objects.cos_half_angle[j])
                 if not inside.any():
                     continue

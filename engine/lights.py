@@ -103,6 +103,8 @@ class LightObjects:
         self.area = self.len_u * self.len_v * np.where(self.elliptic, np.pi / 4, 1.0)
         self.half_spread = np.array([0.5 * float(light.spread) for light in lights])
         normalize = np.array([bool(light.normalize) for light in lights])
+        self.visible_camera = np.array([bool(light.visible_camera) for light in lights], bool)
+        self.use_mis = np.array([bool(light.use_mis) for light in lights], bool)
         # Emitted radiance per unit power for the surface-like lights.
         sphere_area = 4.0 * np.pi * self.radius**2
         with np.errstate(divide="ignore", invalid="ignore"):

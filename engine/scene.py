@@ -236,6 +236,9 @@ class Light:
     angle : a sun's angular diameter (radians).
     shape, size_x, size_y, spread, normalize : area light shape, size, spread (radians)
         and whether power is normalised by area (Blender 4.5+; default on).
+    visible_camera : camera rays see the light (Blender's object ray visibility; off by
+        default for lights). use_mis : BSDF rays can hit it (Cycles' "Multiple Importance"
+        light option, on by default); off, it is reached by light sampling only.
     """
 
     name: str
@@ -252,6 +255,8 @@ class Light:
     size_y: float = 1.0
     spread: float = math.pi
     normalize: bool = True
+    visible_camera: bool = False
+    use_mis: bool = True
 
     def validate(self) -> None:
         who = f"light '{self.name}'"

@@ -151,11 +151,22 @@ def test_camera_sees_the_front_of_an_area_light_and_through_it():
     for eye, expected in (((0, 0, -3), 10.0 + 0.25), ((0, 0, 3), 0.25)):
         b = SceneBuilder()
         area = 4.0
-        b.add_light(Light("panel", "AREA", (10.0 * np.pi * area,) * 3, at((0, 0, 0)), size_x=2.0))
+        b.add_light(Light("panel", "AREA", (10.0 * np.pi * area,) * 3, at((0, 0, 0)), size_x=2.0,
+                          visible_camera=True))
         scene = b.build(Camera(world_from_camera=look_at(eye, (0, 0, 0), up=(0, 1, 0)),
                                lens_mm=80), World((0.25, 0.25, 0.25)))
         r = render(scene, RenderSettings(width=8, height=8, samples=2, max_bounces=0))
         assert np.allclose(r.combined[3:5, 3:5, :3], expected), (eye, r.combined[4, 4])
+
+
+def test_lights_are_invisible_to_the_camera_by_default():
+    """Blender lights default to visible_camera off: the camera sees the world only."""
+    b = SceneBuilder()
+    b.add_light(Light("panel", "AREA", (100.0,) * 3, at((0, 0, 0)), size_x=2.0))
+    scene = b.build(Camera(world_from_camera=look_at((0, 0, -3), (0, 0, 0), up=(0, 1, 0)),
+                           lens_mm=80), World((0.25, 0.25, 0.25)))
+    r = render(scene, RenderSettings(width=8, height=8, samples=2, max_bounces=0))
+    assert np.allclose(r.combined[..., :3], 0.25)
 
 
 def test_lights_share_one_power_distribution():
