@@ -138,7 +138,7 @@ class Integrator:
             # Handle escaped rays.
             miss = prim < 0
             if miss.any():
-                self.handle_escaped(radiance, live[miss], throughput[miss], d[miss],
+                self.handle_escaped(radiance, live[miss], throughput[miss], o[miss], d[miss],
                                     prev_pdf[miss])
             hit = ~miss
             live, throughput, prev_pdf = live[hit], throughput[hit], prev_pdf[hit]
@@ -223,7 +223,7 @@ class Integrator:
         self._count("intersect", time.perf_counter() - t0)
         return out
 
-    def handle_escaped(self, radiance, idx, throughput, d, prev_pdf):
+    def handle_escaped(self, radiance, idx, throughput, o, d, prev_pdf):
         """Escaped rays take the world: a constant colour (found by BSDF sampling only, as
         in Cycles) or the environment map, MIS-weighted against its light sampling."""
         if self.plan.environment:
@@ -232,8 +232,8 @@ class Integrator:
             w = np.ones(len(idx))
             soft = np.isfinite(prev_pdf)
             if soft.any() and self.plan.light_sampling:
-                w[soft] = power_heuristic(prev_pdf[soft],
-                                          self.emitters.pmf_environment * env.pdf(d[soft]))
+                w[soft] = power_heuristic(prev_pdf[soft], self.emitters.pmf_environment(o[soft])
+                                          * env.pdf(d[soft]))
             radiance[idx] += throughput * le * w[:, None]
         elif self.plan.world_light:
             radiance[idx] += throughput * self.world
@@ -277,7 +277,8 @@ class Integrator:
         soft = emissive & np.isfinite(prev_pdf)
         if soft.any() and self.plan.light_sampling:
             cos_l = np.abs(bsdf.dot(hits.ng[soft], hits.wo[soft]))
-            pdf_l = (self.emitters.pdf_triangle_area(hits.prim[soft]) * hits.t[soft] ** 2
+            origin = hits.p[soft] + hits.wo[soft] * hits.t[soft, None]
+            pdf_l = (self.emitters.pdf_triangle_area(origin, hits.prim[soft]) * hits.t[soft] ** 2
                      / np.maximum(cos_l, 1e-300))
             pb = prev_pdf[soft]
             w[soft] = power_heuristic(pb, pdf_l)
@@ -314,7 +315,7 @@ class Integrator:
             w = np.ones(len(live))
             if mis:
                 sel = hit & soft
-                pdf_l = self.emitters.pmf_by_light[j] * objects.pdf(
+                pdf_l = self.emitters.pmf_light(o[sel], j) * objects.pdf(
                     np.full(int(sel.sum()), j), o[sel], d[sel], t[sel])
                 w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
             radiance[live[hit]] += throughput[hit] * le[hit] * w[hit, None]
@@ -326,9 +327,9 @@ class Integrator:
                 w = np.ones(len(live))
                 if mis:
                     sel = inside & soft
-                    pdf_l = self.emitters.pmf_by_light[j] / (
+                    pdf_l = self.emitters.pmf_light(o[sel], j) / (
                         2.0 * np.pi * (1.0 - objects.cos_half_angle[j]))
-                    w[sel] = power_heuristic(prev_pdf[sel], np.full(int(sel.sum()), pdf_l))
+                    w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
                 le = objects.power[j] * objects.sun_radiance[j]
                 radiance[live[inside]] += throughput[inside] * le * w[inside, None]
         self._count("handle light hits", time.perf_counter() - t0)
@@ -357,10 +358,15 @@ class Integrator:
         t1 = time.perf_counter()
         origin = offset_ray_origin(p[ok], ng[ok], wi[ok], hits.scale[diffuse[ok]])
         finite = np.isfinite(dist[ok])
+        # Aim from the offset origin at the sampled point itself: reusing wi from the
+        # un-offset point would reach a grazing emitter's plane early and self-occlude.
         target = p[ok] + wi[ok] * np.where(finite, dist[ok], 0.0)[:, None]
-        seg_len = np.where(finite, np.linalg.norm(target - origin, axis=1), 3e38)
+        seg = target - origin
+        seg_len = np.linalg.norm(seg, axis=1)
+        direction = np.where(finite[:, None], seg / np.maximum(seg_len, 1e-300)[:, None], wi[ok])
         light_eps = RAY_EPSILON * np.maximum(light_scale[ok], 1e-30)
-        blocked = self.accel.occluded(origin, wi[ok], np.where(finite, seg_len - light_eps, 3e38))
+        blocked = self.accel.occluded(origin, direction,
+                                      np.where(finite, seg_len - light_eps, 3e38))
         self._count("trace shadow rays", time.perf_counter() - t1)
         vis = ~blocked
         radiance[rows[ok][vis]] += contrib[vis]

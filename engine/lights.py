@@ -331,12 +331,19 @@ class LightObjects:
 
 
 class LightSampler:
-    """All emitters of a scene under one power-proportional distribution.
+    """All emitters of a scene, chosen by a mixture of two distributions.
 
-    Entries 0..k-1 are emissive triangles, k..k+m-1 light objects.
-    pmf_by_triangle : (t,) selection probability of every scene triangle (0 if not an
-    emitter), for MIS on BSDF-sampled emitter hits.
+    Entries 0..k-1 are emissive triangles, then light objects, then the environment.
+    With few emitters the choice is by power alone. With many, a voxel grid over the
+    scene holds, per voxel, a distribution by power / distance^2 from the voxel (so a
+    point picks the lights that matter to it); a point samples that local distribution
+    with probability LOCAL_WEIGHT and the global power distribution otherwise. Both are
+    known at any point, so `pmf(points, entries)` is exact for MIS.
     """
+
+    LOCAL_WEIGHT = 0.75
+    GRID = 8  # voxels per axis
+    MIN_ENTRIES, MAX_ENTRIES = 8, 20_000  # the grid is (GRID^3, entries) floats
 
     def __init__(self, scene: Scene):
         emission = scene.materials.emission[scene.material_index]
@@ -361,15 +368,78 @@ class LightSampler:
         self.distribution = sampling.Distribution1D(weights)
         k = len(self.index)
         self.num_triangles = k
-        self.pmf_by_triangle = np.zeros(scene.num_triangles)
-        self.pmf_by_triangle[self.index] = self.distribution.pmf[:k]
-        self.pmf_by_light = self.distribution.pmf[k:k + self.objects.count]
-        self.pmf_environment = float(self.distribution.pmf[-1]) if env is not None else 0.0
+        self.num_entries = len(weights)
+        self.entry_of_triangle = np.full(scene.num_triangles, -1, np.int64)
+        self.entry_of_triangle[self.index] = np.arange(k)
         self.environment_index = len(weights) - 1 if env is not None else -1
         self.area_by_triangle = np.where(area > 0, area, 1.0)
+        # Entry positions (suns and the environment have none: distance plays no part).
+        centres = np.concatenate([self.corners.mean(axis=1), self.objects.centre,
+                                  np.zeros((len(env_power), 3))])
+        distant = np.concatenate([np.zeros(k, bool), self.objects.type == SUN,
+                                  np.ones(len(env_power), bool)])
+        self.scene_radius = radius
+        if self.MIN_ENTRIES <= self.num_entries <= self.MAX_ENTRIES and len(v):
+            self._build_grid(v.reshape(-1, 3), weights, centres, distant)
+
+    def _build_grid(self, points, weights, centres, distant):
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        pad = 1e-6 * max(float(np.max(hi - lo)), 1e-12)
+        self.grid_lo, size = lo - pad, (hi - lo) + 2 * pad
+        self.cell = np.maximum(size / self.GRID, 1e-30)
+        g = self.GRID
+        idx = np.stack(np.meshgrid(np.arange(g), np.arange(g), np.arange(g), indexing="ij"),
+                       -1).reshape(-1, 3)
+        voxel_centres = self.grid_lo + (idx + 0.5) * self.cell
+        half_diag2 = float(np.sum((0.5 * self.cell) ** 2))
+        d2 = np.sum((voxel_centres[:, None, :] - centres[None, :, :]) ** 2, axis=2)
+        # Irradiance-like importance: flux / (4 pi d^2) for local emitters (distance floored
+        # at the voxel's size), the irradiance itself for suns and the environment.
+        importance = weights[None, :] / (4.0 * np.pi * np.maximum(d2, half_diag2))
+        importance[:, distant] = weights[distant] / (np.pi * self.scene_radius**2)
+        total = importance.sum(axis=1, keepdims=True)
+        self.local_pmf = np.where(total > 0, importance / np.where(total > 0, total, 1), 0.0)
+        cdf = np.cumsum(self.local_pmf, axis=1)
+        cdf[:, -1] = 1.0
+        # Row v's CDF shifted by v: one monotone array for a batched searchsorted.
+        self.local_cdf_flat = (cdf + np.arange(len(cdf))[:, None]).ravel()
+        self.grid_has_mass = total[:, 0] > 0
+
+    def _voxel(self, p):
+        ijk = np.clip(((p - self.grid_lo) / self.cell).astype(np.int64), 0, self.GRID - 1)
+        return (ijk[:, 0] * self.GRID + ijk[:, 1]) * self.GRID + ijk[:, 2]
+
+    def pmf(self, p, entries):
+        """Probability (n,) of choosing `entries` (n,) from points p (n, 3)."""
+        glob = self.distribution.pmf[entries]
+        if not hasattr(self, "local_pmf"):
+            return glob
+        vox = self._voxel(p)
+        local = self.local_pmf[vox, entries]
+        a = np.where(self.grid_has_mass[vox], self.LOCAL_WEIGHT, 0.0)
+        return a * local + (1.0 - a) * glob
+
+    def choose(self, p, u):
+        """Entries (n,) chosen from points p (n, 3) with u (n,) and their probability."""
+        if not hasattr(self, "local_pmf"):
+            k = self.distribution.sample(u)
+            return k, self.distribution.pmf[k]
+        vox = self._voxel(p)
+        a = np.where(self.grid_has_mass[vox], self.LOCAL_WEIGHT, 0.0)
+        use_local = u < a
+        k = np.empty(len(p), np.int64)
+        if (~use_local).any():
+            ug = (u[~use_local] - a[~use_local]) / (1.0 - a[~use_local])
+            k[~use_local] = self.distribution.sample(ug)
+        if use_local.any():
+            ul = np.minimum(u[use_local] / a[use_local], 1.0 - 1e-12)
+            v = vox[use_local]
+            flat = np.searchsorted(self.local_cdf_flat, v + ul, side="right")
+            k[use_local] = np.clip(flat - v * self.num_entries, 0, self.num_entries - 1)
+        return k, self.pmf(p, k)
 
     def __len__(self):
-        return len(self.distribution.pmf)
+        return self.num_entries
 
     def sample(self, p, u_select, u_point):
         """Next-event estimation from points p (n, 3).
@@ -380,8 +450,7 @@ class LightSampler:
         scale at the sampled point for the shadow ray's offset.
         """
         n = len(p)
-        k_all = self.distribution.sample(u_select)
-        p_sel = self.distribution.pmf[k_all]
+        k_all, p_sel = self.choose(p, u_select)
         is_tri = k_all < self.num_triangles
         wi = np.zeros((n, 3))
         dist = np.full(n, np.inf)
@@ -425,6 +494,16 @@ class LightSampler:
         value /= np.where(p_sel > 0, p_sel, 1.0)[:, None]
         return wi, dist, value, pdf * p_sel, scale
 
-    def pdf_triangle_area(self, triangle: np.ndarray) -> np.ndarray:
-        """Area density of sampling each emissive triangle point (selection included)."""
-        return self.pmf_by_triangle[triangle] / self.area_by_triangle[triangle]
+    def pdf_triangle_area(self, p, triangle: np.ndarray) -> np.ndarray:
+        """Area density of sampling points on emissive triangles from points p (n, 3),
+        selection included."""
+        entry = self.entry_of_triangle[triangle]
+        pm = np.where(entry >= 0, self.pmf(p, np.maximum(entry, 0)), 0.0)
+        return pm / self.area_by_triangle[triangle]
+
+    def pmf_light(self, p, j: int) -> np.ndarray:
+        """Probability (n,) of choosing light object j from points p (n, 3)."""
+        return self.pmf(p, np.full(len(p), self.num_triangles + j))
+
+    def pmf_environment(self, p) -> np.ndarray:
+        return self.pmf(p, np.full(len(p), self.environment_index))

@@ -206,3 +206,27 @@ def test_scale_comparison_rejects_a_fixed_epsilon(monkeypatch):
     other = render(scaled_cbspheres(1e3), RenderSettings(**{**st.__dict__, "seed": 12}))
     z, critical = max_block_z(ref, other)
     assert z > critical
+
+
+def test_grazing_shadow_rays_reach_the_emitter():
+    """Regression: a small horizontal emitter seen at a grazing angle from the floor
+    (shadow rays nearly parallel to its plane) lights the floor as the small-source
+    formula says, E = L A cos_l cos / d^2, with no self-occlusion of the shadow rays."""
+    L, side, h, x, rho = 50.0, 0.02, 0.2, 3.0, 0.5
+    b = SceneBuilder()
+    lm = b.add_material(Material.emission_only("lamp", (1, 1, 1), L))
+    pm = b.add_material(Material.diffuse("plane", (rho,) * 3))
+    s = side / 2
+    b.add_mesh("lamp", np.array([[x - s, -s, h], [x + s, -s, h], [x + s, s, h], [x - s, s, h]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), lm)
+    b.add_mesh("plane", np.array([[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0.0]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), pm)
+    cam = Camera(type="ORTHO", ortho_scale=0.002,
+                 world_from_camera=look_at((0, 0, 0.5), (0, 0, 0), up=(0, 1, 0)))
+    r = render(b.build(cam, World()), RenderSettings(width=8, height=8, samples=64,
+                                                     max_bounces=0, seed=5))
+    mean, err = image_mean_and_error(r)
+    d2 = x * x + h * h
+    cos = h / np.sqrt(d2)  # both cosines equal: horizontal emitter, horizontal floor
+    expected = rho * L * side * side * cos * cos / d2 / np.pi
+    assert abs(mean - expected) < 5 * err + 2e-3 * expected, (mean, expected, err)

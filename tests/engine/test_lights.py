@@ -186,3 +186,55 @@ def test_invalid_light_raises_naming_it():
         SceneBuilder().add_light(Light("Key", "POINT", (-1.0, 0, 0)))
     with pytest.raises(ValueError, match="light 'Key'.*type"):
         SceneBuilder().add_light(Light("Key", "LASER", (1.0, 1, 1)))
+
+
+def many_lights_scene(n=30, seed=4):
+    r = np.random.default_rng(seed)
+    lights = [Light(f"L{i}", "POINT", tuple(r.uniform(5, 50, 3)),
+                    at((r.uniform(-5, 5), r.uniform(-5, 5), r.uniform(0.5, 3))))
+              for i in range(n)]
+    return lights
+
+
+def test_many_lights_use_the_spatial_grid_and_stay_unbiased():
+    """With many emitters the choice is spatially aware; the estimate still equals the
+    sum of each light's closed-form irradiance."""
+    lights = many_lights_scene()
+    e = np.zeros(3)
+    for light in lights:
+        pos = np.asarray(light.matrix)[:3, 3]
+        d2 = float(pos @ pos)
+        e += np.asarray(light.power) / (4 * np.pi * d2) * (pos[2] / math.sqrt(d2))
+    mean, err, r = plane_scene(lights, samples=256)
+    expected = RHO * e / np.pi
+    assert np.all(np.abs(mean - expected) <= 5 * err + 1e-6 * expected), (mean, expected, err)
+
+
+def test_spatial_choice_samples_its_own_pmf(rng):
+    """choose() draws entries with exactly the probabilities pmf() reports (used by MIS)."""
+    from engine.lights import LightSampler
+
+    b = SceneBuilder()
+    pm = b.add_material(Material.diffuse("plane", (RHO,) * 3))
+    b.add_mesh("plane", np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0.0]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), pm)
+    for light in many_lights_scene(12):
+        b.add_light(light)
+    sampler = LightSampler(b.build(Camera(), World()))
+    assert hasattr(sampler, "local_pmf")
+    n = 200_000
+    p = np.tile([[3.0, -4.0, 0.0]], (n, 1))
+    k, pm_k = sampler.choose(p, rng.random(n))
+    counts = np.bincount(k, minlength=len(sampler))
+    expected = sampler.pmf(p[:len(sampler)], np.arange(len(sampler))) * n
+    assert np.allclose(pm_k, sampler.pmf(p, k))
+    from tests.stats import chi2_test
+    pval, _ = chi2_test(counts, expected)
+    assert pval > 1e-3
+    # The local part favours the nearest light over the global power order.
+    local_best = np.argmax(sampler.pmf(p[:len(sampler)], np.arange(len(sampler))))
+    pos = np.array([np.asarray(light.matrix)[:3, 3] for light in many_lights_scene(12)])
+    d2 = np.sum((pos - [3.0, -4.0, 0.0]) ** 2, axis=1)
+    power = np.array([np.mean(light.power) for light in many_lights_scene(12)])
+    assert local_best == np.argmax(power / np.maximum(d2, 1e-3)) or \
+        sampler.pmf(p[:1], np.array([local_best]))[0] > sampler.distribution.pmf[local_best]
