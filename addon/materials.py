@@ -110,11 +110,10 @@ class _Reader:
                           f"rendered as Lambert (roughness 0)")
             return MaterialSpec("diffuse", name, {"colour": self.colour(node, "Color")})
         if kind in GLOSSY_NODES:
-            r = self.number(node, "Roughness")
-            if r > ROUGHNESS_EPSILON:
-                self.warn(f"node '{node.name}' roughness {r:.3g} is not supported; rendered as "
-                          f"a mirror (roughness 0)")
-            return MaterialSpec("mirror", name, {"colour": self.colour(node, "Color")})
+            # Rough Glossy is Multiscatter GGX (Cycles' default for the node); at Cycles'
+            # delta threshold it is a perfect mirror.
+            return MaterialSpec("glossy", name, {"colour": self.colour(node, "Color"),
+                                                 "roughness": self.number(node, "Roughness")})
         if kind == "ShaderNodeBsdfGlass":
             r = self.number(node, "Roughness")
             if r > ROUGHNESS_EPSILON:
@@ -149,7 +148,9 @@ class _Reader:
                                    self.number(node, "Transmission"))
         roughness = self.number(node, "Roughness")
         strength = self.number(node, "Emission Strength", 0.0)
-        emission = tuple(strength * c for c in self.colour(node, "Emission Color",
+        # The colour input is "Emission Color" since 4.0 and "Emission" before.
+        emission_socket = "Emission Color" if "Emission Color" in node.inputs else "Emission"
+        emission = tuple(strength * c for c in self.colour(node, emission_socket,
                                                            (1.0, 1.0, 1.0)))
         kwargs = {"emission": emission} if strength > 0 else {}
         for label, w in (("Metallic", metallic), ("Transmission Weight", transmission)):
@@ -162,7 +163,17 @@ class _Reader:
         elif metallic >= 0.5:
             ctor, kwargs = "metal", {"base_colour": base, **kwargs}
         else:
-            return MaterialSpec("diffuse", name, {"colour": base, **kwargs})
+            # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
+            level = self.number(node, "Specular IOR Level", 0.5) \
+                if "Specular IOR Level" in node.inputs else 0.5
+            tint = self.colour(node, "Specular Tint", (1.0, 1.0, 1.0)) \
+                if "Specular Tint" in node.inputs and node.inputs["Specular Tint"].type == "RGBA" \
+                else (1.0, 1.0, 1.0)
+            if any(abs(c - 1.0) > 1e-6 for c in tint):
+                self.warn(f"node '{node.name}' Specular Tint is not supported; rendered white")
+            return MaterialSpec("principled", name, {
+                "base_colour": base, "roughness": roughness, "ior": self.ior(node),
+                "specular_ior_level": level, **kwargs})
         if roughness > ROUGHNESS_EPSILON:
             self.warn(f"node '{node.name}' roughness {roughness:.3g} is not supported; "
                       f"rendered smooth (roughness 0)")

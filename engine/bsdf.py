@@ -156,3 +156,179 @@ def sample_dielectric(wo, n, eta, reflection_tint, transmission_tint, u, fresnel
     weight = np.where((total > 0)[:, None], weight, 0.0)
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     return wi, weight, np.full(len(wo), DELTA_PDF), ~choose_r
+
+
+# ----------------------------------------------------------------- rough (GGX) lobes
+# Cycles' Multiscatter GGX at roughness r: alpha = r^2, isotropic. The single-scatter
+# lobe is F D G2 / (4 cos_o) (times cos_i, folded in), sampled from the distribution of
+# visible normals (Heitz 2018). Kulla-Conty energy compensation scales it by
+# 1 + Fms (1 - E(mu_o)) / E(mu_o), with E the white-furnace albedo of the single-scatter
+# lobe, E_avg its cosine-weighted mean and Fms = Fss E_avg / (1 - Fss (1 - E_avg)) for a
+# Fresnel whose hemispherical average is Fss (Cycles' microfacet_ggx_preserve_energy).
+# The Principled BSDF layers this specular over its diffuse base, which keeps the weight
+# 1 - albedo_spec(mu_o) (Cycles' closure_layering_weight).
+
+ALBEDO_TABLE_SIZE = 64
+MIN_ALPHA = 1e-4
+
+
+def ggx_d(cos_h: np.ndarray, a2: np.ndarray) -> np.ndarray:
+    c2 = np.minimum(cos_h * cos_h, 1.0)
+    return a2 / (np.pi * (1.0 - c2 + a2 * c2) ** 2)
+
+
+def ggx_lambda(cos_n: np.ndarray, a2: np.ndarray) -> np.ndarray:
+    c2 = np.maximum(cos_n * cos_n, 1e-300)
+    return 0.5 * (np.sqrt(1.0 + a2 * np.maximum(1.0 / c2 - 1.0, 0.0)) - 1.0)
+
+
+def sample_ggx_vndf(v_local: np.ndarray, alpha: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Visible-normal sample (Heitz 2018) for view directions v_local (n, 3), z up."""
+    vh = np.column_stack([alpha * v_local[:, 0], alpha * v_local[:, 1], v_local[:, 2]])
+    vh /= np.linalg.norm(vh, axis=1, keepdims=True)
+    lensq = vh[:, 0] ** 2 + vh[:, 1] ** 2
+    inv = 1.0 / np.sqrt(np.where(lensq > 0, lensq, 1.0))
+    t1 = np.where((lensq > 0)[:, None], np.column_stack([-vh[:, 1] * inv, vh[:, 0] * inv,
+                                                         np.zeros(len(vh))]),
+                  np.array([1.0, 0.0, 0.0]))
+    t2 = np.cross(vh, t1)
+    r = np.sqrt(u[:, 0])
+    phi = 2.0 * np.pi * u[:, 1]
+    p1 = r * np.cos(phi)
+    p2 = r * np.sin(phi)
+    s = 0.5 * (1.0 + vh[:, 2])
+    p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * p2
+    p3 = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
+    nh = p1[:, None] * t1 + p2[:, None] * t2 + p3[:, None] * vh
+    h = np.column_stack([alpha * nh[:, 0], alpha * nh[:, 1], np.maximum(nh[:, 2], 1e-12)])
+    return h / np.linalg.norm(h, axis=1, keepdims=True)
+
+
+def _fresnel_for(kind_fresnel: str, cos_hv: np.ndarray, eta: float) -> np.ndarray:
+    if kind_fresnel == "none":
+        return np.ones_like(cos_hv)
+    return fresnel_dielectric(cos_hv, np.full_like(cos_hv, eta))[0]
+
+
+class MicrofacetTables:
+    """Per-material tables over mu_o = cos(theta_o) for one GGX lobe (alpha, Fresnel).
+
+    compensation(mu) : Kulla-Conty factor 1 + Fms (1 - E) / E.
+    albedo(mu) : directional albedo of the compensated lobe with its Fresnel (what the
+        Principled base loses to the specular layer).
+    Integrals use a fixed stratified set of visible-normal samples, so the tables are
+    deterministic.
+    """
+
+    def __init__(self, alpha: float, fresnel: str = "dielectric", eta: float = 1.5):
+        self.alpha = max(float(alpha), MIN_ALPHA)
+        n_mu, n_s = ALBEDO_TABLE_SIZE, 1024
+        self.mu = np.linspace(1e-3, 1.0, n_mu)
+        k = int(np.sqrt(n_s))
+        g = (np.arange(k) + 0.5) / k
+        u = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
+        a2 = self.alpha**2
+        e_white = np.zeros(n_mu)
+        e_fresnel = np.zeros(n_mu)
+        for i, mu in enumerate(self.mu):
+            v = np.tile([np.sqrt(max(0.0, 1 - mu * mu)), 0.0, mu], (len(u), 1))
+            h = sample_ggx_vndf(v, np.full(len(u), self.alpha), u)
+            cos_hv = np.maximum(h @ v[0], 0.0)
+            wi = 2.0 * cos_hv[:, None] * h - v
+            cos_i = wi[:, 2]
+            ok = cos_i > 0
+            g1v = 1.0 / (1.0 + ggx_lambda(np.full(len(u), mu), a2))
+            g2 = 1.0 / (1.0 + ggx_lambda(np.full(len(u), mu), a2) + ggx_lambda(cos_i, a2))
+            w = np.where(ok, g2 / g1v, 0.0)  # f cos / pdf for VNDF sampling, F = 1
+            e_white[i] = w.mean()
+            e_fresnel[i] = (w * _fresnel_for(fresnel, cos_hv, eta)).mean()
+        e_white = np.clip(e_white, 1e-6, 1.0)
+        e_avg = 2.0 * np.trapz(e_white * self.mu, self.mu)
+        if fresnel == "none":
+            fss = 1.0
+        else:
+            m = np.linspace(0.0, 1.0, 2049)
+            fss = 2.0 * np.trapz(fresnel_dielectric(m, np.full_like(m, eta))[0] * m, m)
+        fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
+        self.compensation_table = 1.0 + fms * (1.0 - e_white) / e_white
+        self.albedo_table = np.clip(e_fresnel * self.compensation_table, 0.0, 1.0)
+        self.fresnel, self.eta = fresnel, float(eta)
+
+    def compensation(self, mu):
+        return np.interp(mu, self.mu, self.compensation_table)
+
+    def albedo(self, mu):
+        return np.interp(mu, self.mu, self.albedo_table)
+
+
+def eval_ggx(wo, wi, n, alpha, eta, fresnel):
+    """Single-scatter GGX reflection f * cos_i (n,) and its VNDF sampling pdf (n,)."""
+    cos_o = dot(n, wo)
+    cos_i = dot(n, wi)
+    h = wo + wi
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
+    a2 = alpha * alpha
+    d = ggx_d(dot(n, h), a2)
+    lo, li = ggx_lambda(cos_o, a2), ggx_lambda(cos_i, a2)
+    ok = (cos_o > 0) & (cos_i > 0)
+    safe_o = np.where(ok, cos_o, 1.0)
+    if fresnel == "none":
+        f = np.ones(len(wo))
+    else:
+        f = fresnel_dielectric(dot(h, wo), eta)[0]
+    common = d / (4.0 * safe_o)
+    value = np.where(ok, f * common / (1.0 + lo + li), 0.0)
+    pdf = np.where(ok, common / (1.0 + lo), 0.0)
+    return value, pdf
+
+
+def sample_ggx_reflection(wo, n, alpha, u):
+    """Directions wi (n, 3) from the visible normals of GGX about n."""
+    s, t = sampling.build_frame(n)
+    v = np.column_stack([dot(wo, s), dot(wo, t), dot(wo, n)])
+    h_local = sample_ggx_vndf(v, alpha, u)
+    h = h_local[:, :1] * s + h_local[:, 1:2] * t + h_local[:, 2:3] * n
+    return reflect(wo, h)
+
+
+def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo):
+    """Principled (diffuse base + GGX dielectric specular) or rough Glossy (specular only,
+    base = 0): f * cos_i (n, 3) and the lobe-mixture pdf (n,), plus the probability of
+    choosing the specular lobe (n,).
+
+    base : (n, 3) diffuse colour (zero for Glossy); spec_tint : (n, 3) specular weight;
+    comp, albedo : (n,) the compensation and specular albedo at mu_o.
+    """
+    diffuse_w = base * (1.0 - albedo)[:, None]
+    p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
+    spec, pdf_s = eval_ggx(wo, wi, n, alpha, eta, fresnel)
+    geometric_ok = (dot(wi, ng) > 0.0)
+    cos_i = np.where(geometric_ok, np.maximum(dot(wi, n), 0.0), 0.0)
+    spec = np.where(geometric_ok, spec, 0.0)
+    f_cos = diffuse_w * (cos_i / np.pi)[:, None] + spec_tint * (spec * comp)[:, None]
+    pdf = p_spec * np.where(geometric_ok, pdf_s, 0.0) + (1.0 - p_spec) * cos_i / np.pi
+    return f_cos, pdf, p_spec
+
+
+def _specular_probability(diffuse_w, spec_tint, albedo):
+    s = spec_tint.mean(axis=1) * albedo
+    d = diffuse_w.mean(axis=1)
+    return np.where(s + d > 0, s / np.maximum(s + d, 1e-300), 1.0)
+
+
+def sample_layered(wo, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo, u_lobe, u):
+    """Sample the layered lobe: pick specular or diffuse, then evaluate both (one-sample
+    MIS over the lobes). Returns (wi, weight, pdf)."""
+    diffuse_w = base * (1.0 - albedo)[:, None]
+    p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
+    choose_spec = u_lobe < p_spec
+    wi_spec = sample_ggx_reflection(wo, n, alpha, u)
+    local = sampling.sample_cosine_hemisphere(u)
+    s, t = sampling.build_frame(n)
+    wi_diff = local[:, :1] * s + local[:, 1:2] * t + local[:, 2:3] * n
+    wi = np.where(choose_spec[:, None], wi_spec, wi_diff)
+    f_cos, pdf, _ = eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp,
+                                 albedo)
+    ok = pdf > 0
+    weight = np.where(ok[:, None], f_cos / np.where(ok, pdf, 1.0)[:, None], 0.0)
+    return wi, weight, np.where(ok, pdf, 0.0)

@@ -28,7 +28,10 @@ import numpy as np
 from . import bsdf, sampling
 from .film import BACKGROUND_DEPTH
 from .sampling import Dim
-from .scene import DIFFUSE, GLASS, METAL, MIRROR, RenderSettings, Scene
+from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, PRINCIPLED, RenderSettings, Scene
+
+# Kinds with a non-delta lobe: they get next-event estimation and MIS.
+SMOOTH_KINDS = (DIFFUSE, PRINCIPLED, GLOSSY)
 
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
 # a few float32 ulps (embree intersects in float32), so the offset scales with the scene.
@@ -83,6 +86,14 @@ class Integrator:
         self.reflection_tint = m.reflection_tint
         self.transmission_tint = m.transmission_tint
         self.emission = m.emission
+        self.roughness = m.roughness if m.roughness is not None else np.zeros(len(m.kind))
+        # Albedo and energy-compensation tables of every rough (GGX) material in use.
+        self.microfacet = {}
+        for k in np.unique(scene.material_index):
+            if self.kind[k] in (PRINCIPLED, GLOSSY):
+                alpha = max(float(self.roughness[k]) ** 2, bsdf.MIN_ALPHA)
+                fresnel = "dielectric" if self.kind[k] == PRINCIPLED else "none"
+                self.microfacet[int(k)] = bsdf.MicrofacetTables(alpha, fresnel, float(self.ior[k]))
         self.world = np.asarray(scene.world.colour, np.float64)
         self.width = settings.width
         self.stage_calls: dict[str, int] = {}
@@ -338,7 +349,7 @@ class Integrator:
         """Next-event estimation at diffuse vertices: one emitter (triangle or light
         object) chosen by power, MIS-weighted against BSDF sampling."""
         t0 = time.perf_counter()
-        diffuse = np.nonzero(self.kind[hits.mat] == DIFFUSE)[0]
+        diffuse = np.nonzero(np.isin(self.kind[hits.mat], SMOOTH_KINDS))[0]
         if len(diffuse) == 0:
             return
         rows = live[diffuse]
@@ -346,7 +357,7 @@ class Integrator:
         u_pt = stream.get_2d(Dim.bounce(depth, Dim.LIGHT_POINT), rows=rows)
         p, ng, ns = hits.p[diffuse], hits.ng[diffuse], hits.ns[diffuse]
         wi, dist, value, pdf_l, light_scale = self.emitters.sample(p, u_sel, u_pt)
-        f_cos, pdf_bsdf = bsdf.eval_diffuse(wi, ns, ng, self.colour[hits.mat[diffuse]])
+        f_cos, pdf_bsdf = self.eval_bsdf(hits.wo[diffuse], wi, ns, ng, hits.mat[diffuse])
         ok = (max3(f_cos) > 0) & (max3(value) > 0) & (dist > 0)
         if not ok.any():
             return
@@ -370,6 +381,35 @@ class Integrator:
         self._count("trace shadow rays", time.perf_counter() - t1)
         vis = ~blocked
         radiance[rows[ok][vis]] += contrib[vis]
+
+    def _layer(self, k: int, wo, n):
+        """Per-vertex parameters of rough material k's layered lobe at view directions wo."""
+        tables = self.microfacet[k]
+        mu = np.clip(bsdf.dot(n, wo), 0.0, 1.0)
+        m = len(wo)
+        if self.kind[k] == PRINCIPLED:
+            base, tint, fresnel = np.tile(self.colour[k], (m, 1)), np.ones((m, 3)), "dielectric"
+        else:
+            base, tint, fresnel = np.zeros((m, 3)), np.tile(self.colour[k], (m, 1)), "none"
+        return dict(base=base, alpha=np.full(m, tables.alpha), eta=np.full(m, self.ior[k]),
+                    spec_tint=tint, fresnel=fresnel, comp=tables.compensation(mu),
+                    albedo=tables.albedo(mu))
+
+    def eval_bsdf(self, wo, wi, ns, ng, mat):
+        """f * cos (n, 3) and sampling pdf (n,) of the non-delta BSDFs, for light sampling."""
+        f_cos, pdf = np.zeros((len(wo), 3)), np.zeros(len(wo))
+        kind = self.kind[mat]
+        sel = np.nonzero(kind == DIFFUSE)[0]
+        if len(sel):
+            f_cos[sel], pdf[sel] = bsdf.eval_diffuse(wi[sel], ns[sel], ng[sel],
+                                                     self.colour[mat[sel]])
+        for k in self.microfacet:
+            sel = np.nonzero(mat == k)[0]
+            if len(sel):
+                lobe = self._layer(k, wo[sel], ns[sel])
+                f_cos[sel], pdf[sel], _ = bsdf.eval_layered(wo[sel], wi[sel], ns[sel], ng[sel],
+                                                            **lobe)
+        return f_cos, pdf
 
     def sample_bsdf(self, hits: Hits, stream, live, depth):
         """Sample each vertex's BSDF by material kind (only the kinds the plan lists)."""
@@ -396,6 +436,21 @@ class Integrator:
             if len(sel):
                 wi[sel], weight[sel], pdf[sel] = bsdf.sample_metal(
                     hits.wo[sel], _specular_normal(hits, sel), colour[sel])
+        if self.microfacet:
+            rough = np.nonzero(np.isin(kind, (PRINCIPLED, GLOSSY)))[0]
+            if len(rough):
+                u_lobe = stream.get_1d(Dim.bounce(depth, Dim.LOBE), rows=live[rough])
+                u2 = stream.get_2d(Dim.bounce(depth, Dim.BSDF), rows=live[rough])
+                mat = hits.mat[rough]
+                for k in self.microfacet:
+                    part = np.nonzero(mat == k)[0]
+                    if len(part) == 0:
+                        continue
+                    sel = rough[part]
+                    lobe = self._layer(k, hits.wo[sel], hits.ns[sel])
+                    wi[sel], weight[sel], pdf[sel] = bsdf.sample_layered(
+                        hits.wo[sel], hits.ns[sel], hits.ng[sel], u_lobe=u_lobe[part],
+                        u=u2[part], **lobe)
         if self.plan.glass:
             sel = np.nonzero(kind == GLASS)[0]
             if len(sel):

@@ -11,7 +11,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .scene import DIFFUSE, GLASS, KIND_NAMES, METAL, MIRROR, NONE, RenderSettings, Scene
+from .scene import (DIFFUSE, GLASS, GLOSSY, KIND_NAMES, METAL, MIRROR, NONE, PRINCIPLED,
+                    RenderSettings, Scene)
 
 
 @dataclass(frozen=True)
@@ -22,6 +23,8 @@ class Plan:
     mirror: bool
     metal: bool
     glass: bool
+    principled: bool
+    glossy: bool
     absorber: bool
     emitters: bool
     num_emitters: int
@@ -39,8 +42,8 @@ class Plan:
 
     @property
     def light_sampling(self) -> bool:
-        """Next-event estimation runs only where a diffuse surface can see an emitter."""
-        return self.emitters and self.diffuse
+        """Next-event estimation runs only where a non-delta surface can see an emitter."""
+        return self.emitters and (self.diffuse or self.principled or self.glossy)
 
     def stages(self) -> list[str]:
         s = ["generate camera rays"]
@@ -57,7 +60,8 @@ class Plan:
             s.append("handle emission")
         if self.light_sampling:
             s += ["sample light", "trace shadow rays"]
-        kinds = [n for n, f in (("diffuse", self.diffuse), ("mirror", self.mirror),
+        kinds = [n for n, f in (("diffuse", self.diffuse), ("principled", self.principled),
+                                ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass)) if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
@@ -91,7 +95,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     assert all(k in KIND_NAMES for k in kinds)
     return Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
-        glass=GLASS in kinds, absorber=NONE in kinds,
+        glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
+        absorber=NONE in kinds,
         emitters=num_emitters + len(lights) > 0 or environment,
         num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,
         sun_discs=sun_discs, dof=dof, polygon_aperture=dof and cam.blades >= 3,

@@ -18,8 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 # BSDF kinds of the materials table (`Materials.kind`).
-NONE, DIFFUSE, MIRROR, METAL, GLASS = 0, 1, 2, 3, 4
-KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass"}
+NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
+KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
+              PRINCIPLED: "principled", GLOSSY: "glossy"}
+# Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
+DELTA_ROUGHNESS = 2e-10 ** 0.25
 
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
@@ -59,6 +62,11 @@ class Material:
           faces); reflection weighted by `reflection_tint` x F, transmission by
           `transmission_tint` x (1 - F). Glass BSDF: both tints = colour. Principled
           transmission: reflection untinted, transmission sqrt(base colour) per interface.
+        - principled: Principled BSDF, dielectric: a Lambert base of `colour` under a GGX
+          specular layer of index `ior` and `roughness` (alpha = roughness^2, Multiscatter
+          GGX energy compensation); the base keeps 1 - the layer's albedo.
+        - glossy: Glossy BSDF with roughness > 0: Multiscatter GGX reflection tinted by
+          `colour`, no Fresnel.
         - none: no BSDF (a pure Emission shader): paths end here.
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
     """
@@ -70,6 +78,7 @@ class Material:
     reflection_tint: tuple = (1.0, 1.0, 1.0)
     transmission_tint: tuple = (1.0, 1.0, 1.0)
     emission: tuple = (0.0, 0.0, 0.0)
+    roughness: float = 0.0
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0)):
@@ -97,6 +106,28 @@ class Material:
                    tuple(np.sqrt(base)), tuple(emission))
 
     @classmethod
+    def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
+                   specular_ior_level=0.5, emission=(0, 0, 0)):
+        """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
+        specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
+        ior = float(ior)
+        if ior > 0 and specular_ior_level != 0.5 and ior != 1.0:
+            f0 = ((ior - 1) / (ior + 1)) ** 2 * 2.0 * float(specular_ior_level)
+            f0 = min(max(f0, 0.0), 0.999999)
+            eta = (1 + np.sqrt(f0)) / max(1 - np.sqrt(f0), 1e-12)
+            ior = float(eta if ior >= 1 else 1 / eta)
+        return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
+                   roughness=float(roughness))
+
+    @classmethod
+    def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0)):
+        """Glossy BSDF: a mirror at (Cycles-)zero roughness, else rough GGX reflection."""
+        if roughness <= DELTA_ROUGHNESS:
+            return cls.mirror(name, colour, emission)
+        return cls(name, "glossy", tuple(colour), emission=tuple(emission),
+                   roughness=float(roughness))
+
+    @classmethod
     def emission_only(cls, name, colour=(1, 1, 1), strength=1.0):
         """Cycles' Emission shader alone: radiance = strength x colour, no BSDF."""
         return cls(name, "none", (0, 0, 0), emission=tuple(float(strength) * np.asarray(colour)))
@@ -119,6 +150,7 @@ class Materials:
     transmission_tint: np.ndarray
     emission: np.ndarray
     names: list
+    roughness: np.ndarray | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -130,6 +162,10 @@ class Materials:
             ior = float(m.ior)
             if not math.isfinite(ior) or ior <= 0:
                 raise ValueError(f"material '{m.name}': IOR must be > 0 and finite, got {m.ior!r}")
+            r = float(m.roughness)
+            if not (0.0 <= r <= 1.0):
+                raise ValueError(f"material '{m.name}': roughness must be in [0, 1], got "
+                                 f"{m.roughness!r}")
             rows.append((kinds[m.kind], _colour(m.colour, f"material '{m.name}' colour"), ior,
                          _colour(m.reflection_tint, f"material '{m.name}' reflection tint"),
                          _colour(m.transmission_tint, f"material '{m.name}' transmission tint"),
@@ -139,7 +175,8 @@ class Materials:
             materials = [Material("default")]
         k, c, i, rt, tt, e = zip(*rows)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
-                   np.array(e), [m.name for m in materials])
+                   np.array(e), [m.name for m in materials],
+                   np.array([float(m.roughness) for m in materials]))
 
     def __len__(self):
         return len(self.kind)

@@ -17,22 +17,27 @@ def convert(mat):
 @pytest.mark.parametrize("shader, inputs, ctor, kwargs", [
     ("ShaderNodeBsdfDiffuse", {"Color": (0.6, 0.2, 0.2, 1), "Roughness": 0.0}, "diffuse",
      {"colour": (0.6, 0.2, 0.2)}),
-    ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.0}, "mirror",
-     {"colour": (1.0, 0.8, 0.4)}),
+    ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.0}, "glossy",
+     {"colour": (1.0, 0.8, 0.4), "roughness": 0.0}),
+    ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.3}, "glossy",
+     {"colour": (1.0, 0.8, 0.4), "roughness": 0.3}),
     ("ShaderNodeBsdfGlass", {"Color": WHITE, "Roughness": 0.0, "IOR": 1.45}, "glass",
      {"colour": (1.0, 1.0, 1.0), "ior": 1.45}),
     ("ShaderNodeEmission", {"Color": WHITE, "Strength": 10.0}, "emission_only",
      {"colour": (1.0, 1.0, 1.0), "strength": 10.0}),
-    ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1)}, "diffuse",
-     {"colour": (0.5, 0.25, 0.125)}),
+    ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
+                                  "IOR": 1.45}, "principled",
+     {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.45,
+      "specular_ior_level": 0.5}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.9, 0.6, 0.2, 1), "Metallic": 1.0,
                                   "Roughness": 0.0}, "metal", {"base_colour": (0.9, 0.6, 0.2)}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": WHITE, "Transmission Weight": 1.0,
                                   "Roughness": 0.0, "IOR": 1.33}, "principled_glass",
      {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.1, 0.1, 0.1, 1), "Emission Color":
-                                  (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "diffuse",
-     {"colour": (0.1, 0.1, 0.1), "emission": (4.0, 2.0, 0.0)}),
+                                  (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "principled",
+     {"base_colour": (0.1, 0.1, 0.1), "roughness": 0.5, "ior": 1.5, "specular_ior_level": 0.5,
+      "emission": (4.0, 2.0, 0.0)}),
 ])
 def test_supported_nodes(fresh, shader, inputs, ctor, kwargs):
     mat, _ = node_material("M", shader, **inputs)
@@ -74,8 +79,7 @@ def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     assert spec.kwargs["colour"] == pytest.approx(expected, abs=1e-6)
 
 
-@pytest.mark.parametrize("shader, ctor", [("ShaderNodeBsdfGlossy", "mirror"),
-                                          ("ShaderNodeBsdfGlass", "glass"),
+@pytest.mark.parametrize("shader, ctor", [("ShaderNodeBsdfGlass", "glass"),
                                           ("ShaderNodeBsdfDiffuse", "diffuse")])
 def test_rough_nodes_warn_and_render_smooth(fresh, shader, ctor):
     mat, node = node_material("Rough", shader, Roughness=0.4)
@@ -118,13 +122,13 @@ def test_reroute_is_followed(fresh):
     tree.links.new(node.outputs[0], reroute.inputs[0])
     tree.links.new(reroute.outputs[0], out.inputs["Surface"])
     spec, warnings = convert(mat)
-    assert (spec.ctor, warnings) == ("mirror", [])
+    assert (spec.ctor, warnings) == ("glossy", [])
 
 
 def test_fractional_principled_weights_warn(fresh):
     mat, _ = node_material("Half", "ShaderNodeBsdfPrincipled", Metallic=0.3, Roughness=0.0)
     spec, warnings = convert(mat)
-    assert spec.ctor == "diffuse"
+    assert spec.ctor == "principled"
     assert any("Metallic" in w for w in warnings)
 
 
