@@ -5,7 +5,13 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup render test test-fast bench scenes clean
+# bpy LTS releases of the version-range smoke test (tests/install/test_extension.py).
+BPY42 := 4.2.23
+BPY45 := 4.5.15
+# Blender 3.4's Python gets numpy + embreex from this user scripts folder (docs/INSTALL.md).
+B34_USER := build/blender34
+
+.PHONY: setup render test test-fast bench scenes scenes-3.4 dist compat clean
 
 setup: $(STAMP)
 
@@ -17,6 +23,32 @@ $(STAMP): requirements.txt
 
 scenes: $(STAMP)
 	$(PY) blend_scenes/build_scenes.py
+
+# Blender 3.4 builds of the scenes, which every supported version (3.4 - 5.0) opens.
+scenes-3.4: $(STAMP)
+	mkdir -p $(B34_USER)/scripts/modules $(B34_USER)/config
+	$(PY) -m pip install --quiet --target $(B34_USER)/scripts/modules --only-binary=:all: \
+		--upgrade numpy==1.26.4 embreex==4.4.0.post1
+	BLENDER_USER_SCRIPTS=$(B34_USER)/scripts BLENDER_USER_CONFIG=$(B34_USER)/config \
+		blender -b --python blend_scenes/build_scenes.py -- --out blend_scenes/v3.4
+
+# dist/specula-<v>-<platform>.zip (Blender 4.2+ extensions) and specula-<v>-legacy.zip.
+dist: $(STAMP)
+	$(PY) tools/build_extension.py
+
+# bpy 4.2 LTS and 4.5 LTS in their own venvs, for the smoke test (about 1 min, 2 x ~1 GB).
+# numpy pinned to the 1.26 line those Blender releases ship (bpy on PyPI would pull numpy 2.4).
+compat: .venv-bpy42/.installed .venv-bpy45/.installed
+
+.venv-bpy42/.installed:
+	$(PYTHON) -m venv .venv-bpy42
+	.venv-bpy42/bin/python -m pip install --quiet bpy==$(BPY42) numpy==1.26.4
+	touch $@
+
+.venv-bpy45/.installed:
+	$(PYTHON) -m venv .venv-bpy45
+	.venv-bpy45/bin/python -m pip install --quiet bpy==$(BPY45) numpy==1.26.4
+	touch $@
 
 render: $(STAMP)
 	mkdir -p out
@@ -33,4 +65,26 @@ bench: $(STAMP)
 	$(PY) -m tests.benchmarks.bench_core
 
 clean:
-	rm -rf out dist
+	rm -rf out dist build
+
+# Specula against Cycles (tests/cycles, tests/benchmarks; see tests/cycles/README.md).
+.PHONY: references test-cycles bench-cycles figures
+
+# Render the Cycles references of tests/cycles/variants.py into tests/cycles/references/
+# (only those whose Blender version or variant changed; FORCE=1 renders all).
+references: $(STAMP)
+	$(PY) -m tests.cycles.references $(if $(FORCE),--force)
+
+test-cycles: $(STAMP)
+	$(PY) -m pytest -q tests/cycles
+
+# Error against run time, Specula beside Cycles: out/bench/report.md and plots.
+# BUDGETS=1,2,4 SCENES=cbspheres for a quick run.
+BUDGETS ?= 1,2,4,8,16,32
+SCENES ?= cbspheres,cbdragon
+bench-cycles: $(STAMP)
+	$(PY) -m tests.benchmarks.bench_cycles --scenes $(SCENES) --budgets $(BUDGETS)
+
+# The course project's experiments side by side: out/figures/*.png and differences.md.
+figures: $(STAMP)
+	$(PY) -m tests.benchmarks.course_figures

@@ -8,7 +8,7 @@ bl_info = {
     "name": "Specula",
     "author": "Specula developers",
     "version": (0, 1, 0),
-    "blender": (4, 2, 0),
+    "blender": (3, 4, 0),
     "location": "Properties > Render > Render Engine > Specula",
     "description": "Progressive numpy/Embree path tracer with Cycles-matching materials",
     "category": "Render",

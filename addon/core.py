@@ -1,8 +1,9 @@
 """The one place that finds Specula's rendering core.
 
-The core is the top-level package `engine/` next to `addon/` in the repository. A packaged
-add-on will carry a copy as `addon/bundled/engine/`; a checkout (or a symlink from Blender's
-scripts/addons to the checkout) uses the repository's copy. The add-on's own `engine.py`
+The core is the top-level package `engine/` next to `addon/` in the repository. The packaged
+add-on and extensions (tools/build_extension.py) carry a copy as `specula/bundled/engine/`;
+a checkout (or a symlink from Blender's scripts/addons to the checkout) uses the repository's
+copy. The add-on's own `engine.py`
 holds the RenderEngine class, so the bundled core cannot live at `addon/engine/`.
 """
 
@@ -18,6 +19,28 @@ def _repo_root():
     return os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 
 
+def _import_embreex():
+    """Import embreex so that its bundled Embree binds to its own bundled TBB.
+
+    A Blender executable linked against a shared TBB (Debian's Blender 3.4 uses the system's
+    libtbb 2021.8; official Linux builds ship their own) puts that TBB in the global symbol
+    scope, and embreex's Embree, built against TBB 2021.12, would bind to it and crash in its
+    first scene build. RTLD_DEEPBIND makes embreex's libraries look in their own
+    dependencies first. Linux only; harmless where nothing else loaded a TBB (the bpy module).
+    """
+    if "embreex" in sys.modules or not sys.platform.startswith("linux"):
+        return
+    flags = sys.getdlopenflags()
+    sys.setdlopenflags(flags | os.RTLD_DEEPBIND)
+    try:
+        importlib.import_module("embreex.rtcore_scene")
+        importlib.import_module("embreex.mesh_construction")
+    except ImportError:
+        pass  # reported by the core's own import below, with the core's context
+    finally:
+        sys.setdlopenflags(flags)
+
+
 def load():
     """Return the core module (`engine`), importing it on first use.
 
@@ -26,9 +49,15 @@ def load():
     global _core
     if _core is not None:
         return _core
-    try:
-        from .bundled import engine as core  # packaged add-on
-    except ImportError:
+    _import_embreex()
+    here = os.path.dirname(os.path.abspath(__file__))
+    if os.path.isfile(os.path.join(here, "bundled", "engine", "__init__.py")):
+        # Packaged add-on or extension: the core is a subpackage, no sys.path change.
+        try:
+            from .bundled import engine as core
+        except ImportError as exc:
+            raise ImportError(f"Specula's bundled core failed to import: {exc}") from exc
+    else:
         root = _repo_root()
         if not os.path.isfile(os.path.join(root, "engine", "__init__.py")):
             raise ImportError(

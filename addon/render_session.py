@@ -29,6 +29,18 @@ def _stats(samples, total, seconds, rel):
     return f"Sample {samples}/{total} | Time {seconds:.1f} s | Est. error {err}"
 
 
+def _set_rect(render_pass, image):
+    """Write an (H, W[, C]) image into a RenderPass with one foreach_set.
+
+    Blender 4.x+ takes the flat float array; 3.x wants one row per pixel, (H * W, C).
+    """
+    flat = np.ascontiguousarray(image, np.float32).reshape(-1)
+    try:
+        render_pass.rect.foreach_set(flat)
+    except TypeError:  # "expected sequence size H*W, got H*W*C" (before 4.x)
+        render_pass.rect.foreach_set(flat.reshape(image.shape[0] * image.shape[1], -1))
+
+
 class RenderSession:
     def __init__(self, engine):
         self.engine = engine
@@ -52,18 +64,16 @@ class RenderSession:
     def _write(self, layer, p):
         """Copy one core Pass into the result layer's passes (foreach_set, no lists)."""
         passes = layer.passes
-        passes["Combined"].rect.foreach_set(np.ascontiguousarray(p.combined, np.float32)
-                                            .reshape(-1))
+        _set_rect(passes["Combined"], p.combined)
         depth = passes.get("Depth")
         if depth is not None:
-            d = np.where(np.isfinite(p.depth), p.depth, exporter.BACKGROUND_DEPTH)
-            depth.rect.foreach_set(d.astype(np.float32).reshape(-1))
+            _set_rect(depth, np.where(np.isfinite(p.depth), p.depth, exporter.BACKGROUND_DEPTH))
         normal = passes.get("Normal")
         if normal is not None:
-            normal.rect.foreach_set(np.nan_to_num(p.normal).astype(np.float32).reshape(-1))
+            _set_rect(normal, np.nan_to_num(p.normal))
         err = passes.get(ERROR_PASS)
         if err is not None:
-            err.rect.foreach_set(np.nan_to_num(p.error).astype(np.float32).reshape(-1))
+            _set_rect(err, np.nan_to_num(p.error))
 
     def should_stop(self):
         """Esc in Blender (checked by the core between passes)."""
@@ -87,8 +97,13 @@ class RenderSession:
             specula = core.load()
             exported = exporter.export(depsgraph)
             core_scene, builder_warnings = exporter.to_core(exported, specula)
-            settings = specula.RenderSettings(**exporter.render_settings_kwargs(
-                scene, width, height))
+            settings_kwargs = exporter.render_settings_kwargs(scene, width, height)
+            # Render border: Blender gives the full frame's size; the core traces only the
+            # border's pixels, sampled as in a whole-frame render, so regions stitch.
+            region = exporter.border_region(scene, width, height)
+            if region is not None:
+                settings_kwargs["region"] = region
+            settings = specula.RenderSettings(**settings_kwargs)
             settings.validate()
         except (ImportError, exporter.ExportError, ValueError) as exc:
             self.fail(f"Specula: {exc}")
@@ -100,8 +115,11 @@ class RenderSession:
         for warning in exported.warnings + builder_warnings:
             engine.report({'WARNING'}, f"Specula: {warning}")
 
-        # Blender calls render() once per view layer; write into that layer's result.
-        result = engine.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
+        # Blender calls render() once per view layer; write into that layer's result. With a
+        # border, the result is the border's rectangle and (0, 0) is its bottom-left pixel;
+        # Blender places it in the frame, or crops the image to it (use_crop_to_border).
+        x0, y0, x1, y1 = region if region is not None else (0, 0, width, height)
+        result = engine.begin_result(0, 0, x1 - x0, y1 - y0, layer=depsgraph.view_layer.name)
         layer = result.layers[0]
         total = settings.samples
 

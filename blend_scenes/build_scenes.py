@@ -1,6 +1,9 @@
 """Rebuild the course project's scenes for Blender and save them next to this script.
 
-Run: .venv/bin/python blend_scenes/build_scenes.py
+Run: .venv/bin/python blend_scenes/build_scenes.py            (bpy 5.0.1: blend_scenes/*.blend)
+     blender -b --python blend_scenes/build_scenes.py -- --out blend_scenes/v3.4
+                                     (Debian's Blender 3.4.1: files every version 3.4 - 5.0 opens;
+                                      files saved by 5.0 open only in 4.5 and later)
 
 Frames: the course is y-up with the camera on +z; Blender is z-up, so a course point
 (x, y, z) is Blender (x, -z, y) and the camera sits on -y looking along +y.
@@ -21,6 +24,8 @@ import bpy  # noqa: I001 - bpy must be imported before bmesh
 import bmesh
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# Where the .blend files go (`-- --out DIR` changes it).
+HERE_OUT = HERE
 sys.path.insert(0, os.path.dirname(HERE))
 
 # Course CBspheres camera: horizontal field of view 49.13 degrees on a 36 mm sensor.
@@ -179,7 +184,7 @@ def build_cbspheres(use_specula):
     uv_sphere("GlassSphere", (0.5, -0.25, 0.3), 0.3, glass, coll)
     camera(scene, "Camera", (0.0, -3.0, 0.75), CBSPHERES_LENS, (480, 360))
     black_world(scene)
-    finish(scene, os.path.join(HERE, "cbspheres.blend"), use_specula)
+    finish(scene, os.path.join(HERE_OUT, "cbspheres.blend"), use_specula)
 
 
 def build_cbdragon(use_specula):
@@ -211,7 +216,7 @@ def build_cbdragon(use_specula):
     dof.focus_distance = CBDRAGON_FOCUS
     dof.aperture_fstop = CBDRAGON_FSTOP
     black_world(scene)
-    finish(scene, os.path.join(HERE, "cbdragon.blend"), use_specula)
+    finish(scene, os.path.join(HERE_OUT, "cbdragon.blend"), use_specula)
 
 
 def build_default(use_specula):
@@ -224,11 +229,18 @@ def build_default(use_specula):
         layer.use_pass_normal = True
     # Saved untouched otherwise: the point light is skipped with a warning (not supported
     # yet), so the cube is lit by the factory world colour only.
-    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(HERE, "default.blend"), compress=True)
-    print(f"wrote {os.path.join(HERE, 'default.blend')}")
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(HERE_OUT, "default.blend"), compress=True)
+    print(f"wrote {os.path.join(HERE_OUT, 'default.blend')}")
 
 
 def main():
+    global HERE_OUT
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    if argv[:1] == ["--out"] and len(argv) == 2:
+        HERE_OUT = os.path.abspath(argv[1])
+        os.makedirs(HERE_OUT, exist_ok=True)
+    elif argv:
+        raise SystemExit(f"usage: build_scenes.py [-- --out DIR], got {argv}")
     use_specula = register_addon()
     build_cbspheres(use_specula)
     build_cbdragon(use_specula)

@@ -169,6 +169,8 @@ def sample_dielectric(wo, n, eta, reflection_tint, transmission_tint, u, fresnel
 # 1 - albedo_spec(mu_o) (Cycles' closure_layering_weight).
 
 ALBEDO_TABLE_SIZE = 64
+# numpy 2 renamed trapz (Blender 4.2+ may ship numpy 2).
+trapezoid = getattr(np, "trapezoid", None) or np.trapz
 MIN_ALPHA = 1e-4
 
 
@@ -243,12 +245,12 @@ class MicrofacetTables:
             e_white[i] = w.mean()
             e_fresnel[i] = (w * _fresnel_for(fresnel, cos_hv, eta)).mean()
         e_white = np.clip(e_white, 1e-6, 1.0)
-        e_avg = 2.0 * np.trapz(e_white * self.mu, self.mu)
+        e_avg = 2.0 * trapezoid(e_white * self.mu, self.mu)
         if fresnel == "none":
             fss = 1.0
         else:
             m = np.linspace(0.0, 1.0, 2049)
-            fss = 2.0 * np.trapz(fresnel_dielectric(m, np.full_like(m, eta))[0] * m, m)
+            fss = 2.0 * trapezoid(fresnel_dielectric(m, np.full_like(m, eta))[0] * m, m)
         fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
         self.compensation_table = 1.0 + fms * (1.0 - e_white) / e_white
         self.albedo_table = np.clip(e_fresnel * self.compensation_table, 0.0, 1.0)

@@ -108,10 +108,10 @@ class CameraModel:
             # Planar near/far clip: z_inv comes from the pinhole ray even with DOF (Cycles).
             p += (cam.clip_start * z_inv)[:, None] * d
             tmax = (cam.clip_end - cam.clip_start) * z_inv
-        origins = p @ self.world_from_camera.T + self.position
-        directions = d @ self.world_from_camera.T
+        origins = sampling.apply3(p, self.world_from_camera) + self.position
+        directions = sampling.apply3(d, self.world_from_camera)
         return origins, directions, tmax
 
     def z_depth(self, points: np.ndarray) -> np.ndarray:
         """Distance of world points (n, 3) from the camera along the view axis."""
-        return (points - self.position) @ self.forward
+        return sampling.dot3(points - self.position, self.forward)

@@ -41,7 +41,7 @@ class EnvironmentMap:
                                            * np.cos(elevation)[:, None]) * np.pi / 2)
 
     def to_uv(self, d_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        d = d_world @ self.texture_from_world.T
+        d = sampling.apply3(d_world, self.texture_from_world)
         u = 0.5 - np.arctan2(d[:, 1], d[:, 0]) / (2.0 * np.pi)
         v = 0.5 + np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])) / np.pi
         return np.mod(u, 1.0), np.clip(v, 0.0, 1.0)
@@ -51,7 +51,7 @@ class EnvironmentMap:
         elevation = (v - 0.5) * np.pi
         ce = np.cos(elevation)
         d = np.column_stack([ce * np.cos(azimuth), ce * np.sin(azimuth), np.sin(elevation)])
-        return d @ self.world_from_texture.T
+        return sampling.apply3(d, self.world_from_texture)
 
     def lookup(self, d_world: np.ndarray) -> np.ndarray:
         """Bilinear radiance (n, 3) for world directions (n, 3)."""

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .sampling import dot3
+
 # Rec.709 luminance weights, for the error estimate.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 # Depth written where a camera ray escapes: finite, so no pass ever holds inf.
@@ -94,7 +96,7 @@ class Film:
         self.mean[pixels] = mean
         after = radiance - mean
         self.m2[pixels] += (delta * after).astype(np.float32)
-        self.m2_luminance[pixels] += (delta @ LUMINANCE) * (after @ LUMINANCE)
+        self.m2_luminance[pixels] += dot3(delta, LUMINANCE) * dot3(after, LUMINANCE)
         w = (1.0 / n).astype(np.float32)
         self.depth[pixels] += w * (depth.astype(np.float32) - self.depth[pixels])
         self.normal[pixels] += w[:, None] * (normal.astype(np.float32) - self.normal[pixels])

@@ -332,7 +332,8 @@ class Integrator:
             radiance[live[hit]] += throughput[hit] * le[hit] * w[hit, None]
         if self.plan.sun_discs and escaped.any():
             for j in np.nonzero((objects.type == 2) & (objects.cos_half_angle < 1.0) & seen)[0]:
-                inside = escaped & (d @ -objects.direction[j] >= objects.cos_half_angle[j])
+                inside = escaped & (sampling.dot3(d, -objects.direction[j])
+                                    >= objects.cos_half_angle[j])
                 if not inside.any():
                     continue
                 w = np.ones(len(live))

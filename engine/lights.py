@@ -294,12 +294,12 @@ class LightObjects:
         power = self.power[j]
         if typ == AREA:
             nrm = self.direction[j]
-            denom = d @ nrm
+            denom = sampling.dot3(d, nrm)
             front = denom < 0  # travelling against the emission direction
-            th = ((c - o) @ nrm) / np.where(front, denom, -1.0)
+            th = sampling.dot3(c - o, nrm) / np.where(front, denom, -1.0)
             hit_p = o + th[:, None] * d
-            lu = (hit_p - c) @ self.axis_u[j] / self.len_u[j]
-            lv = (hit_p - c) @ self.axis_v[j] / self.len_v[j]
+            lu = sampling.dot3(hit_p - c, self.axis_u[j]) / self.len_u[j]
+            lv = sampling.dot3(hit_p - c, self.axis_v[j]) / self.len_v[j]
             inside = (lu * lu + lv * lv <= 0.25) if self.elliptic[j] else \
                 (np.abs(lu) <= 0.5) & (np.abs(lv) <= 0.5)
             ok = front & inside & (th > 0) & (th < tmax)
@@ -355,6 +355,12 @@ class LightSampler:
         self.radiance = emission[self.index]
         self.area = area[self.index]
         self.corners = v[self.index]
+        # Per-emitter constants, gathered once rather than per sample.
+        c = self.corners
+        self.v0, self.e1, self.e2 = c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
+        nrm = np.cross(self.e1, self.e2)
+        self.normal = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+        self.scale = np.abs(c).max(axis=(1, 2)) if len(c) else np.zeros(0)
         radius = max(scene.extent, 1e-3) * 2.0
         self.objects = LightObjects(scene.lights, scene.origin, radius)
         env = scene.world.environment
@@ -461,21 +467,18 @@ class LightSampler:
         if len(tri):
             k = k_all[tri]
             b = sampling.sample_uniform_triangle(u_point[tri])
-            c = self.corners[k]
-            y = b[:, 0:1] * c[:, 0] + b[:, 1:2] * c[:, 1] + b[:, 2:3] * c[:, 2]
+            y = self.v0[k] + b[:, 1:2] * self.e1[k] + b[:, 2:3] * self.e2[k]
             to = y - p[tri]
-            d = np.linalg.norm(to, axis=1)
+            d = np.sqrt(np.einsum("ij,ij->i", to, to))
             w = to / np.where(d > 0, d, 1.0)[:, None]
-            nrm = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
-            nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-            cos_l = np.abs(_dot(nrm, w))
+            cos_l = np.abs(_dot(self.normal[k], w))
             ok = (cos_l > 0) & (d > 0)
             pdf_sa = np.where(ok, d * d / np.maximum(self.area[k] * cos_l, 1e-300), 0.0)
             wi[tri], dist[tri] = w, d
-            value[tri] = np.where(ok[:, None], self.radiance[k] / np.where(ok, pdf_sa, 1.0)[:, None],
-                                  0.0)
+            value[tri] = self.radiance[k] * np.where(ok, 1.0 / np.where(ok, pdf_sa, 1.0),
+                                                     0.0)[:, None]
             pdf[tri] = pdf_sa
-            scale[tri] = np.abs(c).max(axis=(1, 2))
+            scale[tri] = self.scale[k]
         is_env = k_all == self.environment_index
         env = np.nonzero(is_env)[0]
         if len(env):

@@ -81,10 +81,11 @@ class Plan:
 def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     used = np.unique(scene.material_index)
     kinds = set(scene.materials.kind[used].tolist())
-    emission = scene.materials.emission[scene.material_index]
-    v = scene.vertices
+    # Only emissive triangles need an area: per-material test first (millions of triangles).
+    emissive = (scene.materials.emission.max(axis=1) > 0)[scene.material_index]
+    v = scene.vertices[emissive]
     area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
-    num_emitters = int(np.count_nonzero((emission.max(axis=1) > 0) & (area > 0)))
+    num_emitters = int(np.count_nonzero(area > 0))
     lights = [light for light in scene.lights if max(light.power) > 0]
     light_hits = any((light.type == "AREA" and light.size_x > 0) or
                      (light.type in ("POINT", "SPOT") and light.radius > 0) for light in lights)

@@ -235,6 +235,18 @@ def build_frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return s, t
 
 
+def apply3(v: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Rows of v (n, 3) times the 3x3 matrix m (each row -> m @ row), written out per
+    element: BLAS matrix products may round differently with the batch size, and a render
+    must give the same pixels whatever its chunking (render borders stitch exactly)."""
+    return v[:, 0:1] * m[:, 0] + v[:, 1:2] * m[:, 1] + v[:, 2:3] * m[:, 2]
+
+
+def dot3(v: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Rows of v (n, 3) dotted with one vector w (3,), per element (see apply3)."""
+    return v[:, 0] * w[0] + v[:, 1] * w[1] + v[:, 2] * w[2]
+
+
 class Distribution1D:
     """Discrete distribution over weights, sampled by binary search in its CDF."""
 

@@ -481,7 +481,8 @@ class SceneBuilder:
 
         # Drop NaN/inf and degenerate (zero-area) triangles, and say how many.
         finite = np.all(np.isfinite(corners), axis=(1, 2))
-        safe = np.where(finite[:, None, None], corners, 0.0)
+        # Copy only when something is not finite (a 5M-triangle mesh is 360 MB per copy).
+        safe = corners if finite.all() else np.where(finite[:, None, None], corners, 0.0)
         cross = np.cross(safe[:, 1] - safe[:, 0], safe[:, 2] - safe[:, 0])
         area2 = np.linalg.norm(cross, axis=1)
         scale = np.abs(safe).max(axis=(1, 2)) + np.finfo(np.float64).tiny
@@ -501,8 +502,10 @@ class SceneBuilder:
                                                               ).all(axis=1)
             sm &= ok
             normals = np.where(ok[:, None, None], normals, 0.0)
-        self._meshes.append((name, corners[keep], None if normals is None else normals[keep],
-                             sm[keep], mi[keep]))
+        if not keep.all():
+            corners, sm, mi = corners[keep], sm[keep], mi[keep]
+            normals = None if normals is None else normals[keep]
+        self._meshes.append((name, corners, normals, sm, mi))
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -526,6 +529,8 @@ class SceneBuilder:
         # Recentre before embree's float32 cast so far-from-origin scenes keep precision.
         origin = (0.5 * (verts.reshape(-1, 3).min(0) + verts.reshape(-1, 3).max(0))
                   if len(verts) else np.zeros(3))
+        # In place: `verts` is a fresh array (concatenate copies), so no second full copy.
+        verts -= origin
         smooth_all = np.concatenate(smooth) if smooth else np.zeros(0, bool)
         norms = None
         if any_normals and smooth_all.any():
@@ -534,7 +539,7 @@ class SceneBuilder:
         else:
             smooth_all = np.zeros(len(verts), bool)
         return Scene(
-            vertices=verts - origin, origin=origin, normals=norms, smooth=smooth_all,
+            vertices=verts, origin=origin, normals=norms, smooth=smooth_all,
             material_index=(np.concatenate(mat) if mat else np.zeros(0, np.int32)).astype(np.int32),
             object_index=np.concatenate(obj) if obj else np.zeros(0, np.int32),
             object_names=names, materials=materials, camera=camera, world=world,

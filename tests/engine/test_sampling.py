@@ -96,7 +96,8 @@ def test_pixel_filter(rng, kind, width):
     r = f.radius
     assert np.abs(d).max() <= r + 1e-9
     obs = histogram_2d(d, (-r, -r), (r, r), RES)
-    norm = np.trapz(f.density(np.linspace(-r, r, 20001)), np.linspace(-r, r, 20001))
+    from engine.bsdf import trapezoid
+    norm = trapezoid(f.density(np.linspace(-r, r, 20001)), np.linspace(-r, r, 20001))
     exp = expected_2d(lambda q: f.density(q[:, 0]) * f.density(q[:, 1]) / norm**2,
                       (-r, -r), (r, r), RES, N)
     assert_chi2(obs, exp)

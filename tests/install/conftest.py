@@ -1,0 +1,36 @@
+import os
+import shutil
+
+import pytest
+
+from . import helpers
+
+
+@pytest.fixture(scope="session")
+def dist():
+    """The zips of `make dist`, built once per session: {platform | 'legacy': path}."""
+    return helpers.build_dist()
+
+
+@pytest.fixture(scope="session")
+def blender34(dist, tmp_path_factory):
+    """Debian's Blender 3.4 with the legacy add-on installed in a fresh user folder, as
+    docs/INSTALL.md says; returns the environment that selects that folder."""
+    if helpers.BLENDER is None:
+        pytest.skip("Debian's blender is not installed (`apt-get install blender`; .ci/run "
+                    "installs it)")
+    if helpers.blender_version() != (3, 4):
+        pytest.skip(f"these tests expect Debian's Blender 3.4, found {helpers.blender_version()}")
+    user = str(tmp_path_factory.mktemp("blender34_user"))
+    return helpers.install_legacy(user, dist["legacy"])
+
+
+@pytest.fixture(scope="session")
+def artifacts():
+    os.makedirs(helpers.ARTIFACTS, exist_ok=True)
+    return helpers.ARTIFACTS
+
+
+def need(binary):
+    if shutil.which(binary) is None:
+        pytest.skip(f"{binary} is not installed (.ci/run installs it with apt-get)")
