@@ -81,9 +81,11 @@ class Film:
     def add(self, pixels, radiance, depth, normal, rejected=None) -> None:
         """Fold one sample for each pixel in `pixels` (n,) into the running statistics
         (Welford): radiance (n, 3), first-hit depth (n,) and normal (n, 3). Updating per
-        chunk keeps temporaries the size of a chunk, not of the image. Samples that are
-        not finite are left out; the integrator names their stage in `rejected`."""
-        ok = np.all(np.isfinite(radiance), axis=1)
+        chunk keeps temporaries the size of a chunk, not of the image. Samples with a
+        non-finite radiance, depth or normal are left out; the integrator names their stage
+        in `rejected`."""
+        ok = (np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
+              & np.all(np.isfinite(normal), axis=1))
         if not ok.all():
             pixels, radiance, depth, normal = pixels[ok], radiance[ok], depth[ok], normal[ok]
         if rejected:
@@ -104,7 +106,8 @@ class Film:
     def check_finite(self, sample: int) -> None:
         """Raise if any pass holds NaN or inf, naming the first bad pixel."""
         for name, arr in (("combined", self.mean), ("depth", self.depth),
-                          ("normal", self.normal), ("error", self.m2)):
+                          ("normal", self.normal), ("error", self.m2),
+                          ("error", self.m2_luminance)):
             bad = ~np.isfinite(arr.reshape(len(self.count), -1)).all(axis=1)
             if bad.any():
                 i = int(np.argmax(bad))

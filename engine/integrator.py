@@ -76,7 +76,7 @@ class Integrator:
         self.pixel_filter = pixel_filter
         self.debug = debug
         v = scene.vertices
-        n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+        n = sampling.cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
         self.tri_normal = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         self.tri_scale = np.abs(v).max(axis=(1, 2)) if len(v) else np.zeros(0)
         m = scene.materials
@@ -159,6 +159,8 @@ class Integrator:
             if depth == 0:
                 depth_pass[live] = self.camera.z_depth(hits.p)
                 normal_pass[live] = hits.ns  # Cycles' N: the shading normal facing the viewer
+                self._check("surface interaction (depth/normal pass)", live, pixels,
+                            depth_pass[live], normal_pass[live])
 
             if self.plan.num_emitters:
                 self.handle_emission(radiance, live, throughput, hits, prev_pdf)
@@ -193,7 +195,9 @@ class Integrator:
             tmax = np.full(len(live), np.inf)
 
         rejected = []
-        bad = ~np.all(np.isfinite(radiance), axis=1)
+        # A sample is bad if any pass it feeds (combined, depth, normal) is not finite.
+        bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth_pass)
+                & np.all(np.isfinite(normal_pass), axis=1))
         if bad.any():
             rejected = self._explain_nonfinite(pixels[bad], sample)
         return pixels, radiance, depth_pass, normal_pass, rejected

@@ -348,7 +348,8 @@ class LightSampler:
     def __init__(self, scene: Scene):
         emission = scene.materials.emission[scene.material_index]
         v = scene.vertices
-        area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+        area = 0.5 * np.linalg.norm(sampling.cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]),
+                                    axis=1)
         # Two-sided exitance pi L per side, times area: the triangle's flux.
         tri_power = 2.0 * np.pi * area * emission.mean(axis=1) if len(v) else np.zeros(0)
         self.index = np.nonzero(tri_power > 0)[0]
@@ -358,7 +359,7 @@ class LightSampler:
         # Per-emitter constants, gathered once rather than per sample.
         c = self.corners
         self.v0, self.e1, self.e2 = c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
-        nrm = np.cross(self.e1, self.e2)
+        nrm = sampling.cross_rows(self.e1, self.e2)
         self.normal = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
         self.scale = np.abs(c).max(axis=(1, 2)) if len(c) else np.zeros(0)
         radius = max(scene.extent, 1e-3) * 2.0

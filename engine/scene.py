@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .sampling import cross_rows
+
 # BSDF kinds of the materials table (`Materials.kind`).
 NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
@@ -483,7 +485,7 @@ class SceneBuilder:
         finite = np.all(np.isfinite(corners), axis=(1, 2))
         # Copy only when something is not finite (a 5M-triangle mesh is 360 MB per copy).
         safe = corners if finite.all() else np.where(finite[:, None, None], corners, 0.0)
-        cross = np.cross(safe[:, 1] - safe[:, 0], safe[:, 2] - safe[:, 0])
+        cross = cross_rows(safe[:, 1] - safe[:, 0], safe[:, 2] - safe[:, 0])
         area2 = np.linalg.norm(cross, axis=1)
         scale = np.abs(safe).max(axis=(1, 2)) + np.finfo(np.float64).tiny
         # Relative test: an edge cross product below float64 noise has no usable normal.
