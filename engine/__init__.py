@@ -4,8 +4,16 @@ The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then ca
 `render(scene, settings, on_pass=..., should_stop=...)`.
 """
 
-from .scene import (Camera, Light, Material, Materials, RenderSettings, Scene, SceneBuilder,  # noqa: F401
-                    World)
-from .renderer import Pass, RenderResult, render  # noqa: F401
-from .plan import Plan, make_plan  # noqa: F401
 from . import bsdf, camera  # noqa: F401
+from .plan import Plan, make_plan  # noqa: F401
+from .renderer import Pass, RenderResult, render  # noqa: F401
+from .scene import (  # noqa: F401
+    Camera,
+    Light,
+    Material,
+    Materials,
+    RenderSettings,
+    Scene,
+    SceneBuilder,
+    World,
+)

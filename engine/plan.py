@@ -11,8 +11,18 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .scene import (DIFFUSE, GLASS, GLOSSY, KIND_NAMES, METAL, MIRROR, NONE, PRINCIPLED,
-                    RenderSettings, Scene)
+from .scene import (
+    DIFFUSE,
+    GLASS,
+    GLOSSY,
+    KIND_NAMES,
+    METAL,
+    MIRROR,
+    NONE,
+    PRINCIPLED,
+    RenderSettings,
+    Scene,
+)
 
 
 @dataclass(frozen=True)

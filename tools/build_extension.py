@@ -1,4 +1,4 @@
-"""Build Specula's installable zips into dist/: one Blender extension per platform, one legacy add-on.
+"""Build Specula's installable zips into dist/: an extension per platform and a legacy add-on.
 
 Run: .venv/bin/python tools/build_extension.py [--dist DIR] [--wheels-cache DIR] [--offline]
 (`make dist`).

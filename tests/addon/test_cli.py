@@ -8,9 +8,9 @@ import sys
 import bpy
 import numpy as np
 import pytest
+from conftest import REPO, SCENES_DIR
 
 from addon import cli
-from conftest import REPO, SCENES_DIR
 
 DEFAULT = os.path.join(SCENES_DIR, "default.blend")
 CBSPHERES = os.path.join(SCENES_DIR, "cbspheres.blend")

@@ -6,10 +6,10 @@ import math
 import bpy
 import numpy as np
 import pytest
+from addon_helpers import camera_object, cube_object, depsgraph, link, node_material, sphere_object
 from mathutils import Matrix, Vector
 
 from addon import exporter
-from addon_helpers import camera_object, cube_object, depsgraph, link, node_material, sphere_object
 
 
 def export(scene):

@@ -2,9 +2,9 @@
 
 import bpy
 import pytest
+from addon_helpers import node_material
 
 from addon import materials
-from addon_helpers import node_material
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 

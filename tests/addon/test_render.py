@@ -6,10 +6,10 @@ import os
 import bpy
 import numpy as np
 import pytest
-
-from addon import exporter, render_session
 from addon_helpers import camera_object, cube_object, node_material
 from conftest import SCENES_DIR
+
+from addon import exporter, render_session
 
 SCENES = sorted(glob.glob(os.path.join(SCENES_DIR, "*.blend")))
 
