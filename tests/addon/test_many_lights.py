@@ -11,6 +11,7 @@ import math
 import bpy
 import numpy as np
 import pytest
+from addon_helpers import node_material
 
 from addon import cli
 
@@ -26,20 +27,10 @@ def build_scene():
     scene.camera = cam
     cam.location, cam.rotation_euler, cam.data.lens = (0, -14, 9), (math.radians(55), 0, 0), 30
 
-    def material(name, shader, **inputs):
-        mat = bpy.data.materials.new(name)
-        nt = mat.node_tree
-        nt.nodes.clear()
-        out = nt.nodes.new("ShaderNodeOutputMaterial")
-        node = nt.nodes.new(shader)
-        for k, v in inputs.items():
-            node.inputs[k].default_value = v
-        nt.links.new(node.outputs[0], out.inputs[0])
-        return mat
-
     floor = bpy.data.meshes.new("floor")
     floor.from_pydata([(-10, -10, 0), (10, -10, 0), (10, 10, 0), (-10, 10, 0)], [], [(0, 1, 2, 3)])
-    floor.materials.append(material("floor", "ShaderNodeBsdfDiffuse", Color=(0.7, 0.7, 0.7, 1)))
+    floor.materials.append(node_material("floor", "ShaderNodeBsdfDiffuse",
+                                         Color=(0.7, 0.7, 0.7, 1))[0])
     scene.collection.objects.link(bpy.data.objects.new("floor", floor))
     rng = np.random.default_rng(2)
     centres = np.column_stack([rng.uniform(-9, 9, 1000), rng.uniform(-9, 9, 1000),
@@ -49,7 +40,7 @@ def build_scene():
     tris = bpy.data.meshes.new("tris")
     tris.from_pydata([tuple(v) for v in verts], [], [(3 * i, 3 * i + 1, 3 * i + 2)
                                                      for i in range(1000)])
-    tris.materials.append(material("em", "ShaderNodeEmission", Strength=20.0))
+    tris.materials.append(node_material("em", "ShaderNodeEmission", Strength=20.0)[0])
     scene.collection.objects.link(bpy.data.objects.new("tris", tris))
     for i in range(100):
         light = bpy.data.lights.new(f"L{i}", "POINT")
