@@ -43,21 +43,26 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
     scene = scenes.cbspheres()
     settings = scenes.settings(width=width, height=height, samples=samples, threads=threads,
                                max_bounces=max_bounces)
-    accels = []
-    original = renderer.Accel
+    accels, integrators = [], []
+    original, original_integrator = renderer.Accel, renderer.Integrator
 
     def tracking(scene_):
         a = original(scene_)
         accels.append(a)
         return a
 
-    renderer.Accel = tracking
+    def tracking_integrator(*args, **kwargs):
+        i = original_integrator(*args, **kwargs)
+        integrators.append(i)
+        return i
+
+    renderer.Accel, renderer.Integrator = tracking, tracking_integrator
     try:
         t0 = time.perf_counter()
         result = render(scene, settings)
         wall = time.perf_counter() - t0
     finally:
-        renderer.Accel = original
+        renderer.Accel, renderer.Integrator = original, original_integrator
     accel = accels[0]
     threads_used = settings.threads or os.cpu_count()
 
@@ -74,6 +79,11 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
     for kind, o, d, tmax in rec.batches:
         (raw.intersect if kind == "intersect" else raw.occluded)(o, d, tmax)
     raw_seconds = time.perf_counter() - t0
+    # Split of the threads' time per named stage (the rest: compaction and bookkeeping in
+    # the bounce loop, the film, and the thread pool).
+    busy = wall * threads_used
+    stages = {k: round(v / busy, 3) for k, v in sorted(integrators[0].stage_seconds.items(),
+                                                         key=lambda kv: -kv[1])}
     return {
         "scene": "CBspheres", "resolution": f"{width}x{height}", "samples": result.samples,
         "threads": threads_used, "wall_seconds": round(wall, 3),
@@ -84,6 +94,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
         "fraction_in_embree": round(accel.seconds / (wall * threads_used), 3),
         "raw_embree_rays_per_second_1_thread": round(raw.rays / raw_seconds),
         "time_to_first_pass": round(result.time_to_first_pass, 3),
+        "share_of_time_per_stage": stages,
     }
 
 
