@@ -44,14 +44,9 @@ RELMSE_EPS = 0.01
 
 
 def open_scene(name, resolution, max_bounces):
-    renderers.ensure_registered()
-    bpy.ops.wm.open_mainfile(filepath=os.path.join(REPO, "blend_scenes", f"{name}.blend"))
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = resolution
-    scene.render.resolution_percentage = 100
+    scene = renderers.open_blend_scene(name, resolution)
     if max_bounces is not None:
         scene.specula.max_bounces = max_bounces
-    scene.specula.threads = renderers.THREADS
     return scene
 
 

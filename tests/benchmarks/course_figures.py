@@ -55,13 +55,9 @@ def blender_bounces(course_depth: int) -> int:
 
 
 def open_scene(name, resolution, samples):
-    renderers.ensure_registered()
-    bpy.ops.wm.open_mainfile(filepath=os.path.join(REPO, "blend_scenes", f"{name}.blend"))
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y = resolution
-    scene.render.resolution_percentage = 100
+    scene = renderers.open_blend_scene(name, resolution)
     s = scene.specula
-    s.samples, s.seed, s.threads, s.time_limit, s.target_error = samples, 0, renderers.THREADS, 0, 0
+    s.samples, s.seed, s.time_limit, s.target_error = samples, 0, 0, 0
     return scene
 
 

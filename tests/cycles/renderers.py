@@ -15,7 +15,7 @@ from types import SimpleNamespace
 import bpy
 import numpy as np
 
-from .variants import Variant
+from .variants import SCENES_DIR, Variant
 
 THREADS = 2  # the CI machine's cores; both engines get the same
 
@@ -25,6 +25,18 @@ def ensure_registered():
     import addon
     if not hasattr(bpy.types.Scene, "specula"):
         addon.register()
+
+
+def open_blend_scene(name, resolution):
+    """Open blend_scenes/<name>.blend at `resolution` (100 %) with Specula registered;
+    shared by the benchmarks."""
+    ensure_registered()
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(SCENES_DIR, f"{name}.blend"))
+    scene = bpy.context.scene
+    scene.render.resolution_x, scene.render.resolution_y = resolution
+    scene.render.resolution_percentage = 100
+    scene.specula.threads = THREADS
+    return scene
 
 
 def core():
