@@ -7,6 +7,8 @@ far from the world origin.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from embreex import mesh_construction, rtcore_scene
 
@@ -44,7 +46,6 @@ class Accel:
         n = len(origins)
         if self.empty or n == 0:
             return (np.full(n, -1, np.int32), np.full(n, np.inf), np.zeros(n), np.zeros(n))
-        import time
         t0 = time.perf_counter()
         hit = self._scene.run(np.ascontiguousarray(origins, F32),
                               np.ascontiguousarray(directions, F32),
@@ -59,7 +60,6 @@ class Accel:
         n = len(origins)
         if self.empty or n == 0:
             return np.zeros(n, bool)
-        import time
         t0 = time.perf_counter()
         hit = self._scene.run(np.ascontiguousarray(origins, F32),
                               np.ascontiguousarray(directions, F32),
@@ -68,3 +68,27 @@ class Accel:
         self.seconds += time.perf_counter() - t0
         self.rays += n
         return hit >= 0
+
+    def intersect_raw(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray):
+        """Closest hits for contiguous float32 rays (the compiled kernels' buffers), in
+        embree's own arrays: prim (n,) int32 (-1 for a miss), t, u, v (n,) float32."""
+        n = len(origins)
+        if self.empty or n == 0:
+            z = np.zeros(n, F32)
+            return np.full(n, -1, np.int32), np.full(n, np.inf, F32), z, z
+        t0 = time.perf_counter()
+        hit = self._scene.run(origins, directions, dists=tmax, output=1)
+        self.seconds += time.perf_counter() - t0
+        self.rays += n
+        return hit["primID"], hit["tfar"], hit["u"], hit["v"]
+
+    def occluded_raw(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray):
+        """(n,) int32 for contiguous float32 segments: >= 0 where something blocks it."""
+        n = len(origins)
+        if self.empty or n == 0:
+            return np.full(n, -1, np.int32)
+        t0 = time.perf_counter()
+        hit = self._scene.run(origins, directions, dists=tmax, query="OCCLUDED")
+        self.seconds += time.perf_counter() - t0
+        self.rays += n
+        return hit

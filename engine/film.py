@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import kernel
 from .sampling import dot3
 
 # Rec.709 luminance weights, for the error estimate.
@@ -84,12 +85,16 @@ class Film:
         chunk keeps temporaries the size of a chunk, not of the image. Samples with a
         non-finite radiance, depth or normal are left out; the integrator names their stage
         in `rejected`."""
+        if rejected:
+            self.rejected.extend(rejected)
+        if kernel.AVAILABLE:
+            _welford(pixels, radiance, depth, normal, self.count, self.mean, self.m2,
+                     self.m2_luminance, self.depth, self.normal, LUMINANCE)
+            return
         ok = (np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
               & np.all(np.isfinite(normal), axis=1))
         if not ok.all():
             pixels, radiance, depth, normal = pixels[ok], radiance[ok], depth[ok], normal[ok]
-        if rejected:
-            self.rejected.extend(rejected)
         n = self.count[pixels] + 1
         self.count[pixels] = n
         mean = self.mean[pixels]
@@ -108,9 +113,13 @@ class Film:
         for name, arr in (("combined", self.mean), ("depth", self.depth),
                           ("normal", self.normal), ("error", self.m2),
                           ("error", self.m2_luminance)):
-            bad = ~np.isfinite(arr.reshape(len(self.count), -1)).all(axis=1)
-            if bad.any():
-                i = int(np.argmax(bad))
+            rows = arr.reshape(len(self.count), -1)
+            if kernel.AVAILABLE:  # one pass, no temporaries: this runs after every pass
+                i = _first_nonfinite_row(rows)
+            else:
+                bad = ~np.isfinite(rows).all(axis=1)
+                i = int(np.argmax(bad)) if bad.any() else -1
+            if i >= 0:
                 raise FloatingPointError(
                     f"non-finite value in the {name} pass at pixel (x={i % self.width}, "
                     f"y={i // self.width}) after sample {sample}")
@@ -148,3 +157,45 @@ class Film:
                     variance=self.variance().astype(np.float32).reshape(h, w, 3),
                     samples=samples, seconds=seconds,
                     relative_error=rel if np.isfinite(rel) else -1.0, progress=min(progress, 1.0))
+
+
+@kernel.njit(cache=True, nogil=True)
+def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, depth_acc,
+             normal_acc, lum):
+    """Film.add compiled: the same arithmetic (float32 where the film stores float32), so
+    both paths accumulate bit-identical films; releases the GIL, so worker threads fold
+    their own chunks."""
+    f32 = np.float32
+    for i in range(len(pixels)):
+        r0, r1, r2, z = radiance[i, 0], radiance[i, 1], radiance[i, 2], depth[i]
+        if not (np.isfinite(r0) and np.isfinite(r1) and np.isfinite(r2) and np.isfinite(z)
+                and np.isfinite(normal[i, 0]) and np.isfinite(normal[i, 1])
+                and np.isfinite(normal[i, 2])):
+            continue
+        p = pixels[i]
+        n = count[p] + 1
+        count[p] = n
+        d0, d1, d2 = r0 - mean[p, 0], r1 - mean[p, 1], r2 - mean[p, 2]
+        mean[p, 0] += d0 / n
+        mean[p, 1] += d1 / n
+        mean[p, 2] += d2 / n
+        a0, a1, a2 = r0 - mean[p, 0], r1 - mean[p, 1], r2 - mean[p, 2]
+        m2[p, 0] += f32(d0 * a0)
+        m2[p, 1] += f32(d1 * a1)
+        m2[p, 2] += f32(d2 * a2)
+        m2_luminance[p] += ((d0 * lum[0] + d1 * lum[1] + d2 * lum[2])
+                            * (a0 * lum[0] + a1 * lum[1] + a2 * lum[2]))
+        w = f32(1.0 / n)
+        depth_acc[p] += w * (f32(z) - depth_acc[p])
+        for c in range(3):
+            normal_acc[p, c] += w * (f32(normal[i, c]) - normal_acc[p, c])
+
+
+@kernel.njit(cache=True, nogil=True)
+def _first_nonfinite_row(rows):
+    """Index of the first row of (n, k) `rows` holding NaN or inf, or -1."""
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            if not np.isfinite(rows[i, j]):
+                return i
+    return -1

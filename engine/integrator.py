@@ -99,6 +99,10 @@ class Integrator:
         self.stage_calls: dict[str, int] = {}
         self.stage_seconds: dict[str, float] = {}
         self._lock = threading.Lock()
+        self.compiled = None
+        if plan.kernel == "compiled" and not debug:
+            from .kernel import CompiledTracer
+            self.compiled = CompiledTracer(self)
 
     # ------------------------------------------------------------ bookkeeping
     def _count(self, stage: str, seconds: float) -> None:
@@ -124,6 +128,10 @@ class Integrator:
         Returns (pixels, radiance (n, 3), depth (n,), normal (n, 3), rejected) where
         rejected lists messages for samples that came out non-finite.
         """
+        if self.compiled is not None:
+            radiance, depth_pass, normal_pass = self.compiled.trace_pixels(pixels, sample)
+            return pixels, radiance, depth_pass, normal_pass, self._rejected(
+                pixels, sample, radiance, depth_pass, normal_pass)
         n = len(pixels)
         stream = sampling.SampleStream(pixels, sample, self.settings.seed)
         radiance = np.zeros((n, 3))
@@ -194,13 +202,14 @@ class Integrator:
             o, d = self.spawn_rays(_take(hits, alive), wi[alive])
             tmax = np.full(len(live), np.inf)
 
-        rejected = []
-        # A sample is bad if any pass it feeds (combined, depth, normal) is not finite.
+        return pixels, radiance, depth_pass, normal_pass, self._rejected(
+            pixels, sample, radiance, depth_pass, normal_pass)
+
+    def _rejected(self, pixels, sample, radiance, depth_pass, normal_pass) -> list[str]:
+        """A sample is bad if any pass it feeds (combined, depth, normal) is not finite."""
         bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth_pass)
                 & np.all(np.isfinite(normal_pass), axis=1))
-        if bad.any():
-            rejected = self._explain_nonfinite(pixels[bad], sample)
-        return pixels, radiance, depth_pass, normal_pass, rejected
+        return self._explain_nonfinite(pixels[bad], sample) if bad.any() else []
 
     def _explain_nonfinite(self, bad_pixels: np.ndarray, sample: int) -> list[str]:
         """Replay the bad samples in debug mode (sampling is deterministic) to name the
@@ -209,7 +218,7 @@ class Integrator:
             return [f"non-finite sample at pixel {int(p)}" for p in bad_pixels]
         tracer = Integrator.__new__(Integrator)
         tracer.__dict__.update(self.__dict__)
-        tracer.debug = True
+        tracer.debug, tracer.compiled = True, None  # the numpy stages name the culprit
         msgs = []
         for p in bad_pixels[:5]:
             try:

@@ -7,7 +7,7 @@ without emitters, no normal interpolation for flat meshes, and so on.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -49,6 +49,8 @@ class Plan:
     fresnel: str
     max_bounces: int
     triangles: int
+    kernel: str = "numpy"
+    kernel_note: str = ""
 
     @property
     def light_sampling(self) -> bool:
@@ -56,7 +58,7 @@ class Plan:
         return self.emitters and (self.diffuse or self.principled or self.glossy)
 
     def stages(self) -> list[str]:
-        s = ["generate camera rays"]
+        s = [f"{self.kernel} kernel", "generate camera rays"]
         if self.dof:
             s.append("sample lens (%s)" % ("polygon" if self.polygon_aperture else "disk"))
         s.append("intersect")
@@ -80,7 +82,9 @@ class Plan:
     def describe(self) -> str:
         return (f"{self.triangles} triangles, {self.num_emitters} emissive, "
                 f"{self.light_objects} lights, max_bounces {self.max_bounces}, "
-                f"fresnel {self.fresnel}; stages: " + " -> ".join(self.stages()))
+                f"fresnel {self.fresnel}, {self.kernel} kernel"
+                + (f" ({self.kernel_note})" if self.kernel_note else "")
+                + "; stages: " + " -> ".join(self.stages()[1:]))
 
     def as_dict(self) -> dict:
         d = asdict(self)
@@ -104,7 +108,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     cam = scene.camera
     dof = cam.aperture_radius > 0
     assert all(k in KIND_NAMES for k in kinds)
-    return Plan(
+    plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
         absorber=NONE in kinds,
@@ -115,3 +119,18 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         world_light=bool(np.max(scene.world.colour) > 0) or environment,
         environment=environment, fresnel=settings.fresnel,
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)
+    return _choose_kernel(plan, scene, settings)
+
+
+def _choose_kernel(plan: Plan, scene: Scene, settings: RenderSettings) -> Plan:
+    """The compiled kernels where numba is there and cover the scene, else numpy."""
+    from . import kernel
+
+    if settings.kernel == "numpy":
+        return plan
+    why = "numba is not installed" if not kernel.AVAILABLE else kernel.unsupported(scene, plan)
+    if why:
+        if settings.kernel == "compiled":
+            raise ValueError(f"kernel 'compiled' cannot render this scene: {why}")
+        return replace(plan, kernel_note=f"numpy: {why}")
+    return replace(plan, kernel="compiled")

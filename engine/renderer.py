@@ -103,6 +103,13 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         ly, lx = np.divmod(local, x1 - x0)
         return (ly + y0) * settings.width + lx + x0
 
+    def trace_and_fold(local: np.ndarray, sample: int) -> None:
+        """One chunk's sample, folded into the film by the worker itself: chunks of a pass
+        hold distinct pixels and passes run one after another, so each pixel still gets
+        its samples in order (the film does not depend on thread timing)."""
+        _, radiance, depth, normal, rejected = integrator.trace_pixels(frame_ids(local), sample)
+        film.add(local, radiance, depth, normal, rejected)
+
     threads = _thread_count(settings)
     # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
     n_chunks = threads * max(1, -(-n_pixels // (threads * int(settings.chunk_pixels))))
@@ -114,16 +121,17 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         while sample < settings.samples:
             # Trace one sample per pixel, chunk by chunk, chunks spread over the pool.
             chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
-            jobs = [pool.submit(integrator.trace_pixels, frame_ids(c), sample) for c in chunks]
-            for local, job in zip(chunks, jobs):
-                _, radiance, depth, normal, rejected = job.result()
-                film.add(local, radiance, depth, normal, rejected)
+            jobs = [pool.submit(trace_and_fold, c, sample) for c in chunks]
+            for job in jobs:
+                job.result()
             sample += 1
             film.check_finite(sample)
             elapsed = time.perf_counter() - t0
             if sample == 1:
                 first = elapsed
-            rel = film.relative_error()
+            # The image-wide error costs a pass over the film: only when someone reads it.
+            needed = on_pass is not None or settings.target_error
+            rel = film.relative_error() if needed else float("nan")
             if on_pass is not None:
                 on_pass(film.snapshot(sample, elapsed, rel, sample / settings.samples))
             if sample >= settings.samples:

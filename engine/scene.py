@@ -28,6 +28,7 @@ DELTA_ROUGHNESS = 2e-10 ** 0.25
 
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
+KERNELS = ("auto", "numpy", "compiled")
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 CAMERA_TYPES = ("PERSP", "ORTHO")
 
@@ -348,6 +349,8 @@ class RenderSettings:
     seed : sample-sequence seed. threads : worker threads (0 = all cores).
     fresnel : "exact" or "schlick". filter_type, filter_width : pixel filter (px).
     chunk_pixels : pixels traced at once per thread, bounding memory.
+    kernel : "auto" (the compiled kernels where numba is installed and the scene's
+        features are covered, else numpy), "numpy" or "compiled" (an error if impossible).
     region : optional (x0, y0, x1, y1) in full-frame pixels (row 0 at the bottom, x1 and
         y1 exclusive): render only that rectangle (Blender's render border). Pixels are
         sampled exactly as in a whole-frame render, so regions stitch into the same image.
@@ -365,6 +368,7 @@ class RenderSettings:
     filter_type: str = "BLACKMAN_HARRIS"
     filter_width: float = 1.5
     chunk_pixels: int = 1 << 16
+    kernel: str = "auto"
     region: tuple | None = None
 
     def validate(self) -> None:
@@ -384,6 +388,8 @@ class RenderSettings:
         if self.filter_type not in FILTER_TYPES:
             raise ValueError(f"filter_type must be one of {FILTER_TYPES}, got {self.filter_type!r}")
         _positive(self.filter_width, "filter_width")
+        if self.kernel not in KERNELS:
+            raise ValueError(f"kernel must be one of {KERNELS}, got {self.kernel!r}")
         if self.region is not None:
             x0, y0, x1, y1 = (int(v) for v in self.region)
             if not (0 <= x0 < x1 <= self.width and 0 <= y0 < y1 <= self.height):

@@ -84,8 +84,9 @@ def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, sphe
 
 
 def cornell_camera(**kw):
+    kw = {"sensor_fit": "HORIZONTAL", **kw}
     return Camera(world_from_camera=look_at((0, -3, 0.75), (0, 0, 0.75)),
-                  lens_mm=lens_for_fov(49.13), sensor_fit="HORIZONTAL", **kw)
+                  lens_mm=lens_for_fov(49.13), **kw)
 
 
 def cbspheres(**kw):

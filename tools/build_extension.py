@@ -11,8 +11,11 @@ What goes in each package (a folder named `specula`, the add-on's import name):
                         so nothing is installed as a global top-level module and nothing
                         touches sys.path
   blender_manifest.toml (extensions only) id `specula`, Blender 4.2.0+, the platform's wheel
-  wheels/*.whl          (extensions only) embreex for Blender's Python 3.11, unmodified from
-                        PyPI; Blender installs it on enable. numpy comes with Blender.
+  wheels/*.whl          (extensions only) embreex for Blender's Python 3.11, and numba with
+                        llvmlite (the compiled kernels, engine/kernel.py) where PyPI has them
+                        for the platform, unmodified from PyPI; Blender installs them on
+                        enable. numpy comes with Blender. Without numba (macOS x64: llvmlite
+                        0.50 has no wheel for it) the core renders with its numpy stages.
 
 Outputs:
   dist/specula-<version>-<platform>.zip   Blender 4.2 - 5.0 extensions, built and validated by
@@ -23,7 +26,8 @@ Outputs:
                                           without manifest or wheels; embreex is installed into
                                           Blender's scripts/modules folder (docs/INSTALL.md)
 
-embreex's only dependency is numpy (its metadata: `Requires-Dist: numpy`).
+embreex's only dependency is numpy (its metadata: `Requires-Dist: numpy`); numba's are
+llvmlite and numpy (>= 1.22, < 2.6).
 """
 
 from __future__ import annotations
@@ -40,6 +44,8 @@ import zipfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PACKAGE = "specula"
 EMBREEX = "embreex==4.4.0.post1"
+# The compiled kernels' wheels (same pins as requirements.txt).
+COMPILED = ("numba==0.68.1", "llvmlite==0.50.0")
 # Blender 4.2 - 5.0 run Python 3.11.
 BLENDER_PYTHON = "3.11"
 # Every platform PyPI has an embreex cp311 wheel for, as pip platform tag -> Blender platform.
@@ -50,6 +56,8 @@ WHEEL_PLATFORMS = {
     "macosx_13_0_arm64": "macos-arm64",
     "macosx_13_0_x86_64": "macos-x64",
 }
+# numba and llvmlite 0.50 publish cp311 wheels for these (not macOS x86_64).
+COMPILED_PLATFORMS = ("manylinux_2_28_x86_64", "win_amd64", "macosx_13_0_arm64")
 BLENDER_VERSION_MIN = "4.2.0"
 LICENSE = "SPDX:GPL-3.0-or-later"
 
@@ -84,29 +92,52 @@ def blender_ext_script():
 
 
 def download_wheels(cache, offline):
-    """Download the embreex wheel of every platform (once; kept in `cache`)."""
+    """Download the wheels of every platform (once; kept in `cache`): a list of paths."""
     os.makedirs(cache, exist_ok=True)
-    name, version = EMBREEX.split("==")
-    pattern = os.path.join(cache, f"{name}-{version}-cp311-cp311-*.whl")
-    wheels = {}
+    wheels = []
     for tag, platform in WHEEL_PLATFORMS.items():
-        have = [w for w in glob.glob(pattern) if tag in _platform_tags(w)]
-        if not have:
-            if offline:
-                raise SystemExit(f"no cached {name} wheel for {platform} in {cache}")
-            subprocess.run([sys.executable, "-m", "pip", "download", EMBREEX, "--no-deps",
-                            "--only-binary=:all:", "--python-version", BLENDER_PYTHON,
-                            "--platform", tag, "--dest", cache, "--quiet"], check=True)
-            have = [w for w in glob.glob(pattern) if tag in _platform_tags(w)]
-        if len(have) != 1:
-            raise SystemExit(f"expected one {name} wheel for {platform}, found {have}")
-        wheels[platform] = have[0]
+        specs = [EMBREEX] + (list(COMPILED) if tag in COMPILED_PLATFORMS else [])
+        for spec in specs:
+            wheels.append(_wheel(cache, spec, tag, platform, offline))
     return wheels
+
+
+def _wheel(cache, spec, tag, platform, offline):
+    """The cached cp311 wheel of `spec` for pip platform `tag`, downloaded if missing."""
+    name, version = spec.split("==")
+    pattern = os.path.join(cache, f"{name}-{version}-cp311-cp311-*.whl")
+
+    def found():
+        return [w for w in glob.glob(pattern) if _matches(w, tag)]
+
+    have = found()
+    if not have:
+        if offline:
+            raise SystemExit(f"no cached {name} wheel for {platform} in {cache}")
+        subprocess.run([sys.executable, "-m", "pip", "download", spec, "--no-deps",
+                        "--only-binary=:all:", "--python-version", BLENDER_PYTHON,
+                        "--platform", tag, "--dest", cache, "--quiet"], check=True)
+        have = found()
+    if len(have) != 1:
+        raise SystemExit(f"expected one {name} wheel for {platform}, found {have}")
+    return have[0]
 
 
 def _platform_tags(path):
     """A wheel file's platform tags: 'a.b' in `name-ver-py-abi-a.b.whl` -> {'a', 'b'}."""
     return set(os.path.basename(path)[:-len(".whl")].split("-")[-1].split("."))
+
+
+def _matches(path, tag):
+    """Whether a wheel fits pip platform `tag`: the same tag, or for macOS the same
+    architecture (a wheel for an older macOS runs on a newer one)."""
+    tags = _platform_tags(path)
+    if tag in tags:
+        return True
+    if tag.startswith("macosx_"):
+        arch = tag.split("_", 3)[3]
+        return any(t.startswith("macosx_") and t.split("_", 3)[3] == arch for t in tags)
+    return False
 
 
 def stage_sources(dest):
@@ -143,7 +174,8 @@ license = ["{LICENSE}"]
 # embreex wheels exist on PyPI for these platforms only (Python {BLENDER_PYTHON}).
 platforms = [{platforms}]
 
-# Unmodified from PyPI; embreex's only dependency, numpy, ships with Blender.
+# Unmodified from PyPI: embreex, and numba + llvmlite (the compiled kernels) where PyPI
+# has them; their other dependency, numpy, ships with Blender.
 wheels = [
 {wheels},
 ]
@@ -152,10 +184,10 @@ wheels = [
 
 def build_extensions(stage, dist, version, wheels):
     os.makedirs(os.path.join(stage, "wheels"))
-    for path in wheels.values():
+    for path in wheels:
         shutil.copy2(path, os.path.join(stage, "wheels"))
     with open(os.path.join(stage, "blender_manifest.toml"), "w", encoding="utf-8") as f:
-        f.write(manifest(version, [os.path.basename(p) for p in wheels.values()]))
+        f.write(manifest(version, [os.path.basename(p) for p in wheels]))
     tool = blender_ext_script()
     for old in glob.glob(os.path.join(dist, f"{PACKAGE}-{version}-*.zip")):
         if not old.endswith("-legacy.zip"):

@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -36,13 +37,22 @@ class RecordingAccel(Accel):
         self.batches.append(("occluded", o.copy(), d.copy(), np.asarray(tmax).copy()))
         return super().occluded(o, d, tmax)
 
+    def intersect_raw(self, o, d, tmax):
+        self.batches.append(("intersect_raw", o.copy(), d.copy(), tmax.copy()))
+        return super().intersect_raw(o, d, tmax)
 
-def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
+    def occluded_raw(self, o, d, tmax):
+        self.batches.append(("occluded_raw", o.copy(), d.copy(), tmax.copy()))
+        return super().occluded_raw(o, d, tmax)
+
+
+def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto"):
     import engine.renderer as renderer
 
     scene = scenes.cbspheres()
-    settings = scenes.settings(width=width, height=height, samples=samples, threads=threads,
-                               max_bounces=max_bounces)
+    settings = replace(scenes.settings(width=width, height=height, samples=samples,
+                                       threads=threads, max_bounces=max_bounces), kernel=kernel)
+    render(scene, replace(settings, width=16, height=12, samples=1))  # load compiled code
     accels, integrators = [], []
     original, original_integrator = renderer.Accel, renderer.Integrator
 
@@ -70,14 +80,13 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
     rec = RecordingAccel(scene)
     renderer.Accel = lambda s: rec
     try:
-        render(scene, scenes.settings(width=width, height=height, samples=1, threads=1,
-                                      max_bounces=max_bounces))
+        render(scene, replace(settings, samples=1, threads=1))
     finally:
         renderer.Accel = original
     raw = Accel(scene)
     t0 = time.perf_counter()
     for kind, o, d, tmax in rec.batches:
-        (raw.intersect if kind == "intersect" else raw.occluded)(o, d, tmax)
+        getattr(raw, kind)(o, d, tmax)
     raw_seconds = time.perf_counter() - t0
     # Split of the threads' time per named stage (the rest: compaction and bookkeeping in
     # the bounce loop, the film, and the thread pool).
@@ -85,7 +94,8 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8):
     stages = {k: round(v / busy, 3) for k, v in sorted(integrators[0].stage_seconds.items(),
                                                          key=lambda kv: -kv[1])}
     return {
-        "scene": "CBspheres", "resolution": f"{width}x{height}", "samples": result.samples,
+        "scene": "CBspheres", "kernel": result.plan.kernel, "resolution": f"{width}x{height}",
+        "samples": result.samples,
         "threads": threads_used, "wall_seconds": round(wall, 3),
         "ray_segments": accel.rays,
         "ray_segments_per_second": round(accel.rays / wall),
@@ -103,13 +113,18 @@ def main():
     ap.add_argument("--samples", type=int, default=8)
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--out", default="out/bench")
+    ap.add_argument("--kernel", choices=("both", "numpy", "compiled"), default="both",
+                    help="both: the numpy integrator, then the compiled kernels, in one run")
     args = ap.parse_args()
-    report = run(samples=args.samples, threads=args.threads)
+    kernels = ("numpy", "compiled") if args.kernel == "both" else (args.kernel,)
+    reports = [run(samples=args.samples, threads=args.threads, kernel=k) for k in kernels]
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "core.json"), "w") as f:
-        json.dump(report, f, indent=2)
-    for k, v in report.items():
-        print(f"{k:40s} {v}")
+        json.dump(reports, f, indent=2)
+    for report in reports:
+        for k, v in report.items():
+            print(f"{k:40s} {v}")
+        print()
 
 
 if __name__ == "__main__":

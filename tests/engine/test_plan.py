@@ -36,8 +36,9 @@ def test_absent_features_do_not_run(monkeypatch):
     monkeypatch.setattr(camera.CameraModel, "sample_lens", boom)
     from engine import integrator
     monkeypatch.setattr(integrator.Integrator, "interpolate_normals", boom)
-    r = render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=2))
-    assert r.plan.stages() == ["generate camera rays", "intersect",
+    r = render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=2,
+                                                     kernel="numpy"))
+    assert r.plan.stages() == ["numpy kernel", "generate camera rays", "intersect",
                                "handle escaped rays (black)", "handle emission", "sample light",
                                "trace shadow rays", "sample BSDF (diffuse)"]
     assert np.isfinite(r.combined).all() and r.combined[..., :3].mean() > 0
@@ -51,7 +52,7 @@ def test_no_emitters_means_no_light_sampling(monkeypatch):
     monkeypatch.setattr(engine.renderer, "LightSampler", boom)
     b = scenes.cornell_box(spheres=False, emitter_radiance=0.0)
     scene = b.build(scenes.cornell_camera(), World((1, 1, 1)))
-    r = render(scene, scenes.settings(width=16, height=12, samples=2))
+    r = render(scene, scenes.settings(width=16, height=12, samples=2, kernel="numpy"))
     assert not r.plan.emitters and r.combined[..., :3].mean() > 0
 
 
@@ -61,10 +62,10 @@ def test_dof_runs_the_lens_only_when_on(monkeypatch):
     monkeypatch.setattr(camera.CameraModel, "sample_lens",
                         lambda self, u: calls.append(len(u)) or original(self, u))
     render(diffuse_only_scene(use_dof=True, fstop=2.0, focus_distance=3.0),
-           scenes.settings(width=16, height=12, samples=1))
+           scenes.settings(width=16, height=12, samples=1, kernel="numpy"))
     assert sum(calls) == 16 * 12
     calls.clear()
-    render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=1))
+    render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=1, kernel="numpy"))
     assert calls == []
 
 

@@ -170,7 +170,8 @@ def test_a_failed_render_leaves_no_thread(monkeypatch):
     monkeypatch.setattr(integrator.Integrator, "intersect", boom)
     baseline = threading.active_count()
     with pytest.raises(RuntimeError, match="stage failed"):
-        render(scenes.cbspheres(), scenes.settings(width=8, height=8, samples=2, threads=2))
+        render(scenes.cbspheres(), scenes.settings(width=8, height=8, samples=2, threads=2,
+                                                   kernel="numpy"))
     assert threading.active_count() == baseline
 
 

@@ -1,0 +1,773 @@
+"""Compiled bounce stages: the integrator's hot loop as numba kernels between embree calls.
+
+The numpy integrator spends about 1 us of interpreter and temporary-array overhead per
+ray segment against embree's 0.1 us, so numpy, not ray tracing, bounds its speed. These
+kernels run the same stages with the same conventions, one loop over the batch per stage
+and no temporaries, with the GIL released so both cores work:
+
+    intersect (embree) -> surface_interaction -> sample_light -> shadow rays (embree)
+    -> accumulate_unoccluded -> sample_bsdf -> intersect (embree) ...
+
+`surface_interaction` handles escaped rays, emission (MIS-weighted), the bounce limit,
+Russian roulette and absorbers, and compacts the survivors; `sample_light` does
+next-event estimation on emissive triangles; `sample_bsdf` samples diffuse, mirror,
+metal and glass and writes the next rays straight into embree's float32 buffers.
+Random numbers come from the same Owen-scrambled Sobol sequences as
+`sampling.SampleStream` (bit-identical: see tests/engine/test_kernel.py), so the
+compiled and numpy paths estimate the same integral with the same sample points.
+
+The kernels cover what `SUPPORTED` lists; the plan falls back to the numpy integrator
+for anything else (rough lobes, light objects, environment maps). numba is optional:
+without it `AVAILABLE` is False and every render takes the numpy path.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import sampling
+from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
+from .scene import DIFFUSE, GLASS, METAL, MIRROR, NONE
+
+try:  # numba is optional: platforms without its wheel render with numpy.
+    from numba import njit
+    AVAILABLE = True
+except ImportError:  # pragma: no cover - exercised on platforms without numba
+    AVAILABLE = False
+
+    def njit(*args, **kwargs):
+        if args and callable(args[0]):
+            return args[0]
+        return lambda f: f
+
+# Material kinds the kernels implement (everything else uses the numpy integrator).
+SUPPORTED = (NONE, DIFFUSE, MIRROR, METAL, GLASS)
+
+# Same constants as the numpy integrator (see integrator.py).
+RAY_EPSILON = 2.0**-18
+ROULETTE_MIN_BOUNCE = 2
+LOCAL_WEIGHT = 0.75
+BACKGROUND_DEPTH = 1e10
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_M32 = np.uint64(0xFFFFFFFF)
+_SOBOL1 = _SOBOL1_REV.astype(np.uint64)
+_REVERSE_STEPS = tuple((np.uint64(s), np.uint64(m)) for s, m in (
+    (1, 0x55555555), (2, 0x33333333), (4, 0x0F0F0F0F), (8, 0x00FF00FF), (16, 0x0000FFFF)))
+
+
+# -------------------------------------------------------------------- sample sequences
+@njit(**_JIT)
+def _hash(x):
+    """lowbias32 (sampling.hash_u32) on a uint64 holding 32 bits."""
+    x = x & _M32
+    x ^= x >> np.uint64(16)
+    x = (x * np.uint64(0x7FEB352D)) & _M32
+    x ^= x >> np.uint64(15)
+    x = (x * np.uint64(0x846CA68B)) & _M32
+    x ^= x >> np.uint64(16)
+    return x
+
+
+@njit(**_JIT)
+def _hash_combine(a, b):
+    return _hash(a ^ ((_hash(b) + np.uint64(0x9E3779B9)) & _M32))
+
+
+@njit(**_JIT)
+def _reverse(x):
+    """Reverse the low 32 bits (swap halves, then bytes, nibbles, pairs, bits)."""
+    for shift, mask in _REVERSE_STEPS:
+        x = ((x >> shift) & mask) | ((x & mask) << shift)
+    return x & _M32
+
+
+@njit(**_JIT)
+def _laine_karras(x, seed):
+    x = (x + seed) & _M32
+    x ^= (x * np.uint64(0x6C50B47C)) & _M32
+    x ^= (x * np.uint64(0xB82F1E52)) & _M32
+    x ^= (x * np.uint64(0xC7AFE638)) & _M32
+    x ^= (x * np.uint64(0x8D22F6E6)) & _M32
+    return x
+
+
+@njit(**_JIT)
+def _to_unit(x):
+    return min(float(x) * 2.0**-32, ONE_MINUS_EPSILON)
+
+
+@njit(**_JIT)
+def pixel_seed(pixel, seed):
+    """SampleStream.pixel_seed for one pixel id."""
+    return _hash_combine(np.uint64(pixel) & _M32, (np.uint64(seed) & _M32) ^ np.uint64(0x5BD1E995))
+
+
+@njit(**_JIT)
+def sample_2d(pseed, rev_sample, dim):
+    """SampleStream.get_2d for one pixel: (u0, u1) in [0, 1)."""
+    dim_seed = _hash_combine(pseed, np.uint64(dim))
+    r = _laine_karras(rev_sample, dim_seed)
+    index = _reverse(r)
+    x = _reverse(_laine_karras(index, _hash_combine(dim_seed, np.uint64(0xA511E9B3))))
+    y_rev = (_SOBOL1[0, r & np.uint64(0xFF)] ^ _SOBOL1[1, (r >> np.uint64(8)) & np.uint64(0xFF)]
+             ^ _SOBOL1[2, (r >> np.uint64(16)) & np.uint64(0xFF)]
+             ^ _SOBOL1[3, r >> np.uint64(24)])
+    y = _reverse(_laine_karras(y_rev, _hash_combine(dim_seed, np.uint64(0x63D83595))))
+    return _to_unit(x), _to_unit(y)
+
+
+@njit(**_JIT)
+def sample_1d(pseed, rev_sample, dim):
+    """SampleStream.get_1d for one pixel."""
+    dim_seed = _hash_combine(pseed, np.uint64(dim))
+    index = _reverse(_laine_karras(rev_sample, dim_seed))
+    return _to_unit(_reverse(_laine_karras(index, _hash_combine(dim_seed, np.uint64(0x1B873593)))))
+
+
+@njit(**_JIT)
+def stream_2d(pixels, sample, seed, dim):
+    """(n, 2) samples of dimension pair `dim` for pixel ids (n,) (for tests)."""
+    out = np.empty((len(pixels), 2))
+    rev = _reverse(np.uint64(sample))
+    for i in range(len(pixels)):
+        out[i, 0], out[i, 1] = sample_2d(pixel_seed(pixels[i], seed), rev, dim)
+    return out
+
+
+@njit(**_JIT)
+def stream_1d(pixels, sample, seed, dim):
+    out = np.empty(len(pixels))
+    rev = _reverse(np.uint64(sample))
+    for i in range(len(pixels)):
+        out[i] = sample_1d(pixel_seed(pixels[i], seed), rev, dim)
+    return out
+
+
+# -------------------------------------------------------------------- small vector helpers
+@njit(**_JIT)
+def _power_heuristic(a, b):
+    """integrator.power_heuristic for scalars."""
+    if math.isinf(a):
+        return 1.0
+    if math.isinf(b):
+        return 0.0
+    m = max(max(a, b), 1e-300)
+    a2 = (a / m) ** 2
+    b2 = (b / m) ** 2
+    s = a2 + b2
+    return a2 / max(s, 1e-300) if s > 0 else 0.0
+
+
+_PER_BOUNCE = Dim.PER_BOUNCE
+_LIGHT_SELECT, _LIGHT_POINT, _LOBE, _BSDF, _ROULETTE = (
+    Dim.LIGHT_SELECT, Dim.LIGHT_POINT, Dim.LOBE, Dim.BSDF, Dim.ROULETTE)
+
+
+@njit(**_JIT)
+def _bounce_dim(depth, which):
+    return 2 + depth * _PER_BOUNCE + which
+
+
+# -------------------------------------------------------------------- light selection
+# The emitters travel as one tuple (see `pack_lights`):
+#   0 pmf (k,), 1 cdf (k,)               global choice by power
+#   2 grid (int, voxels per axis; 0: none), 3 grid_lo (3,), 4 cell (3,)
+#   5 local_pmf (g^3, k), 6 local_cdf_flat (g^3 k,), 7 has_mass (g^3,)
+#   8 entry_of_triangle (t,), 9 area_by_triangle (t,)
+#   10 v0, 11 e1, 12 e2, 13 normal (k, 3), 14 area (k,), 15 radiance (k, 3), 16 scale (k,)
+@njit(**_JIT)
+def _voxel(px, py, pz, lo, cell, grid):
+    i = min(max(int((px - lo[0]) / cell[0]), 0), grid - 1)
+    j = min(max(int((py - lo[1]) / cell[1]), 0), grid - 1)
+    k = min(max(int((pz - lo[2]) / cell[2]), 0), grid - 1)
+    return (i * grid + j) * grid + k
+
+
+# Helpers take the tuple's arrays one by one: passing the tuple itself to a helper
+# costs ~100 ns per call (measured), more than the rest of a light sample.
+@njit(**_JIT)
+def _entry_pmf(px, py, pz, entry, pmf, grid, lo, cell, local_pmf, has_mass):
+    """LightSampler.pmf for one point and entry."""
+    if grid == 0:
+        return pmf[entry]
+    vox = _voxel(px, py, pz, lo, cell, grid)
+    a = LOCAL_WEIGHT if has_mass[vox] else 0.0
+    return a * local_pmf[vox, entry] + (1.0 - a) * pmf[entry]
+
+
+@njit(**_JIT)
+def _choose(px, py, pz, u, pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass):
+    """LightSampler.choose for one point: (entry, probability)."""
+    k_count = len(pmf)
+    if grid == 0:
+        k = min(np.searchsorted(cdf, u, side="right"), k_count - 1)
+        return k, pmf[k]
+    vox = _voxel(px, py, pz, lo, cell, grid)
+    a = LOCAL_WEIGHT if has_mass[vox] else 0.0
+    if u < a:
+        ul = min(u / a, 1.0 - 1e-12)
+        flat = np.searchsorted(local_cdf_flat, vox + ul, side="right")
+        k = min(max(flat - vox * k_count, 0), k_count - 1)
+    else:
+        k = min(np.searchsorted(cdf, (u - a) / (1.0 - a), side="right"), k_count - 1)
+    return k, a * local_pmf[vox, k] + (1.0 - a) * pmf[k]
+
+
+# -------------------------------------------------------------------- stages
+@njit(**_JIT)
+def surface_interaction(depth, rev_sample, flags, geometry, materials, lights, world, camera,
+                        prim, tfar, bu, bv, m, live, pseed, d64, throughput, prev_pdf,
+                        radiance, depth_pass, normal_pass, hp, hng, hns, hscale, hmat, hfront):
+    """Escaped rays, surface interaction, emission, bounce limit, roulette, absorbers.
+
+    For the m live rays (row live[i] of the pixel batch) with embree's hits (prim, tfar,
+    bu, bv): adds world and emitted radiance, then compacts the rays that go on scattering
+    to the front of live, d64, throughput, prev_pdf and writes their hit point hp, normals
+    hng/hns (flipped to the incoming side), offset scale, material and side. Returns
+    their count.
+    """
+    max_bounces, world_light, emitters, light_sampling, shading_normals = (
+        flags[0], flags[1], flags[2], flags[3], flags[4])
+    vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
+    kind, emission = materials[0], materials[5]
+    pmf, grid, lo, cell, local_pmf, has_mass = (lights[0], lights[2], lights[3], lights[4],
+                                                lights[5], lights[7])
+    entry_of_triangle, area_by_triangle = lights[8], lights[9]
+    cam_pos, forward = camera[0], camera[1]
+    out = 0
+    for i in range(m):
+        row = live[i]
+        t0, t1, t2 = throughput[i, 0], throughput[i, 1], throughput[i, 2]
+        dx, dy, dz = d64[i, 0], d64[i, 1], d64[i, 2]
+        f = prim[i]
+        if f < 0:
+            if world_light:
+                radiance[row, 0] += t0 * world[0]
+                radiance[row, 1] += t1 * world[1]
+                radiance[row, 2] += t2 * world[2]
+            continue
+        # Hit point from the barycentrics in float64 (embree works in float32).
+        u = np.float64(bu[i])
+        v = np.float64(bv[i])
+        w0 = 1.0 - u - v
+        px = w0 * vertices[f, 0, 0] + u * vertices[f, 1, 0] + v * vertices[f, 2, 0]
+        py = w0 * vertices[f, 0, 1] + u * vertices[f, 1, 1] + v * vertices[f, 2, 1]
+        pz = w0 * vertices[f, 0, 2] + u * vertices[f, 1, 2] + v * vertices[f, 2, 2]
+        nx, ny, nz = tri_normal[f, 0], tri_normal[f, 1], tri_normal[f, 2]
+        front = dx * nx + dy * ny + dz * nz < 0.0
+        sign = 1.0 if front else -1.0
+        nx, ny, nz = nx * sign, ny * sign, nz * sign
+        sx, sy, sz = nx, ny, nz
+        if shading_normals and smooth[f]:
+            ax = (w0 * normals[f, 0, 0] + u * normals[f, 1, 0] + v * normals[f, 2, 0]) * sign
+            ay = (w0 * normals[f, 0, 1] + u * normals[f, 1, 1] + v * normals[f, 2, 1]) * sign
+            az = (w0 * normals[f, 0, 2] + u * normals[f, 1, 2] + v * normals[f, 2, 2]) * sign
+            length = math.sqrt(ax * ax + ay * ay + az * az)
+            if length > 1e-12:
+                sx, sy, sz = ax / length, ay / length, az / length
+        if depth == 0:
+            depth_pass[row] = ((px - cam_pos[0]) * forward[0] + (py - cam_pos[1]) * forward[1]
+                               + (pz - cam_pos[2]) * forward[2])
+            normal_pass[row, 0], normal_pass[row, 1], normal_pass[row, 2] = sx, sy, sz
+        mat = material_index[f]
+        t = np.float64(tfar[i])
+        # Emission: two-sided, MIS-weighted against light sampling after soft bounces.
+        if emitters:
+            le0, le1, le2 = emission[mat, 0], emission[mat, 1], emission[mat, 2]
+            if max(le0, max(le1, le2)) > 0:
+                w = 1.0
+                if light_sampling and not math.isinf(prev_pdf[i]):
+                    cos_l = abs(nx * dx + ny * dy + nz * dz)
+                    ox, oy, oz = px - dx * t, py - dy * t, pz - dz * t
+                    entry = entry_of_triangle[f]
+                    pm = 0.0
+                    if entry >= 0 and grid == 0:
+                        pm = pmf[entry]
+                    elif entry >= 0:
+                        pm = _entry_pmf(ox, oy, oz, entry, pmf, grid, lo, cell, local_pmf,
+                                        has_mass)
+                    pdf_l = pm / area_by_triangle[f] * t * t / max(cos_l, 1e-300)
+                    w = _power_heuristic(prev_pdf[i], pdf_l)
+                radiance[row, 0] += t0 * le0 * w
+                radiance[row, 1] += t1 * le1 * w
+                radiance[row, 2] += t2 * le2 * w
+        # Vertex max_bounces + 1 only adds emission.
+        if depth > max_bounces:
+            continue
+        if depth >= ROULETTE_MIN_BOUNCE:
+            q = min(math.sqrt(max(t0, max(t1, t2))), 1.0)
+            if not sample_1d(pseed[row], rev_sample, _bounce_dim(depth, _ROULETTE)) < q:
+                continue
+            t0, t1, t2 = t0 / q, t1 / q, t2 / q
+        if kind[mat] == NONE:
+            continue
+        live[out] = row
+        throughput[out, 0], throughput[out, 1], throughput[out, 2] = t0, t1, t2
+        prev_pdf[out] = prev_pdf[i]
+        d64[out, 0], d64[out, 1], d64[out, 2] = dx, dy, dz
+        hp[out, 0], hp[out, 1], hp[out, 2] = px, py, pz
+        hng[out, 0], hng[out, 1], hng[out, 2] = nx, ny, nz
+        hns[out, 0], hns[out, 1], hns[out, 2] = sx, sy, sz
+        hscale[out] = max(tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+        hmat[out] = mat
+        hfront[out] = front
+        out += 1
+    return out
+
+
+@njit(**_JIT)
+def sample_light(depth, rev_sample, materials, lights, m, live, pseed, d64, throughput,
+                 hp, hng, hns, hscale, hmat, srow, sorigin, sdir, stmax, scontrib):
+    """Next-event estimation at diffuse vertices: an emissive triangle chosen by
+    LightSampler's rule, a uniform point on it, MIS against BSDF sampling. Writes one
+    shadow ray per vertex with a non-zero contribution; returns their count."""
+    kind, colour = materials[0], materials[1]
+    pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass = lights[:8]
+    v0, e1, e2, lnormal, larea, lradiance, lscale = (lights[10], lights[11], lights[12],
+                                                     lights[13], lights[14], lights[15],
+                                                     lights[16])
+    ns_out = 0
+    if len(pmf) == 0:
+        return 0
+    for i in range(m):
+        mat = hmat[i]
+        if kind[mat] != DIFFUSE:
+            continue
+        row = live[i]
+        pseed_row = pseed[row]
+        u_sel = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_SELECT))
+        ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_POINT))
+        px, py, pz = hp[i, 0], hp[i, 1], hp[i, 2]
+        if grid == 0:  # inline fast path: the general call costs ~35 ns a sample
+            k = min(np.searchsorted(cdf, u_sel, side="right"), len(pmf) - 1)
+            p_sel = pmf[k]
+        else:
+            k, p_sel = _choose(px, py, pz, u_sel, pmf, cdf, grid, lo, cell, local_pmf,
+                               local_cdf_flat, has_mass)
+        # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
+        if ua < ub:
+            b0, b1 = ua / 2, ub - ua / 2
+        else:
+            b0, b1 = ua - ub / 2, ub / 2
+        b2 = 1.0 - b0 - b1
+        yx = v0[k, 0] + b1 * e1[k, 0] + b2 * e2[k, 0]
+        yy = v0[k, 1] + b1 * e1[k, 1] + b2 * e2[k, 1]
+        yz = v0[k, 2] + b1 * e1[k, 2] + b2 * e2[k, 2]
+        tx, ty, tz = yx - px, yy - py, yz - pz
+        dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+        if not dist > 0:
+            continue
+        wx, wy, wz = tx / dist, ty / dist, tz / dist
+        cos_l = abs(lnormal[k, 0] * wx + lnormal[k, 1] * wy + lnormal[k, 2] * wz)
+        if not cos_l > 0 or not p_sel > 0:
+            continue
+        pdf_sa = dist * dist / max(larea[k] * cos_l, 1e-300)
+        # Lambert f cos and its sampling pdf.
+        nx, ny, nz = hng[i, 0], hng[i, 1], hng[i, 2]
+        cos = wx * hns[i, 0] + wy * hns[i, 1] + wz * hns[i, 2]
+        if not (cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0):
+            continue
+        w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
+        scale = cos / np.pi / pdf_sa / p_sel * w
+        c0 = throughput[i, 0] * colour[mat, 0] * lradiance[k, 0] * scale
+        c1 = throughput[i, 1] * colour[mat, 1] * lradiance[k, 1] * scale
+        c2 = throughput[i, 2] * colour[mat, 2] * lradiance[k, 2] * scale
+        if not max(c0, max(c1, c2)) > 0:
+            continue
+        # Shadow ray from the offset point, aimed at the sampled point itself.
+        eps = RAY_EPSILON * max(hscale[i], 1e-30)
+        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+        sx, sy, sz = yx - ox, yy - oy, yz - oz
+        seg = math.sqrt(sx * sx + sy * sy + sz * sz)
+        inv = 1.0 / max(seg, 1e-300)
+        j = ns_out
+        srow[j] = row
+        sorigin[j, 0], sorigin[j, 1], sorigin[j, 2] = ox, oy, oz
+        sdir[j, 0], sdir[j, 1], sdir[j, 2] = sx * inv, sy * inv, sz * inv
+        stmax[j] = max(seg - RAY_EPSILON * max(lscale[k], 1e-30), 0.0)
+        scontrib[j, 0], scontrib[j, 1], scontrib[j, 2] = c0, c1, c2
+        ns_out += 1
+    return ns_out
+
+
+@njit(**_JIT)
+def accumulate_unoccluded(radiance, srow, scontrib, occluded_prim, count):
+    """Add the contributions of shadow rays that reached their light (embree's occlusion
+    query leaves prim -1 on unblocked rays)."""
+    for j in range(count):
+        if occluded_prim[j] < 0:
+            row = srow[j]
+            radiance[row, 0] += scontrib[j, 0]
+            radiance[row, 1] += scontrib[j, 1]
+            radiance[row, 2] += scontrib[j, 2]
+
+
+@njit(**_JIT)
+def _build_frame(nx, ny, nz):
+    sign = 1.0 if nz >= 0.0 else -1.0
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
+
+
+@njit(**_JIT)
+def _fresnel_dielectric(cos_i, eta, exact):
+    """(F, cos_t) as bsdf.fresnel_dielectric / fresnel_schlick_dielectric."""
+    cos_i = min(max(abs(cos_i), 0.0), 1.0)
+    disc = eta * eta - 1.0 + cos_i * cos_i
+    if disc <= 0.0:
+        return 1.0, 0.0
+    cos_t = math.sqrt(disc) / eta
+    if exact:
+        d_par = eta * cos_i + cos_t
+        d_perp = cos_i + eta * cos_t
+        if not (d_par > 0 and d_perp > 0):
+            return 1.0, cos_t
+        r_par = (eta * cos_i - cos_t) / d_par
+        r_perp = (cos_i - eta * cos_t) / d_perp
+        f = 0.5 * (r_par * r_par + r_perp * r_perp)
+    else:
+        r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+        c = cos_i if eta >= 1.0 else cos_t
+        f = r0 + (1.0 - r0) * (1.0 - c) ** 5
+    return min(max(f, 0.0), 1.0), cos_t
+
+
+@njit(**_JIT)
+def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64, throughput,
+                prev_pdf, hp, hng, hns, hscale, hmat, hfront, origin32, dir32, tmax32):
+    """Sample each vertex's BSDF, update throughput, compact the paths that go on and
+    write their next rays (offset origin, float32 for embree). Returns their count."""
+    kind, colour, ior, reflection_tint, transmission_tint = (
+        materials[0], materials[1], materials[2], materials[3], materials[4])
+    out = 0
+    for i in range(m):
+        mat = hmat[i]
+        k = kind[mat]
+        row = live[i]
+        wox, woy, woz = -d64[i, 0], -d64[i, 1], -d64[i, 2]
+        nx, ny, nz = hng[i, 0], hng[i, 1], hng[i, 2]
+        sx, sy, sz = hns[i, 0], hns[i, 1], hns[i, 2]
+        pdf = np.inf
+        if k == DIFFUSE:
+            ua, ub = sample_2d(pseed[row], rev_sample, _bounce_dim(depth, _BSDF))
+            # Concentric disk, then Malley's method about the shading normal.
+            a = 2.0 * ua - 1.0
+            b = 2.0 * ub - 1.0
+            if abs(a) > abs(b):
+                r, theta = a, (np.pi / 4) * (b / a)
+            else:
+                r = b
+                theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
+            lx, ly = r * math.cos(theta), r * math.sin(theta)
+            lz = math.sqrt(max(0.0, 1.0 - (lx * lx + ly * ly)))
+            s, t = _build_frame(sx, sy, sz)
+            wx = lx * s[0] + ly * t[0] + lz * sx
+            wy = lx * s[1] + ly * t[1] + lz * sy
+            wz = lx * s[2] + ly * t[2] + lz * sz
+            if not (wx * nx + wy * ny + wz * nz > 0.0 and lz > 0.0):
+                continue
+            f0, f1, f2 = colour[mat, 0], colour[mat, 1], colour[mat, 2]
+            pdf = lz / np.pi
+        else:
+            # Delta lobes use the shading normal unless it faces away from wo.
+            if sx * wox + sy * woy + sz * woz <= 0.0:
+                sx, sy, sz = nx, ny, nz
+            cos_o = sx * wox + sy * woy + sz * woz
+            rx, ry, rz = 2.0 * cos_o * sx - wox, 2.0 * cos_o * sy - woy, 2.0 * cos_o * sz - woz
+            wx, wy, wz = rx, ry, rz
+            if k == MIRROR:
+                f0, f1, f2 = colour[mat, 0], colour[mat, 1], colour[mat, 2]
+            elif k == METAL:
+                c = (1.0 - min(max(abs(cos_o), 0.0), 1.0)) ** 5
+                g0 = min(max(colour[mat, 0], 0.0), 1.0)
+                g1 = min(max(colour[mat, 1], 0.0), 1.0)
+                g2 = min(max(colour[mat, 2], 0.0), 1.0)
+                f0 = min(max(g0 + (1.0 - g0) * c, 0.0), 1.0)
+                f1 = min(max(g1 + (1.0 - g1) * c, 0.0), 1.0)
+                f2 = min(max(g2 + (1.0 - g2) * c, 0.0), 1.0)
+            else:  # GLASS
+                eta = ior[mat] if hfront[i] else 1.0 / ior[mat]
+                fr, cos_t = _fresnel_dielectric(cos_o, eta, exact_fresnel)
+                r0 = fr * reflection_tint[mat, 0]
+                r1 = fr * reflection_tint[mat, 1]
+                r2 = fr * reflection_tint[mat, 2]
+                q0 = (1.0 - fr) * transmission_tint[mat, 0]
+                q1 = (1.0 - fr) * transmission_tint[mat, 1]
+                q2 = (1.0 - fr) * transmission_tint[mat, 2]
+                r_avg = (r0 + r1 + r2) / 3.0
+                t_avg = (q0 + q1 + q2) / 3.0
+                total = r_avg + t_avg
+                if not total > 0:
+                    continue
+                p_reflect = r_avg / total
+                u = sample_1d(pseed[row], rev_sample, _bounce_dim(depth, _LOBE))
+                if u < p_reflect:
+                    inv = 1.0 / max(p_reflect, 1e-300)
+                    f0, f1, f2 = r0 * inv, r1 * inv, r2 * inv
+                else:
+                    inv = 1.0 / max(1.0 - p_reflect, 1e-300)
+                    f0, f1, f2 = q0 * inv, q1 * inv, q2 * inv
+                    c = cos_o / eta - cos_t
+                    wx = -wox / eta + c * sx
+                    wy = -woy / eta + c * sy
+                    wz = -woz / eta + c * sz
+                length = math.sqrt(wx * wx + wy * wy + wz * wz)
+                wx, wy, wz = wx / length, wy / length, wz / length
+        t0 = throughput[i, 0] * f0
+        t1 = throughput[i, 1] * f1
+        t2 = throughput[i, 2] * f2
+        if not max(t0, max(t1, t2)) > 0:
+            continue
+        # Spawn: leave the surface toward the side of the new direction.
+        side = 1.0 if wx * nx + wy * ny + wz * nz >= 0.0 else -1.0
+        eps = side * RAY_EPSILON * max(hscale[i], 1e-30)
+        origin32[out, 0] = hp[i, 0] + eps * nx
+        origin32[out, 1] = hp[i, 1] + eps * ny
+        origin32[out, 2] = hp[i, 2] + eps * nz
+        dir32[out, 0], dir32[out, 1], dir32[out, 2] = wx, wy, wz
+        tmax32[out] = np.inf
+        d64[out, 0], d64[out, 1], d64[out, 2] = wx, wy, wz
+        throughput[out, 0], throughput[out, 1], throughput[out, 2] = t0, t1, t2
+        prev_pdf[out] = pdf
+        live[out] = row
+        out += 1
+    return out
+
+
+def interp_guide(xp: np.ndarray, cells: int = 4096) -> np.ndarray:
+    """Index guide for `_interp` on xp in [0, 1]: guide[c] = the last j with xp[j] <= c /
+    cells (-1 if none), for c = 0..cells."""
+    return np.searchsorted(xp, np.arange(cells + 1) / cells, side="right") - 1
+
+
+@njit(**_JIT)
+def _interp(x, xp, fp, guide):
+    """np.interp for one x in [0, 1], bit-identical. A binary search over the whole
+    16k-entry filter table mispredicts a branch per level (~150 ns a sample); the guide
+    narrows it to the few entries of x's cell."""
+    cells = len(guide) - 1
+    c = min(int(x * cells), cells - 1)
+    lo = max(guide[c], 0)
+    hi = min(guide[c + 1] + 1, len(xp))  # the answer j is in [guide[c], guide[c + 1]]
+    while lo < hi:  # first index with xp > x, within the cell's entries
+        mid = (lo + hi) >> 1
+        if x < xp[mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    j = lo - 1
+    if j < 0:
+        return fp[0]
+    if j >= len(xp) - 1:
+        return fp[-1]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    return slope * (x - xp[j]) + fp[j]
+
+
+@njit(**_JIT)
+def generate_camera_rays(pixels, sample, seed, width, filter_cdf, filter_x, filter_guide, view,
+                         lens,
+                         world_from_camera, position, pseed, origin32, dir32, tmax32, d64):
+    """Camera rays for pixel ids (n,) as CameraModel.generate_rays, with the filter
+    offsets and lens points of the numpy path; also fills each pixel's sequence seed.
+
+    view = (width, height, half_x, half_y, fit_half, shift_x, shift_y, clip_start,
+    clip_end, ortho); lens = (aperture, blades, rotation, ratio, focus) (aperture 0: pinhole).
+    """
+    rev_sample = _reverse(np.uint64(sample))
+    w_img, h_img, half_x, half_y, fit_half, shift_x, shift_y, clip_start, clip_end, ortho = view
+    aperture, blades, rotation, ratio, focus = lens
+    m = world_from_camera
+    for i in range(len(pixels)):
+        ps = pixel_seed(pixels[i], seed)
+        pseed[i] = ps
+        fx, fy = sample_2d(ps, rev_sample, 0)
+        rx = (pixels[i] % width) + 0.5 + _interp(fx, filter_cdf, filter_x, filter_guide)
+        ry = (pixels[i] // width) + 0.5 + _interp(fy, filter_cdf, filter_x, filter_guide)
+        x = (2.0 * rx / w_img - 1.0) * half_x + shift_x * 2 * fit_half
+        y = (2.0 * ry / h_img - 1.0) * half_y + shift_y * 2 * fit_half
+        lx = ly = 0.0
+        if aperture > 0.0:
+            ua, ub = sample_2d(ps, rev_sample, 1)
+            if blades >= 3:
+                nb = int(blades)
+                corner = min(math.floor(ua * nb), nb - 1)
+                sv = math.sqrt(min(max(ua * nb - corner, 0.0), 1.0))
+                ang = np.pi / nb
+                tx = sv * math.cos(ang)
+                ty = sv * math.sin(ang) * (2.0 * ub - 1.0)
+                phi = rotation + corner * (2.0 * np.pi / nb)
+                c, sn = math.cos(phi), math.sin(phi)
+                lx, ly = c * tx - sn * ty, sn * tx + c * ty
+            else:
+                a = 2.0 * ua - 1.0
+                b = 2.0 * ub - 1.0
+                if abs(a) > abs(b):
+                    r, theta = a, (np.pi / 4) * (b / a)
+                else:
+                    r = b
+                    theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
+                lx, ly = r * math.cos(theta), r * math.sin(theta)
+            lx, ly = lx * aperture / ratio, ly * aperture
+        if ortho:
+            px, py, pz = x, y, 0.0
+            dx, dy, dz = 0.0, 0.0, 1.0
+            if aperture > 0.0:
+                px, py = px + lx, py + ly
+                norm = math.sqrt(lx * lx + ly * ly + focus * focus)
+                dx, dy, dz = -lx / norm, -ly / norm, focus / norm
+            px, py, pz = px + clip_start * dx, py + clip_start * dy, pz + clip_start * dz
+            tmax = clip_end - clip_start
+        else:
+            norm = math.sqrt(x * x + y * y + 1.0)
+            dx, dy, dz = x / norm, y / norm, 1.0 / norm
+            z_inv = 1.0 / dz
+            px = py = pz = 0.0
+            if aperture > 0.0:
+                k = focus / dz
+                fx_, fy_, fz_ = dx * k - lx, dy * k - ly, dz * k
+                norm = math.sqrt(fx_ * fx_ + fy_ * fy_ + fz_ * fz_)
+                dx, dy, dz = fx_ / norm, fy_ / norm, fz_ / norm
+                px, py = lx, ly
+            c = clip_start * z_inv
+            px, py, pz = px + c * dx, py + c * dy, pz + c * dz
+            tmax = (clip_end - clip_start) * z_inv
+        for j in range(3):
+            origin32[i, j] = px * m[j, 0] + py * m[j, 1] + pz * m[j, 2] + position[j]
+            dj = dx * m[j, 0] + dy * m[j, 1] + dz * m[j, 2]
+            dir32[i, j] = dj
+            d64[i, j] = dj
+        tmax32[i] = min(tmax, 3e38)
+
+
+# -------------------------------------------------------------------- the bounce loop
+F32 = np.float32
+
+
+def unsupported(scene, plan) -> str:
+    """Why the kernels cannot render this scene ("" if they can)."""
+    kinds = set(scene.materials.kind[np.unique(scene.material_index)].tolist())
+    extra = sorted(kinds - set(SUPPORTED))
+    if extra:
+        from .scene import KIND_NAMES
+        return "material kinds " + ", ".join(KIND_NAMES[k] for k in extra)
+    if plan.light_objects:
+        return "light objects"
+    if plan.environment:
+        return "an environment map"
+    return ""
+
+
+def pack_lights(sampler, num_triangles: int) -> tuple:
+    """The emitters as the kernels' tuple (layout above); empty arrays without emitters."""
+    if sampler is None or sampler.num_triangles == 0:
+        z3, z = np.zeros((0, 3)), np.zeros(0)
+        return (z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z, np.zeros(1, np.bool_),
+                np.full(num_triangles, -1, np.int64), np.ones(num_triangles), z3, z3, z3, z3,
+                z, z3, z)
+    s = sampler
+    if hasattr(s, "local_pmf"):
+        grid = (s.GRID, s.grid_lo, s.cell, s.local_pmf, s.local_cdf_flat, s.grid_has_mass)
+    else:
+        grid = (0, np.zeros(3), np.ones(3), np.zeros((1, s.num_entries)), np.zeros(0),
+                np.zeros(1, np.bool_))
+    return (s.distribution.pmf, s.distribution.cdf, *grid, s.entry_of_triangle,
+            s.area_by_triangle, s.v0, s.e1, s.e2, s.normal, s.area, s.radiance, s.scale)
+
+
+class CompiledTracer:
+    """The bounce loop over the compiled stages; embree calls stay in Python (they release
+    the GIL). Built by `Integrator` when the plan selects the compiled kernel."""
+
+    def __init__(self, integrator):
+        it = self.it = integrator
+        scene, plan = it.scene, it.plan
+        normals = scene.normals if scene.normals is not None else np.zeros((1, 3, 3))
+        self.geometry = (scene.vertices, it.tri_normal, it.tri_scale,
+                         scene.material_index.astype(np.int64), normals,
+                         scene.smooth.astype(np.bool_))
+        self.materials = (it.kind.astype(np.int64), it.colour, it.ior, it.reflection_tint,
+                          it.transmission_tint, it.emission)
+        self.lights = pack_lights(it.emitters, scene.num_triangles)
+        self.world = it.world
+        self.camera = (it.camera.position, it.camera.forward)
+        self.flags = (int(it.settings.max_bounces), bool(plan.world_light),
+                      bool(plan.num_emitters), bool(plan.light_sampling),
+                      bool(plan.shading_normals))
+        self.exact_fresnel = it.settings.fresnel == "exact"
+        cm, cam = it.camera, it.camera.cam
+        self.filter_cdf, self.filter_x = it.pixel_filter._cdf, it.pixel_filter._x
+        self.filter_guide = interp_guide(self.filter_cdf)
+        self.view = (float(cm.width), float(cm.height), cm.half_x, cm.half_y, cm.fit_half,
+                     float(cam.shift_x), float(cam.shift_y), float(cam.clip_start),
+                     float(cam.clip_end), cam.type == "ORTHO")
+        self.lens = (float(cm.aperture) if it.plan.dof else 0.0, float(cm.blades),
+                     float(cam.rotation), float(cam.ratio), float(cm.focus))
+        self.world_from_camera = np.ascontiguousarray(cm.world_from_camera)
+        self.position = np.asarray(cm.position, np.float64)
+
+    def trace_pixels(self, pixels: np.ndarray, sample: int):
+        """As Integrator.trace_pixels: one sample for each pixel in `pixels` (n,)."""
+        it = self.it
+        n = len(pixels)
+        seed = it.settings.seed
+        radiance = np.zeros((n, 3))
+        depth_pass = np.full(n, BACKGROUND_DEPTH)
+        normal_pass = np.zeros((n, 3))
+        rev_sample = np.uint64(sampling.reverse_bits(np.array([sample], np.uint32))[0])
+        t0 = time.perf_counter()
+        pseed = np.empty(n, np.uint64)
+        origin32, dir32, tmax32 = np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32)
+        d64 = np.empty((n, 3))
+        generate_camera_rays(np.asarray(pixels, np.int64), sample, seed, it.width,
+                             self.filter_cdf, self.filter_x, self.filter_guide, self.view,
+                             self.lens,
+                             self.world_from_camera, self.position, pseed, origin32, dir32,
+                             tmax32, d64)
+        it._count("generate camera rays", time.perf_counter() - t0)
+        live = np.arange(n, dtype=np.int64)
+        throughput = np.ones((n, 3))
+        prev_pdf = np.full(n, np.inf)
+        hp, hng, hns = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+        hscale, hmat, hfront = np.empty(n), np.empty(n, np.int64), np.empty(n, np.bool_)
+        light_sampling = self.flags[3]
+        if light_sampling:
+            srow, stmax, scontrib = np.empty(n, np.int64), np.empty(n, F32), np.empty((n, 3))
+            sorigin, sdir = np.empty((n, 3), F32), np.empty((n, 3), F32)
+        m = n
+        for depth in range(it.settings.max_bounces + 2):
+            if m == 0:
+                break
+            t0 = time.perf_counter()
+            prim, tfar, bu, bv = it.accel.intersect_raw(origin32[:m], dir32[:m], tmax32[:m])
+            it._count("intersect", time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            m = surface_interaction(depth, rev_sample, self.flags, self.geometry, self.materials,
+                                    self.lights, self.world, self.camera, prim, tfar, bu, bv, m,
+                                    live, pseed, d64, throughput, prev_pdf, radiance, depth_pass,
+                                    normal_pass, hp, hng, hns, hscale, hmat, hfront)
+            it._count("surface interaction", time.perf_counter() - t0)
+            if m == 0:
+                break
+            if light_sampling:
+                t0 = time.perf_counter()
+                count = sample_light(depth, rev_sample, self.materials, self.lights, m, live,
+                                     pseed, d64, throughput, hp, hng, hns, hscale, hmat, srow,
+                                     sorigin, sdir, stmax, scontrib)
+                it._count("sample light", time.perf_counter() - t0)
+                if count:
+                    t0 = time.perf_counter()
+                    blocked = it.accel.occluded_raw(sorigin[:count], sdir[:count], stmax[:count])
+                    accumulate_unoccluded(radiance, srow, scontrib, blocked, count)
+                    it._count("trace shadow rays", time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            m = sample_bsdf(depth, rev_sample, self.exact_fresnel, self.materials, m, live,
+                            pseed, d64, throughput, prev_pdf, hp, hng, hns, hscale, hmat, hfront,
+                            origin32, dir32, tmax32)
+            it._count("sample BSDF", time.perf_counter() - t0)
+        return radiance, depth_pass, normal_pass

@@ -1,0 +1,178 @@
+"""The compiled kernels (engine/kernel.py) against the numpy integrator.
+
+The kernels draw the same sample values and run the same arithmetic as the numpy stages,
+so on every scene they cover they must give the same image up to float rounding, pass by
+pass. All the statistical and known-answer tests of the numpy integrator (furnace,
+invisible glass, the Cycles comparisons' power tests) then carry over to them.
+"""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from engine import kernel, render
+from engine.sampling import SampleStream
+from engine.scene import Camera, Light, Material, SceneBuilder, World
+from tests import scenes
+
+pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not installed")
+
+
+def both(scene, **kw):
+    st = scenes.settings(width=40, height=30, samples=4, **kw)
+    a = render(scene, replace(st, kernel="numpy"))
+    b = render(scene, replace(st, kernel="compiled"))
+    assert a.plan.kernel == "numpy" and b.plan.kernel == "compiled"
+    return a, b
+
+
+def assert_same_image(a, b):
+    """Equal up to float rounding in every pass (a wrong IOR or one bounce fewer changes
+    pixels by percent; see test_a_wrong_renderer_is_told_apart)."""
+    for name in ("combined", "depth", "normal", "variance"):
+        x, y = getattr(a, name), getattr(b, name)
+        np.testing.assert_allclose(y, x, rtol=1e-5, atol=1e-6, err_msg=name)
+    assert a.samples == b.samples
+
+
+# ----------------------------------------------------------------- sample sequences
+@pytest.mark.parametrize("sample", [0, 1, 7, 1000, 2**31 + 5])
+def test_sample_values_are_bit_identical_to_sample_stream(sample):
+    rng = np.random.default_rng(4)
+    pixels = rng.integers(0, 2**33, 500)
+    for seed in (0, 17, 2**32 - 1):
+        stream = SampleStream(pixels, sample, seed)
+        for dim in (0, 1, 2, 9, 57):
+            np.testing.assert_array_equal(kernel.stream_2d(pixels, sample, seed, dim),
+                                          stream.get_2d(dim))
+            np.testing.assert_array_equal(kernel.stream_1d(pixels, sample, seed, dim),
+                                          stream.get_1d(dim))
+
+
+def test_guided_interpolation_is_np_interp():
+    from engine.film import PixelFilter
+
+    f = PixelFilter("BLACKMAN_HARRIS", 1.5)
+    guide = kernel.interp_guide(f._cdf)
+    u = np.concatenate([np.random.default_rng(2).random(2000), [0.0, 0.5, 1.0 - 2**-53],
+                        f._cdf[::997]])
+    got = np.array([kernel._interp(x, f._cdf, f._x, guide) for x in u])
+    np.testing.assert_array_equal(got, np.interp(u, f._cdf, f._x))
+
+
+# ----------------------------------------------------------------- whole images
+@pytest.mark.parametrize("opts", [
+    dict(),
+    dict(fresnel="schlick"),
+    dict(max_bounces=0),
+    dict(max_bounces=1),
+    dict(max_bounces=3),
+    dict(region=(5, 4, 31, 22)),
+    dict(filter_type="BOX", filter_width=1.0),
+    dict(threads=1, chunk_pixels=97),
+])
+def test_cbspheres_matches_numpy(opts):
+    assert_same_image(*both(scenes.cbspheres(), **opts))
+
+
+@pytest.mark.parametrize("cam", [
+    dict(use_dof=True, fstop=0.5, focus_distance=2.5),
+    dict(use_dof=True, fstop=0.4, focus_distance=3.5, blades=5, rotation=0.3, ratio=1.6),
+    dict(shift_x=0.1, shift_y=-0.05, clip_start=2.2, clip_end=3.4),
+    dict(type="ORTHO", ortho_scale=2.5),
+    dict(type="ORTHO", ortho_scale=2.5, use_dof=True, fstop=8.0, focus_distance=3.0),
+    dict(sensor_fit="VERTICAL", sensor_height=20.0),
+])
+def test_cameras_match_numpy(cam):
+    scene = scenes.cornell_box().build(scenes.cornell_camera(**cam), World((0, 0, 0)))
+    assert_same_image(*both(scene))
+
+
+def test_metal_tinted_glass_world_light_and_emissive_diffuse_match_numpy():
+    b = SceneBuilder()
+    floor = b.add_material(Material.diffuse("floor", (0.5, 0.6, 0.4), emission=(0.05, 0, 0)))
+    metal = b.add_material(Material.metal("gold", (1.0, 0.75, 0.3)))
+    glass = b.add_material(Material.glass("tinted", (0.9, 0.6, 0.8), 1.6))
+    pglass = b.add_material(Material.principled_glass("pglass", (0.4, 0.9, 0.7), 1.33))
+    b.add_mesh("floor", *scenes.quad((-3, -3, 0), (3, -3, 0), (3, 3, 0), (-3, 3, 0)), floor)
+    for m, x in ((metal, -1.1), (glass, 0.0), (pglass, 1.1)):
+        v, t, n = scenes.uv_sphere((x, 0, 0.5), 0.5)
+        b.add_mesh(f"sphere {x}", v, t, m, corner_normals=n)
+    cam = Camera(world_from_camera=scenes.look_at((0, -5, 2), (0, 0, 0.5)), lens_mm=40)
+    scene = b.build(cam, World((0.3, 0.5, 0.8)))
+    a, c = both(scene)
+    assert a.combined[..., :3].mean() > 0.1
+    assert_same_image(a, c)
+
+
+def test_many_emitters_use_the_light_grid_and_match_numpy():
+    """24 emissive quads: the spatial light grid (LightSampler.GRID) is in use."""
+    b = scenes.cornell_box(spheres=True, emitter_radiance=0.0)
+    rng = np.random.default_rng(5)
+    for i in range(24):
+        m = b.add_material(Material.emission_only(f"lamp {i}", rng.random(3), 30.0))
+        x, y = rng.uniform(-0.9, 0.8, 2)
+        b.add_mesh(f"lamp {i}", *scenes.quad((x, y, 1.45), (x, y + 0.1, 1.45),
+                                             (x + 0.1, y + 0.1, 1.45), (x + 0.1, y, 1.45)), m)
+    scene = b.build(scenes.cornell_camera(), World((0, 0, 0)))
+    a, c = both(scene)
+    from engine.lights import LightSampler
+    assert hasattr(LightSampler(scene), "local_pmf")
+    assert_same_image(a, c)
+
+
+def test_a_wrong_renderer_is_told_apart():
+    """Power of the comparison: IOR 1.45 -> 1.46 or one bounce fewer fails it."""
+    ref = render(scenes.cbspheres(), scenes.settings(width=40, height=30, samples=4,
+                                                     kernel="numpy"))
+    for scene, kw in ((scenes.cbspheres(glass_ior=1.46), {}),
+                      (scenes.cbspheres(), dict(max_bounces=7))):
+        other = render(scene, scenes.settings(width=40, height=30, samples=4,
+                                              kernel="compiled", **kw))
+        with pytest.raises(AssertionError):
+            assert_same_image(ref, other)
+
+
+# ----------------------------------------------------------------- the plan's choice
+def test_auto_takes_the_kernels_where_they_cover_the_scene():
+    from engine.plan import make_plan
+
+    plan = make_plan(scenes.cbspheres(), scenes.settings())
+    assert plan.kernel == "compiled" and "compiled kernel" in plan.describe()
+    b = scenes.cornell_box()
+    plastic = b.add_material(Material.principled("plastic"))
+    b.add_mesh("box", *scenes.quad((-0.2, 0, 0.1), (0.2, 0, 0.1), (0.2, 0, 0.5),
+                                   (-0.2, 0, 0.5)), plastic)
+    scene = b.build(scenes.cornell_camera(), World((0, 0, 0)))
+    plan = make_plan(scene, scenes.settings())
+    assert plan.kernel == "numpy" and "principled" in plan.kernel_note
+    with pytest.raises(ValueError, match="principled"):
+        make_plan(scene, scenes.settings(kernel="compiled"))
+    b = scenes.cornell_box()
+    b.add_light(Light("lamp", "POINT", (10, 10, 10)))
+    lit = b.build(scenes.cornell_camera(), World((0, 0, 0)))
+    assert make_plan(lit, scenes.settings()).kernel_note == "numpy: light objects"
+
+
+def test_without_numba_everything_takes_the_numpy_path(monkeypatch):
+    """A platform without the numba wheel (macOS x64): same image from the numpy stages
+    and the numpy film."""
+    st = scenes.settings(width=24, height=18, samples=3)
+    compiled = render(scenes.cbspheres(), st)
+    monkeypatch.setattr(kernel, "AVAILABLE", False)
+    fallback = render(scenes.cbspheres(), st)
+    assert fallback.plan.kernel == "numpy"
+    assert fallback.plan.kernel_note == "numpy: numba is not installed"
+    assert_same_image(fallback, compiled)
+
+
+def test_no_emitters_means_no_light_sampling_kernel(monkeypatch):
+    def boom(*a, **k):
+        raise AssertionError("light sampling ran without emitters")
+
+    monkeypatch.setattr(kernel, "sample_light", boom)
+    scene = scenes.cornell_box(emitter_radiance=0.0).build(scenes.cornell_camera(),
+                                                          World((1, 1, 1)))
+    r = render(scene, scenes.settings(width=16, height=12, samples=2))
+    assert r.plan.kernel == "compiled" and r.combined[..., :3].mean() > 0
