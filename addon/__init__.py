@@ -27,6 +27,8 @@ def _modules():
 def register():
     for module in _modules():
         module.register()
+    from . import core
+    core.warm_up_in_background()
 
 
 def unregister():

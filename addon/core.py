@@ -10,8 +10,10 @@ holds the RenderEngine class, so the bundled core cannot live at `addon/engine/`
 import importlib
 import os
 import sys
+import threading
 
 _core = None
+_load_lock = threading.Lock()
 
 
 def _repo_root():
@@ -42,10 +44,16 @@ def _import_embreex():
 
 
 def load():
-    """Return the core module (`engine`), importing it on first use.
+    """Return the core module (`engine`), importing it on first use (thread-safe: the
+    background warm-up and a render may both ask at once).
 
     Raises ImportError with a message saying where the core was looked for.
     """
+    with _load_lock:
+        return _load()
+
+
+def _load():
     global _core
     if _core is not None:
         return _core
@@ -75,6 +83,18 @@ def load():
 
 
 classes = ()
+
+
+def warm_up_in_background() -> None:
+    """Import the core and load its compiled kernels on a daemon thread, so the first
+    Render does not wait for them. Failures are left for that render to report."""
+    def run():
+        try:
+            load().kernel.warm_up()
+        except Exception:  # noqa: BLE001 - the render will say what is wrong
+            pass
+
+    threading.Thread(target=run, name="specula-warm-up", daemon=True).start()
 
 
 def register():

@@ -4,7 +4,7 @@ The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then ca
 `render(scene, settings, on_pass=..., should_stop=...)`.
 """
 
-from . import bsdf, camera  # noqa: F401
+from . import bsdf, camera, kernel  # noqa: F401
 from .plan import Plan, make_plan  # noqa: F401
 from .renderer import Pass, RenderResult, render  # noqa: F401
 from .scene import (  # noqa: F401

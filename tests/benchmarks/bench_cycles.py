@@ -43,8 +43,21 @@ LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 RELMSE_EPS = 0.01
 
 
+# "<scene>_dof": the committed scene with a thin lens focused this far along the view axis
+# (CBspheres: on the glass sphere) and this lens radius (scene units).
+DOF = {"cbspheres_dof": (2.75, 0.1)}
+
+
 def open_scene(name, resolution, max_bounces):
-    scene = renderers.open_blend_scene(name, resolution)
+    scene = renderers.open_blend_scene(name.removesuffix("_dof"), resolution)
+    if name in DOF:
+        focus, radius = DOF[name]
+        cam = scene.camera.data
+        cam.dof.use_dof = True
+        cam.dof.focus_object = None
+        cam.dof.focus_distance = focus
+        cam.dof.aperture_fstop = cam.lens * 1e-3 / (2.0 * radius)
+        cam.dof.aperture_blades = 0
     if max_bounces is not None:
         scene.specula.max_bounces = max_bounces
     return scene
@@ -183,12 +196,13 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(prog="python -m tests.benchmarks.bench_cycles",
                                      description=__doc__.split("\n\n")[0])
-    parser.add_argument("--scenes", default="cbspheres,cbdragon",
-                        help="comma-separated names in blend_scenes/ (default cbspheres,cbdragon)")
-    parser.add_argument("--budgets", default="1,2,4,8,16,32", help="seconds, comma-separated")
+    parser.add_argument("--scenes", default="cbspheres,cbdragon,cbspheres_dof",
+                        help="comma-separated names in blend_scenes/, or cbspheres_dof (the "
+                             "first with a thin lens); default all three")
+    parser.add_argument("--budgets", default="10,60", help="seconds, comma-separated")
     parser.add_argument("--resolution", default="160x120", help="WIDTHxHEIGHT (default 160x120)")
-    parser.add_argument("--reference-samples", type=int, default=4096,
-                        help="Cycles reference samples, split over two seeds (default 4096)")
+    parser.add_argument("--reference-samples", type=int, default=16384,
+                        help="Cycles reference samples, split over two seeds (default 16384)")
     parser.add_argument("--max-bounces", type=int, default=None,
                         help="bounce limit for both engines (default: the scene's)")
     args = parser.parse_args(argv)
