@@ -33,7 +33,10 @@ from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
 from .scene import DIFFUSE, GLASS, METAL, MIRROR, NONE
 
 try:  # numba is optional: platforms without its wheel render with numpy.
-    from numba import njit
+    from llvmlite import ir
+    from numba import njit, types
+    from numba.core import cgutils
+    from numba.extending import intrinsic
     AVAILABLE = True
 except ImportError:  # pragma: no cover - exercised on platforms without numba
     AVAILABLE = False
@@ -42,6 +45,8 @@ except ImportError:  # pragma: no cover - exercised on platforms without numba
         if args and callable(args[0]):
             return args[0]
         return lambda f: f
+
+    intrinsic = njit
 
 # Material kinds the kernels implement (everything else uses the numpy integrator).
 SUPPORTED = (NONE, DIFFUSE, MIRROR, METAL, GLASS)
@@ -217,193 +222,15 @@ def _choose(px, py, pz, u, pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, 
     return k, a * local_pmf[vox, k] + (1.0 - a) * pmf[k]
 
 
-# -------------------------------------------------------------------- stages
-@njit(**_JIT)
-def surface_interaction(depth, rev_sample, flags, geometry, materials, lights, world, camera,
-                        prim, tfar, bu, bv, m, live, pseed, d64, throughput, prev_pdf,
-                        radiance, depth_pass, normal_pass, hp, hng, hns, hscale, hmat, hfront):
-    """Escaped rays, surface interaction, emission, bounce limit, roulette, absorbers.
-
-    For the m live rays (row live[i] of the pixel batch) with embree's hits (prim, tfar,
-    bu, bv): adds world and emitted radiance, then compacts the rays that go on scattering
-    to the front of live, d64, throughput, prev_pdf and writes their hit point hp, normals
-    hng/hns (flipped to the incoming side), offset scale, material and side. Returns
-    their count.
-    """
-    max_bounces, world_light, emitters, light_sampling, shading_normals = (
-        flags[0], flags[1], flags[2], flags[3], flags[4])
-    vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
-    kind, emission = materials[0], materials[5]
-    pmf, grid, lo, cell, local_pmf, has_mass = (lights[0], lights[2], lights[3], lights[4],
-                                                lights[5], lights[7])
-    entry_of_triangle, area_by_triangle = lights[8], lights[9]
-    cam_pos, forward = camera[0], camera[1]
-    out = 0
-    for i in range(m):
-        row = live[i]
-        t0, t1, t2 = throughput[i, 0], throughput[i, 1], throughput[i, 2]
-        dx, dy, dz = d64[i, 0], d64[i, 1], d64[i, 2]
-        f = prim[i]
-        if f < 0:
-            if world_light:
-                radiance[row, 0] += t0 * world[0]
-                radiance[row, 1] += t1 * world[1]
-                radiance[row, 2] += t2 * world[2]
-            continue
-        # Hit point from the barycentrics in float64 (embree works in float32).
-        u = np.float64(bu[i])
-        v = np.float64(bv[i])
-        w0 = 1.0 - u - v
-        px = w0 * vertices[f, 0, 0] + u * vertices[f, 1, 0] + v * vertices[f, 2, 0]
-        py = w0 * vertices[f, 0, 1] + u * vertices[f, 1, 1] + v * vertices[f, 2, 1]
-        pz = w0 * vertices[f, 0, 2] + u * vertices[f, 1, 2] + v * vertices[f, 2, 2]
-        nx, ny, nz = tri_normal[f, 0], tri_normal[f, 1], tri_normal[f, 2]
-        front = dx * nx + dy * ny + dz * nz < 0.0
-        sign = 1.0 if front else -1.0
-        nx, ny, nz = nx * sign, ny * sign, nz * sign
-        sx, sy, sz = nx, ny, nz
-        if shading_normals and smooth[f]:
-            ax = (w0 * normals[f, 0, 0] + u * normals[f, 1, 0] + v * normals[f, 2, 0]) * sign
-            ay = (w0 * normals[f, 0, 1] + u * normals[f, 1, 1] + v * normals[f, 2, 1]) * sign
-            az = (w0 * normals[f, 0, 2] + u * normals[f, 1, 2] + v * normals[f, 2, 2]) * sign
-            length = math.sqrt(ax * ax + ay * ay + az * az)
-            if length > 1e-12:
-                sx, sy, sz = ax / length, ay / length, az / length
-        if depth == 0:
-            depth_pass[row] = ((px - cam_pos[0]) * forward[0] + (py - cam_pos[1]) * forward[1]
-                               + (pz - cam_pos[2]) * forward[2])
-            normal_pass[row, 0], normal_pass[row, 1], normal_pass[row, 2] = sx, sy, sz
-        mat = material_index[f]
-        t = np.float64(tfar[i])
-        # Emission: two-sided, MIS-weighted against light sampling after soft bounces.
-        if emitters:
-            le0, le1, le2 = emission[mat, 0], emission[mat, 1], emission[mat, 2]
-            if max(le0, max(le1, le2)) > 0:
-                w = 1.0
-                if light_sampling and not math.isinf(prev_pdf[i]):
-                    cos_l = abs(nx * dx + ny * dy + nz * dz)
-                    ox, oy, oz = px - dx * t, py - dy * t, pz - dz * t
-                    entry = entry_of_triangle[f]
-                    pm = 0.0
-                    if entry >= 0 and grid == 0:
-                        pm = pmf[entry]
-                    elif entry >= 0:
-                        pm = _entry_pmf(ox, oy, oz, entry, pmf, grid, lo, cell, local_pmf,
-                                        has_mass)
-                    pdf_l = pm / area_by_triangle[f] * t * t / max(cos_l, 1e-300)
-                    w = _power_heuristic(prev_pdf[i], pdf_l)
-                radiance[row, 0] += t0 * le0 * w
-                radiance[row, 1] += t1 * le1 * w
-                radiance[row, 2] += t2 * le2 * w
-        # Vertex max_bounces + 1 only adds emission.
-        if depth > max_bounces:
-            continue
-        if depth >= ROULETTE_MIN_BOUNCE:
-            q = min(math.sqrt(max(t0, max(t1, t2))), 1.0)
-            if not sample_1d(pseed[row], rev_sample, _bounce_dim(depth, _ROULETTE)) < q:
-                continue
-            t0, t1, t2 = t0 / q, t1 / q, t2 / q
-        if kind[mat] == NONE:
-            continue
-        live[out] = row
-        throughput[out, 0], throughput[out, 1], throughput[out, 2] = t0, t1, t2
-        prev_pdf[out] = prev_pdf[i]
-        d64[out, 0], d64[out, 1], d64[out, 2] = dx, dy, dz
-        hp[out, 0], hp[out, 1], hp[out, 2] = px, py, pz
-        hng[out, 0], hng[out, 1], hng[out, 2] = nx, ny, nz
-        hns[out, 0], hns[out, 1], hns[out, 2] = sx, sy, sz
-        hscale[out] = max(tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
-        hmat[out] = mat
-        hfront[out] = front
-        out += 1
-    return out
-
-
-@njit(**_JIT)
-def sample_light(depth, rev_sample, materials, lights, m, live, pseed, d64, throughput,
-                 hp, hng, hns, hscale, hmat, srow, sorigin, sdir, stmax, scontrib):
-    """Next-event estimation at diffuse vertices: an emissive triangle chosen by
-    LightSampler's rule, a uniform point on it, MIS against BSDF sampling. Writes one
-    shadow ray per vertex with a non-zero contribution; returns their count."""
-    kind, colour = materials[0], materials[1]
-    pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass = lights[:8]
-    v0, e1, e2, lnormal, larea, lradiance, lscale = (lights[10], lights[11], lights[12],
-                                                     lights[13], lights[14], lights[15],
-                                                     lights[16])
-    ns_out = 0
-    if len(pmf) == 0:
-        return 0
-    for i in range(m):
-        mat = hmat[i]
-        if kind[mat] != DIFFUSE:
-            continue
-        row = live[i]
-        pseed_row = pseed[row]
-        u_sel = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_SELECT))
-        ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_POINT))
-        px, py, pz = hp[i, 0], hp[i, 1], hp[i, 2]
-        if grid == 0:  # inline fast path: the general call costs ~35 ns a sample
-            k = min(np.searchsorted(cdf, u_sel, side="right"), len(pmf) - 1)
-            p_sel = pmf[k]
-        else:
-            k, p_sel = _choose(px, py, pz, u_sel, pmf, cdf, grid, lo, cell, local_pmf,
-                               local_cdf_flat, has_mass)
-        # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
-        if ua < ub:
-            b0, b1 = ua / 2, ub - ua / 2
-        else:
-            b0, b1 = ua - ub / 2, ub / 2
-        b2 = 1.0 - b0 - b1
-        yx = v0[k, 0] + b1 * e1[k, 0] + b2 * e2[k, 0]
-        yy = v0[k, 1] + b1 * e1[k, 1] + b2 * e2[k, 1]
-        yz = v0[k, 2] + b1 * e1[k, 2] + b2 * e2[k, 2]
-        tx, ty, tz = yx - px, yy - py, yz - pz
-        dist = math.sqrt(tx * tx + ty * ty + tz * tz)
-        if not dist > 0:
-            continue
-        wx, wy, wz = tx / dist, ty / dist, tz / dist
-        cos_l = abs(lnormal[k, 0] * wx + lnormal[k, 1] * wy + lnormal[k, 2] * wz)
-        if not cos_l > 0 or not p_sel > 0:
-            continue
-        pdf_sa = dist * dist / max(larea[k] * cos_l, 1e-300)
-        # Lambert f cos and its sampling pdf.
-        nx, ny, nz = hng[i, 0], hng[i, 1], hng[i, 2]
-        cos = wx * hns[i, 0] + wy * hns[i, 1] + wz * hns[i, 2]
-        if not (cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0):
-            continue
-        w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
-        scale = cos / np.pi / pdf_sa / p_sel * w
-        c0 = throughput[i, 0] * colour[mat, 0] * lradiance[k, 0] * scale
-        c1 = throughput[i, 1] * colour[mat, 1] * lradiance[k, 1] * scale
-        c2 = throughput[i, 2] * colour[mat, 2] * lradiance[k, 2] * scale
-        if not max(c0, max(c1, c2)) > 0:
-            continue
-        # Shadow ray from the offset point, aimed at the sampled point itself.
-        eps = RAY_EPSILON * max(hscale[i], 1e-30)
-        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
-        sx, sy, sz = yx - ox, yy - oy, yz - oz
-        seg = math.sqrt(sx * sx + sy * sy + sz * sz)
-        inv = 1.0 / max(seg, 1e-300)
-        j = ns_out
-        srow[j] = row
-        sorigin[j, 0], sorigin[j, 1], sorigin[j, 2] = ox, oy, oz
-        sdir[j, 0], sdir[j, 1], sdir[j, 2] = sx * inv, sy * inv, sz * inv
-        stmax[j] = max(seg - RAY_EPSILON * max(lscale[k], 1e-30), 0.0)
-        scontrib[j, 0], scontrib[j, 1], scontrib[j, 2] = c0, c1, c2
-        ns_out += 1
-    return ns_out
-
-
-@njit(**_JIT)
-def accumulate_unoccluded(radiance, srow, scontrib, occluded_prim, count):
-    """Add the contributions of shadow rays that reached their light (embree's occlusion
-    query leaves prim -1 on unblocked rays)."""
-    for j in range(count):
-        if occluded_prim[j] < 0:
-            row = srow[j]
-            radiance[row, 0] += scontrib[j, 0]
-            radiance[row, 1] += scontrib[j, 1]
-            radiance[row, 2] += scontrib[j, 2]
+# -------------------------------------------------------------------- the bounce kernel
+@intrinsic
+def _cycles(typingctx):
+    """The CPU's cycle counter (llvm.readcyclecounter), for the per-stage profile."""
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(ir.IntType(64), [])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.readcyclecounter")
+        return builder.call(fn, [])
+    return types.uint64(), codegen
 
 
 @njit(**_JIT)
@@ -438,23 +265,166 @@ def _fresnel_dielectric(cos_i, eta, exact):
 
 
 @njit(**_JIT)
-def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64, throughput,
-                prev_pdf, hp, hng, hns, hscale, hmat, hfront, origin32, dir32, tmax32):
-    """Sample each vertex's BSDF, update throughput, compact the paths that go on and
-    write their next rays (offset origin, float32 for embree). Returns their count."""
-    kind, colour, ior, reflection_tint, transmission_tint = (
-        materials[0], materials[1], materials[2], materials[3], materials[4])
+def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, world, camera,
+          prim, tfar, bu, bv, m, live, pseed, d64, throughput, prev_pdf, radiance,
+          depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin, sdir, stmax,
+          scontrib, profile):
+    """One bounce for the m live rays (pixel-batch rows live[:m]) after embree's closest
+    hits (prim, tfar, bu, bv), in three stages per ray:
+
+    surface interaction - escaped rays take the world; hit point, normals (flipped to the
+        incoming side), depth and normal passes at depth 0, emission (MIS-weighted), the
+        bounce limit, Russian roulette, absorbers;
+    sample light - next-event estimation at diffuse vertices: an emissive triangle chosen
+        by LightSampler's rule, a uniform point on it, MIS against BSDF sampling; the
+        shadow ray goes to the s* buffers;
+    sample BSDF - diffuse, mirror, metal or glass; the paths that go on are compacted to
+        the front of live, d64, throughput, prev_pdf, their next rays (offset origin) in
+        origin32, dir32, tmax32.
+
+    One loop with the arrays unpacked once: per-ray helper functions taking the scene's
+    arrays cost reference counting per call (measured 2-10x slower). profile (3,) uint64,
+    if given (an empty array: no timing), receives cycle counts: [0] the whole loop,
+    [1] sample light, [2] sample BSDF; the rest of the loop is surface interaction.
+    Returns (paths that go on, shadow rays written).
+    """
+    max_bounces, world_light, emitters, light_sampling, shading_normals = flags
+    vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
+    kind, colour, ior, reflection_tint, transmission_tint, emission = materials
+    (pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass, entry_of_triangle,
+     area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
+    cam_pos, forward = camera
+    timing = len(profile) == 3
+    if timing:
+        c_loop = _cycles()
     out = 0
+    shadow = 0
     for i in range(m):
-        mat = hmat[i]
-        k = kind[mat]
         row = live[i]
-        wox, woy, woz = -d64[i, 0], -d64[i, 1], -d64[i, 2]
-        nx, ny, nz = hng[i, 0], hng[i, 1], hng[i, 2]
-        sx, sy, sz = hns[i, 0], hns[i, 1], hns[i, 2]
+        pseed_row = pseed[row]
+        t0, t1, t2 = throughput[i, 0], throughput[i, 1], throughput[i, 2]
+        dx, dy, dz = d64[i, 0], d64[i, 1], d64[i, 2]
+        f = prim[i]
+        # ---- surface interaction
+        if f < 0:
+            if world_light:
+                radiance[row, 0] += t0 * world[0]
+                radiance[row, 1] += t1 * world[1]
+                radiance[row, 2] += t2 * world[2]
+            continue
+        # Hit point from the barycentrics in float64 (embree works in float32).
+        u = np.float64(bu[i])
+        v = np.float64(bv[i])
+        w0 = 1.0 - u - v
+        px = w0 * vertices[f, 0, 0] + u * vertices[f, 1, 0] + v * vertices[f, 2, 0]
+        py = w0 * vertices[f, 0, 1] + u * vertices[f, 1, 1] + v * vertices[f, 2, 1]
+        pz = w0 * vertices[f, 0, 2] + u * vertices[f, 1, 2] + v * vertices[f, 2, 2]
+        nx, ny, nz = tri_normal[f, 0], tri_normal[f, 1], tri_normal[f, 2]
+        front = dx * nx + dy * ny + dz * nz < 0.0
+        sign = 1.0 if front else -1.0
+        nx, ny, nz = nx * sign, ny * sign, nz * sign
+        sx, sy, sz = nx, ny, nz
+        if shading_normals and smooth[f]:
+            ax = (w0 * normals[f, 0, 0] + u * normals[f, 1, 0] + v * normals[f, 2, 0]) * sign
+            ay = (w0 * normals[f, 0, 1] + u * normals[f, 1, 1] + v * normals[f, 2, 1]) * sign
+            az = (w0 * normals[f, 0, 2] + u * normals[f, 1, 2] + v * normals[f, 2, 2]) * sign
+            length = math.sqrt(ax * ax + ay * ay + az * az)
+            if length > 1e-12:
+                sx, sy, sz = ax / length, ay / length, az / length
+        if depth == 0:
+            depth_pass[row] = ((px - cam_pos[0]) * forward[0] + (py - cam_pos[1]) * forward[1]
+                               + (pz - cam_pos[2]) * forward[2])
+            normal_pass[row, 0], normal_pass[row, 1], normal_pass[row, 2] = sx, sy, sz
+        mat = material_index[f]
+        # Emission: two-sided, MIS-weighted against light sampling after soft bounces.
+        if emitters:
+            le0, le1, le2 = emission[mat, 0], emission[mat, 1], emission[mat, 2]
+            if max(le0, max(le1, le2)) > 0:
+                w = 1.0
+                if light_sampling and not math.isinf(prev_pdf[i]):
+                    t = np.float64(tfar[i])
+                    cos_l = abs(nx * dx + ny * dy + nz * dz)
+                    ox, oy, oz = px - dx * t, py - dy * t, pz - dz * t
+                    entry = entry_of_triangle[f]
+                    pm = 0.0
+                    if entry >= 0 and grid == 0:
+                        pm = pmf[entry]
+                    elif entry >= 0:
+                        pm = _entry_pmf(ox, oy, oz, entry, pmf, grid, lo, cell, local_pmf,
+                                        has_mass)
+                    pdf_l = pm / area_by_triangle[f] * t * t / max(cos_l, 1e-300)
+                    w = _power_heuristic(prev_pdf[i], pdf_l)
+                radiance[row, 0] += t0 * le0 * w
+                radiance[row, 1] += t1 * le1 * w
+                radiance[row, 2] += t2 * le2 * w
+        # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
+        k = kind[mat]
+        if depth > max_bounces or k == NONE:
+            continue
+        if depth >= ROULETTE_MIN_BOUNCE:
+            q = min(math.sqrt(max(t0, max(t1, t2))), 1.0)
+            if not sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _ROULETTE)) < q:
+                continue
+            t0, t1, t2 = t0 / q, t1 / q, t2 / q
+        scale = max(tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+        if timing:
+            c_light = _cycles()
+        # ---- sample light
+        if light_sampling and k == DIFFUSE:
+            u_sel = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_SELECT))
+            ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_POINT))
+            if grid == 0:  # inline fast path: the general call costs ~35 ns a sample
+                e = min(np.searchsorted(cdf, u_sel, side="right"), len(pmf) - 1)
+                p_sel = pmf[e]
+            else:
+                e, p_sel = _choose(px, py, pz, u_sel, pmf, cdf, grid, lo, cell, local_pmf,
+                                   local_cdf_flat, has_mass)
+            # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
+            if ua < ub:
+                b0, b1 = ua / 2, ub - ua / 2
+            else:
+                b0, b1 = ua - ub / 2, ub / 2
+            b2 = 1.0 - b0 - b1
+            yx = v0[e, 0] + b1 * e1[e, 0] + b2 * e2[e, 0]
+            yy = v0[e, 1] + b1 * e1[e, 1] + b2 * e2[e, 1]
+            yz = v0[e, 2] + b1 * e1[e, 2] + b2 * e2[e, 2]
+            tx, ty, tz = yx - px, yy - py, yz - pz
+            dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+            wx, wy, wz = tx / dist, ty / dist, tz / dist
+            cos_l = abs(lnormal[e, 0] * wx + lnormal[e, 1] * wy + lnormal[e, 2] * wz)
+            cos = wx * sx + wy * sy + wz * sz
+            # Lambert f cos over the solid-angle pdf, MIS-weighted.
+            if (dist > 0 and cos_l > 0 and p_sel > 0 and cos > 0.0
+                    and wx * nx + wy * ny + wz * nz > 0.0):
+                pdf_sa = dist * dist / max(larea[e] * cos_l, 1e-300)
+                w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
+                weight = cos / np.pi / pdf_sa / p_sel * w
+                c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
+                c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
+                c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
+                if max(c0, max(c1, c2)) > 0:
+                    # Shadow ray from the offset point, aimed at the sampled point itself.
+                    eps = RAY_EPSILON * max(scale, 1e-30)
+                    ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+                    gx, gy, gz = yx - ox, yy - oy, yz - oz
+                    seg = math.sqrt(gx * gx + gy * gy + gz * gz)
+                    inv = 1.0 / max(seg, 1e-300)
+                    srow[shadow] = row
+                    sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
+                    sdir[shadow, 0] = gx * inv
+                    sdir[shadow, 1] = gy * inv
+                    sdir[shadow, 2] = gz * inv
+                    stmax[shadow] = max(seg - RAY_EPSILON * max(lscale[e], 1e-30), 0.0)
+                    scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
+                    shadow += 1
+        if timing:
+            c_bsdf = _cycles()
+            profile[1] += c_bsdf - c_light
+        # ---- sample BSDF
+        wox, woy, woz = -dx, -dy, -dz
         pdf = np.inf
         if k == DIFFUSE:
-            ua, ub = sample_2d(pseed[row], rev_sample, _bounce_dim(depth, _BSDF))
+            ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _BSDF))
             # Concentric disk, then Malley's method about the shading normal.
             a = 2.0 * ua - 1.0
             b = 2.0 * ub - 1.0
@@ -465,12 +435,11 @@ def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64
                 theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
             lx, ly = r * math.cos(theta), r * math.sin(theta)
             lz = math.sqrt(max(0.0, 1.0 - (lx * lx + ly * ly)))
-            s, t = _build_frame(sx, sy, sz)
-            wx = lx * s[0] + ly * t[0] + lz * sx
-            wy = lx * s[1] + ly * t[1] + lz * sy
-            wz = lx * s[2] + ly * t[2] + lz * sz
-            if not (wx * nx + wy * ny + wz * nz > 0.0 and lz > 0.0):
-                continue
+            s, tt = _build_frame(sx, sy, sz)
+            wx = lx * s[0] + ly * tt[0] + lz * sx
+            wy = lx * s[1] + ly * tt[1] + lz * sy
+            wz = lx * s[2] + ly * tt[2] + lz * sz
+            ok = wx * nx + wy * ny + wz * nz > 0.0 and lz > 0.0
             f0, f1, f2 = colour[mat, 0], colour[mat, 1], colour[mat, 2]
             pdf = lz / np.pi
         else:
@@ -478,8 +447,8 @@ def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64
             if sx * wox + sy * woy + sz * woz <= 0.0:
                 sx, sy, sz = nx, ny, nz
             cos_o = sx * wox + sy * woy + sz * woz
-            rx, ry, rz = 2.0 * cos_o * sx - wox, 2.0 * cos_o * sy - woy, 2.0 * cos_o * sz - woz
-            wx, wy, wz = rx, ry, rz
+            wx, wy, wz = 2.0 * cos_o * sx - wox, 2.0 * cos_o * sy - woy, 2.0 * cos_o * sz - woz
+            ok = True
             if k == MIRROR:
                 f0, f1, f2 = colour[mat, 0], colour[mat, 1], colour[mat, 2]
             elif k == METAL:
@@ -491,7 +460,7 @@ def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64
                 f1 = min(max(g1 + (1.0 - g1) * c, 0.0), 1.0)
                 f2 = min(max(g2 + (1.0 - g2) * c, 0.0), 1.0)
             else:  # GLASS
-                eta = ior[mat] if hfront[i] else 1.0 / ior[mat]
+                eta = ior[mat] if front else 1.0 / ior[mat]
                 fr, cos_t = _fresnel_dielectric(cos_o, eta, exact_fresnel)
                 r0 = fr * reflection_tint[mat, 0]
                 r1 = fr * reflection_tint[mat, 1]
@@ -502,11 +471,9 @@ def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64
                 r_avg = (r0 + r1 + r2) / 3.0
                 t_avg = (q0 + q1 + q2) / 3.0
                 total = r_avg + t_avg
-                if not total > 0:
-                    continue
-                p_reflect = r_avg / total
-                u = sample_1d(pseed[row], rev_sample, _bounce_dim(depth, _LOBE))
-                if u < p_reflect:
+                ok = total > 0
+                p_reflect = r_avg / total if ok else 1.0
+                if sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LOBE)) < p_reflect:
                     inv = 1.0 / max(p_reflect, 1e-300)
                     f0, f1, f2 = r0 * inv, r1 * inv, r2 * inv
                 else:
@@ -518,28 +485,54 @@ def sample_bsdf(depth, rev_sample, exact_fresnel, materials, m, live, pseed, d64
                     wz = -woz / eta + c * sz
                 length = math.sqrt(wx * wx + wy * wy + wz * wz)
                 wx, wy, wz = wx / length, wy / length, wz / length
-        t0 = throughput[i, 0] * f0
-        t1 = throughput[i, 1] * f1
-        t2 = throughput[i, 2] * f2
-        if not max(t0, max(t1, t2)) > 0:
-            continue
-        # Spawn: leave the surface toward the side of the new direction.
-        side = 1.0 if wx * nx + wy * ny + wz * nz >= 0.0 else -1.0
-        eps = side * RAY_EPSILON * max(hscale[i], 1e-30)
-        origin32[out, 0] = hp[i, 0] + eps * nx
-        origin32[out, 1] = hp[i, 1] + eps * ny
-        origin32[out, 2] = hp[i, 2] + eps * nz
-        dir32[out, 0], dir32[out, 1], dir32[out, 2] = wx, wy, wz
-        tmax32[out] = np.inf
-        d64[out, 0], d64[out, 1], d64[out, 2] = wx, wy, wz
-        throughput[out, 0], throughput[out, 1], throughput[out, 2] = t0, t1, t2
-        prev_pdf[out] = pdf
-        live[out] = row
-        out += 1
-    return out
+        t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
+        if ok and max(t0, max(t1, t2)) > 0:
+            # Spawn: leave the surface toward the side of the new direction.
+            side = 1.0 if wx * nx + wy * ny + wz * nz >= 0.0 else -1.0
+            eps = side * RAY_EPSILON * max(scale, 1e-30)
+            origin32[out, 0] = px + eps * nx
+            origin32[out, 1] = py + eps * ny
+            origin32[out, 2] = pz + eps * nz
+            dir32[out, 0], dir32[out, 1], dir32[out, 2] = wx, wy, wz
+            tmax32[out] = np.inf
+            d64[out, 0], d64[out, 1], d64[out, 2] = wx, wy, wz
+            throughput[out, 0], throughput[out, 1], throughput[out, 2] = t0, t1, t2
+            prev_pdf[out] = pdf
+            live[out] = row
+            out += 1
+        if timing:
+            profile[2] += _cycles() - c_bsdf
+    if timing:
+        profile[0] += _cycles() - c_loop
+    return out, shadow
 
 
-def interp_guide(xp: np.ndarray, cells: int = 4096) -> np.ndarray:
+@njit(**_JIT)
+def all_finite(radiance, depth, normal):
+    """Whether every sample of a chunk is finite in all the passes it feeds."""
+    for i in range(len(depth)):
+        if not (np.isfinite(radiance[i, 0]) and np.isfinite(radiance[i, 1])
+                and np.isfinite(radiance[i, 2]) and np.isfinite(depth[i])
+                and np.isfinite(normal[i, 0]) and np.isfinite(normal[i, 1])
+                and np.isfinite(normal[i, 2])):
+            return False
+    return True
+
+
+@njit(**_JIT)
+def accumulate_unoccluded(radiance, srow, scontrib, occluded_prim, count):
+    """Add the contributions of shadow rays that reached their light (embree's occlusion
+    query leaves prim -1 on unblocked rays)."""
+    for j in range(count):
+        if occluded_prim[j] < 0:
+            row = srow[j]
+            radiance[row, 0] += scontrib[j, 0]
+            radiance[row, 1] += scontrib[j, 1]
+            radiance[row, 2] += scontrib[j, 2]
+
+
+# -------------------------------------------------------------------- camera rays
+def interp_guide(xp: np.ndarray, cells: int = 16384) -> np.ndarray:
     """Index guide for `_interp` on xp in [0, 1]: guide[c] = the last j with xp[j] <= c /
     cells (-1 if none), for c = 0..cells."""
     return np.searchsorted(xp, np.arange(cells + 1) / cells, side="right") - 1
@@ -549,21 +542,15 @@ def interp_guide(xp: np.ndarray, cells: int = 4096) -> np.ndarray:
 def _interp(x, xp, fp, guide):
     """np.interp for one x in [0, 1], bit-identical. A binary search over the whole
     16k-entry filter table mispredicts a branch per level (~150 ns a sample); the guide
-    narrows it to the few entries of x's cell."""
+    starts at x's cell, a step or two short of the answer."""
     cells = len(guide) - 1
-    c = min(int(x * cells), cells - 1)
-    lo = max(guide[c], 0)
-    hi = min(guide[c + 1] + 1, len(xp))  # the answer j is in [guide[c], guide[c + 1]]
-    while lo < hi:  # first index with xp > x, within the cell's entries
-        mid = (lo + hi) >> 1
-        if x < xp[mid]:
-            hi = mid
-        else:
-            lo = mid + 1
-    j = lo - 1
+    j = guide[min(int(x * cells), cells - 1)]
+    n = len(xp)
+    while j + 1 < n and xp[j + 1] <= x:  # the last j with xp[j] <= x
+        j += 1
     if j < 0:
         return fp[0]
-    if j >= len(xp) - 1:
+    if j >= n - 1:
         return fp[-1]
     slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
     return slope * (x - xp[j]) + fp[j]
@@ -682,7 +669,13 @@ def pack_lights(sampler, num_triangles: int) -> tuple:
 
 class CompiledTracer:
     """The bounce loop over the compiled stages; embree calls stay in Python (they release
-    the GIL). Built by `Integrator` when the plan selects the compiled kernel."""
+    the GIL). Built by `Integrator` when the plan selects the compiled kernel.
+
+    Each bounce is one `shade` call between the closest-hit and the shadow-ray queries.
+    With `profile` on (the benchmark's profile) `shade` also counts cycles per stage, and
+    its time is split into surface interaction, light sampling and BSDF sampling."""
+
+    profile = False
 
     def __init__(self, integrator):
         it = self.it = integrator
@@ -711,6 +704,16 @@ class CompiledTracer:
         self.world_from_camera = np.ascontiguousarray(cm.world_from_camera)
         self.position = np.asarray(cm.position, np.float64)
 
+    def _count_shade(self, seconds: float, profile: np.ndarray) -> None:
+        if len(profile) == 0 or profile[0] == 0:
+            self.it._count("shade", seconds)
+            return
+        light, bsdf = profile[1] / profile[0], profile[2] / profile[0]
+        self.it._count("surface interaction", seconds * (1.0 - light - bsdf))
+        self.it._count("sample light", seconds * light)
+        self.it._count("sample BSDF", seconds * bsdf)
+        profile[:] = 0
+
     def trace_pixels(self, pixels: np.ndarray, sample: int):
         """As Integrator.trace_pixels: one sample for each pixel in `pixels` (n,)."""
         it = self.it
@@ -733,12 +736,10 @@ class CompiledTracer:
         live = np.arange(n, dtype=np.int64)
         throughput = np.ones((n, 3))
         prev_pdf = np.full(n, np.inf)
-        hp, hng, hns = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-        hscale, hmat, hfront = np.empty(n), np.empty(n, np.int64), np.empty(n, np.bool_)
-        light_sampling = self.flags[3]
-        if light_sampling:
-            srow, stmax, scontrib = np.empty(n, np.int64), np.empty(n, F32), np.empty((n, 3))
-            sorigin, sdir = np.empty((n, 3), F32), np.empty((n, 3), F32)
+        # Shadow rays: at most one per path and bounce.
+        srow, stmax, scontrib = np.empty(n, np.int64), np.empty(n, F32), np.empty((n, 3))
+        sorigin, sdir = np.empty((n, 3), F32), np.empty((n, 3), F32)
+        profile = np.zeros(3 if self.profile else 0, np.uint64)
         m = n
         for depth in range(it.settings.max_bounces + 2):
             if m == 0:
@@ -747,29 +748,17 @@ class CompiledTracer:
             prim, tfar, bu, bv = it.accel.intersect_raw(origin32[:m], dir32[:m], tmax32[:m])
             it._count("intersect", time.perf_counter() - t0)
             t0 = time.perf_counter()
-            m = surface_interaction(depth, rev_sample, self.flags, self.geometry, self.materials,
-                                    self.lights, self.world, self.camera, prim, tfar, bu, bv, m,
-                                    live, pseed, d64, throughput, prev_pdf, radiance, depth_pass,
-                                    normal_pass, hp, hng, hns, hscale, hmat, hfront)
-            it._count("surface interaction", time.perf_counter() - t0)
-            if m == 0:
-                break
-            if light_sampling:
+            m, count = shade(depth, rev_sample, self.flags, self.exact_fresnel, self.geometry,
+                             self.materials, self.lights, self.world, self.camera, prim, tfar,
+                             bu, bv, m, live, pseed, d64, throughput, prev_pdf, radiance,
+                             depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin,
+                             sdir, stmax, scontrib, profile)
+            self._count_shade(time.perf_counter() - t0, profile)
+            if count:
                 t0 = time.perf_counter()
-                count = sample_light(depth, rev_sample, self.materials, self.lights, m, live,
-                                     pseed, d64, throughput, hp, hng, hns, hscale, hmat, srow,
-                                     sorigin, sdir, stmax, scontrib)
-                it._count("sample light", time.perf_counter() - t0)
-                if count:
-                    t0 = time.perf_counter()
-                    blocked = it.accel.occluded_raw(sorigin[:count], sdir[:count], stmax[:count])
-                    accumulate_unoccluded(radiance, srow, scontrib, blocked, count)
-                    it._count("trace shadow rays", time.perf_counter() - t0)
-            t0 = time.perf_counter()
-            m = sample_bsdf(depth, rev_sample, self.exact_fresnel, self.materials, m, live,
-                            pseed, d64, throughput, prev_pdf, hp, hng, hns, hscale, hmat, hfront,
-                            origin32, dir32, tmax32)
-            it._count("sample BSDF", time.perf_counter() - t0)
+                blocked = it.accel.occluded_raw(sorigin[:count], sdir[:count], stmax[:count])
+                accumulate_unoccluded(radiance, srow, scontrib, blocked, count)
+                it._count("trace shadow rays", time.perf_counter() - t0)
         return radiance, depth_pass, normal_pass
 
 

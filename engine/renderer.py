@@ -66,6 +66,15 @@ class RenderResult(Pass):
     time_to_first_pass: float = 0.0
 
 
+class _Gate:
+    """Opens when a pass may be folded into the film; `discard` drops it instead."""
+
+    def __init__(self):
+        import threading
+        self.opened = threading.Event()
+        self.discard = False
+
+
 class NonFiniteError(RuntimeError):
     """A pass produced NaN or inf; the message names the pixel and stage."""
 
@@ -103,12 +112,20 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         ly, lx = np.divmod(local, x1 - x0)
         return (ly + y0) * settings.width + lx + x0
 
-    def trace_and_fold(local: np.ndarray, sample: int) -> None:
-        """One chunk's sample, folded into the film by the worker itself: chunks of a pass
-        hold distinct pixels and passes run one after another, so each pixel still gets
-        its samples in order (the film does not depend on thread timing)."""
+    def trace_and_fold(local: np.ndarray, sample: int, gate: _Gate) -> None:
+        """One chunk's sample, folded into the film by the worker itself once the gate of
+        its pass opens: the main thread opens it after it has finished with the previous
+        pass, so each pixel gets its samples in order (the film does not depend on thread
+        timing) and a pass is folded whole or, if the render stopped, not at all."""
+        if gate.discard:
+            return
         _, radiance, depth, normal, rejected = integrator.trace_pixels(frame_ids(local), sample)
+        gate.opened.wait()
+        if gate.discard:
+            return
+        t1 = time.perf_counter()
         film.add(local, radiance, depth, normal, rejected)
+        integrator._count("film", time.perf_counter() - t1)
 
     threads = _thread_count(settings)
     # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
@@ -117,34 +134,56 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     starts = list(range(0, n_pixels, chunk))
     stop_reason, cancelled, first = "samples", False, 0.0
     sample = 0
+    chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        while sample < settings.samples:
-            # Trace one sample per pixel, chunk by chunk, chunks spread over the pool.
-            chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
-            jobs = [pool.submit(trace_and_fold, c, sample) for c in chunks]
-            for job in jobs:
-                job.result()
-            sample += 1
-            film.check_finite(sample)
-            elapsed = time.perf_counter() - t0
-            if sample == 1:
-                first = elapsed
-            # The image-wide error costs a pass over the film: only when someone reads it.
-            needed = on_pass is not None or settings.target_error
-            rel = film.relative_error() if needed else float("nan")
-            if on_pass is not None:
-                on_pass(film.snapshot(sample, elapsed, rel, sample / settings.samples))
-            if sample >= settings.samples:
-                break
-            if settings.time_limit and elapsed >= settings.time_limit:
-                stop_reason = "time limit"
-                break
-            if settings.target_error and sample >= 2 and rel <= settings.target_error:
-                stop_reason = "target error"
-                break
-            if should_stop is not None and should_stop():
-                stop_reason, cancelled = "cancelled", True
-                break
+
+        def launch(index):
+            """Queue pass `index`: one sample per pixel, chunk by chunk over the pool."""
+            gate = _Gate()
+            return gate, [pool.submit(trace_and_fold, c, index, gate) for c in chunks]
+
+        gate, jobs = launch(0)
+        gate.opened.set()
+        ahead = None
+        try:
+            while sample < settings.samples:
+                # Queue the next pass before waiting for this one, so the workers go on
+                # tracing while this thread folds statistics and calls back.
+                ahead = launch(sample + 1) if sample + 1 < settings.samples else None
+                for job in jobs:
+                    job.result()
+                sample += 1
+                film.check_finite(sample)
+                elapsed = time.perf_counter() - t0
+                if sample == 1:
+                    first = elapsed
+                # The image-wide error costs a pass over the film: only when someone reads it.
+                needed = on_pass is not None or settings.target_error
+                rel = film.relative_error() if needed else float("nan")
+                if on_pass is not None:
+                    on_pass(film.snapshot(sample, elapsed, rel, sample / settings.samples))
+                if sample >= settings.samples:
+                    break
+                if settings.time_limit and elapsed >= settings.time_limit:
+                    stop_reason = "time limit"
+                    break
+                if settings.target_error and sample >= 2 and rel <= settings.target_error:
+                    stop_reason = "target error"
+                    break
+                if should_stop is not None and should_stop():
+                    stop_reason, cancelled = "cancelled", True
+                    break
+                if ahead is not None:
+                    gate, jobs = ahead
+                    ahead = None
+                    gate.opened.set()
+        finally:
+            # Stopped (or failed): the pass queued ahead is traced but never folded.
+            if ahead is not None:
+                ahead[0].discard = True
+                ahead[0].opened.set()
+                for job in ahead[1]:
+                    job.cancel()
     elapsed = time.perf_counter() - t0
     snap = film.snapshot(sample, elapsed, film.relative_error(), sample / settings.samples)
     return RenderResult(**snap.__dict__, plan=plan, stop_reason=stop_reason, cancelled=cancelled,

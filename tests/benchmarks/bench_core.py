@@ -13,6 +13,7 @@ import argparse
 import json
 import os
 import time
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -46,6 +47,41 @@ class RecordingAccel(Accel):
         return super().occluded_raw(o, d, tmax)
 
 
+@contextmanager
+def profiled():
+    """Keep the Accel and Integrator of the renders inside the block (the last ones in
+    `seen`), for embree's share and the per-stage split."""
+    import engine.renderer as renderer
+
+    seen = {}
+    original_accel, original_integrator = renderer.Accel, renderer.Integrator
+
+    def accel(scene):
+        seen["accel"] = a = original_accel(scene)
+        return a
+
+    def integrator(*args, **kwargs):
+        seen["integrator"] = i = original_integrator(*args, **kwargs)
+        return i
+
+    renderer.Accel, renderer.Integrator = accel, integrator
+    try:
+        yield seen
+    finally:
+        renderer.Accel, renderer.Integrator = original_accel, original_integrator
+
+
+def shares(seen, wall, threads):
+    """(fraction of the threads' time inside embreex, share per named stage). The stages
+    'intersect' and 'trace shadow rays' include their embreex calls; 'other' is what no
+    stage covers: the bounce loop's Python glue and threads waiting at pass ends."""
+    busy = wall * threads
+    stages = {k: round(v / busy, 3) for k, v in sorted(seen["integrator"].stage_seconds.items(),
+                                                         key=lambda kv: -kv[1])}
+    stages["other"] = round(1.0 - sum(stages.values()), 3)
+    return round(seen["accel"].seconds / busy, 3), stages
+
+
 def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto"):
     import engine.renderer as renderer
 
@@ -53,31 +89,16 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
     settings = replace(scenes.settings(width=width, height=height, samples=samples,
                                        threads=threads, max_bounces=max_bounces), kernel=kernel)
     render(scene, replace(settings, width=16, height=12, samples=1))  # load compiled code
-    accels, integrators = [], []
-    original, original_integrator = renderer.Accel, renderer.Integrator
-
-    def tracking(scene_):
-        a = original(scene_)
-        accels.append(a)
-        return a
-
-    def tracking_integrator(*args, **kwargs):
-        i = original_integrator(*args, **kwargs)
-        integrators.append(i)
-        return i
-
-    renderer.Accel, renderer.Integrator = tracking, tracking_integrator
-    try:
+    with profiled() as seen:
         t0 = time.perf_counter()
         result = render(scene, settings)
         wall = time.perf_counter() - t0
-    finally:
-        renderer.Accel, renderer.Integrator = original, original_integrator
-    accel = accels[0]
+    accel = seen["accel"]
     threads_used = settings.threads or os.cpu_count()
 
     # Replay one pass's rays through embreex alone, single-threaded.
     rec = RecordingAccel(scene)
+    original = renderer.Accel
     renderer.Accel = lambda s: rec
     try:
         render(scene, replace(settings, samples=1, threads=1))
@@ -88,11 +109,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
     for kind, o, d, tmax in rec.batches:
         getattr(raw, kind)(o, d, tmax)
     raw_seconds = time.perf_counter() - t0
-    # Split of the threads' time per named stage (the rest: compaction and bookkeeping in
-    # the bounce loop, the film, and the thread pool).
-    busy = wall * threads_used
-    stages = {k: round(v / busy, 3) for k, v in sorted(integrators[0].stage_seconds.items(),
-                                                         key=lambda kv: -kv[1])}
+    fraction, stages = shares(seen, wall, threads_used)
     return {
         "scene": "CBspheres", "kernel": result.plan.kernel, "resolution": f"{width}x{height}",
         "samples": result.samples,
@@ -101,7 +118,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
         "ray_segments_per_second": round(accel.rays / wall),
         "path_samples_per_second": round(width * height * result.samples / wall),
         # Summed over threads, divided by threads: the share of the cores' time in embree.
-        "fraction_in_embree": round(accel.seconds / (wall * threads_used), 3),
+        "fraction_in_embree": fraction,
         "raw_embree_rays_per_second_1_thread": round(raw.rays / raw_seconds),
         "time_to_first_pass": round(result.time_to_first_pass, 3),
         "share_of_time_per_stage": stages,

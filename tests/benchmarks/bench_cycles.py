@@ -35,7 +35,7 @@ if REPO not in sys.path:
 
 import bpy  # noqa: E402
 
-from tests.benchmarks import imaging  # noqa: E402
+from tests.benchmarks import bench_core, imaging  # noqa: E402
 from tests.cycles import renderers  # noqa: E402
 
 OUT = os.path.join(REPO, "out", "bench")
@@ -81,7 +81,11 @@ def render_specula(scene, samples=1 << 20, time_limit=0.0):
         if not first:
             first.append(time.perf_counter() - t0)
 
-    result = core.render(core_scene, core.RenderSettings(**kw), on_pass=on_pass)
+    t_render = time.perf_counter()
+    with bench_core.profiled() as seen:
+        result = core.render(core_scene, core.RenderSettings(**kw), on_pass=on_pass)
+    wall = time.perf_counter() - t_render
+    result.profile = bench_core.shares(seen, wall, renderers.THREADS)
     return result, time.perf_counter() - t0, first[0]
 
 
@@ -140,6 +144,8 @@ def bench_scene(name, budgets, resolution, ref_samples, max_bounces):
                    specula_rmse=rmse_s, specula_relmse=rel_s, specula_rel_measured=lum_s,
                    specula_rel_estimated=float(res.relative_error),
                    specula_rmse_estimated=float(np.sqrt(np.mean(res.variance))),
+                   specula_fraction_in_embree=res.profile[0],
+                   specula_share_per_stage=res.profile[1],
                    cycles_seconds=wall_c, cycles_rmse=rmse_c, cycles_relmse=rel_c,
                    equal_time_mse_ratio=(rmse_s / rmse_c) ** 2 if rmse_c > 0 else float("nan"))
         rows.append(row)
@@ -182,6 +188,14 @@ def report(all_rows, info, args):
                      f"{r['specula_relmse']:.5f} | {r['cycles_relmse']:.5f} | "
                      f"{r['equal_time_mse_ratio']:.1f} | {r['specula_rel_estimated']:.4f} / "
                      f"{r['specula_rel_measured']:.4f} |")
+    lines += ["", "Specula's share of the two threads' time inside embreex, and per stage "
+              "(from the core's stage timers; 'intersect' and 'trace shadow rays' include their "
+              "embreex calls, 'other' is the bounce loop's glue and waiting at pass ends):", "",
+              "| scene | budget s | in embreex | stages |", "|---|---|---|---|"]
+    for r in all_rows:
+        split = ", ".join(f"{k} {v:.0%}" for k, v in r["specula_share_per_stage"].items())
+        lines.append(f"| {r['scene']} | {r['budget']:g} | "
+                     f"{r['specula_fraction_in_embree']:.0%} | {split} |")
     lines += ["", "Time to first pixels (Specula: export + first pass; Cycles: a 1-sample "
               "render including sync):", "", "| scene | resolution | Specula s | Cycles s |",
               "|---|---|---|---|"]

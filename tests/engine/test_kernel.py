@@ -168,11 +168,23 @@ def test_without_numba_everything_takes_the_numpy_path(monkeypatch):
 
 
 def test_no_emitters_means_no_light_sampling_kernel(monkeypatch):
-    def boom(*a, **k):
-        raise AssertionError("light sampling ran without emitters")
+    """No emitters: the light-sampling stage of `shade` is off and no shadow ray is traced."""
+    from engine.accel import Accel
 
-    monkeypatch.setattr(kernel, "sample_light", boom)
+    def boom(*a, **k):
+        raise AssertionError("shadow rays traced without emitters")
+
+    monkeypatch.setattr(Accel, "occluded_raw", boom)
     scene = scenes.cornell_box(emitter_radiance=0.0).build(scenes.cornell_camera(),
                                                           World((1, 1, 1)))
     r = render(scene, scenes.settings(width=16, height=12, samples=2))
-    assert r.plan.kernel == "compiled" and r.combined[..., :3].mean() > 0
+    assert r.plan.kernel == "compiled" and not r.plan.light_sampling
+    assert r.combined[..., :3].mean() > 0
+
+
+def test_profile_mode_renders_the_same_image(monkeypatch):
+    """The per-stage cycle counting of the benchmark's profile changes no pixel."""
+    plain = render(scenes.cbspheres(), scenes.settings(width=24, height=18, samples=2))
+    monkeypatch.setattr(kernel.CompiledTracer, "profile", True)
+    profiled = render(scenes.cbspheres(), scenes.settings(width=24, height=18, samples=2))
+    assert_same_image(plain, profiled)
