@@ -61,8 +61,13 @@ test: $(STAMP)
 test-fast: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests
 
+# Performance (tests/benchmarks/README.md): the core (numpy and compiled kernels), scaling
+# and time to first pixels, then error against run time beside Cycles at 10 s and 60 s on
+# CBspheres, CBdragon and CBspheres with depth of field. Reports and plots in out/bench/.
 bench: $(STAMP)
 	$(PY) -m tests.benchmarks.bench_core
+	$(PY) -m tests.benchmarks.bench_scaling
+	$(PY) -m tests.benchmarks.bench_cycles --scenes $(SCENES) --budgets $(BUDGETS)
 
 clean:
 	rm -rf out dist build
@@ -80,8 +85,8 @@ test-cycles: $(STAMP)
 
 # Error against run time, Specula beside Cycles: out/bench/report.md and plots.
 # BUDGETS=1,2,4 SCENES=cbspheres for a quick run.
-BUDGETS ?= 1,2,4,8,16,32
-SCENES ?= cbspheres,cbdragon
+BUDGETS ?= 10,60
+SCENES ?= cbspheres,cbdragon,cbspheres_dof
 bench-cycles: $(STAMP)
 	$(PY) -m tests.benchmarks.bench_cycles --scenes $(SCENES) --budgets $(BUDGETS)
 

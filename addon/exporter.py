@@ -127,10 +127,17 @@ def to_world(mesh: MeshData, matrix_world):
     m = np.asarray(matrix_world, dtype=np.float64)
     linear = m[:3, :3]
     vertices = mesh.vertices @ linear.T + m[:3, 3]
-    normals = mesh.normals @ np.linalg.pinv(linear)  # row vectors: (M^-T n)^T = n^T M^-1
     triangles = mesh.triangles
-    if np.linalg.det(linear) < 0:
+    mirrored = np.linalg.det(linear) < 0
+    if mirrored:
         triangles = triangles[:, [0, 2, 1]]
+    if not mesh.smooth.any():
+        return vertices, triangles, None  # flat: the core uses geometric normals
+    # Row vectors: (M^-T n)^T = n^T M^-1, as one (3t, 3) x (3, 3) product (a stacked
+    # (t, 3, 3) @ (3, 3) matmul is several times slower for millions of triangles).
+    t = len(mesh.normals)
+    normals = (mesh.normals.reshape(-1, 3) @ np.linalg.pinv(linear)).reshape(t, 3, 3)
+    if mirrored:
         normals = normals[:, [0, 2, 1]]
     return vertices, triangles, normals
 
@@ -540,7 +547,8 @@ def to_core(exported: ExportedScene, core):
         mat_index = lut[np.clip(mesh.material_index, 0, len(lut) - 1)]
         k = len(insts)
         builder.add_mesh(name, vertices, triangles, np.tile(mat_index, k),
-                         corner_normals=normals, smooth=np.tile(mesh.smooth, k))
+                         corner_normals=normals,
+                         smooth=np.tile(mesh.smooth, k) if normals is not None else False)
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
     world = core.World(exported.world_colour, **(exported.environment or {}))

@@ -84,10 +84,14 @@ def _one_sided_emission():
 
     Integrator.handle_emission = front_only_emission
     LightSampler.sample = front_only_sample
+    # The patched stages are the numpy integrator's: render with it (the compiled kernels
+    # reproduce it bit for bit, tests/engine/test_kernel.py).
+    available, core.kernel.AVAILABLE = core.kernel.AVAILABLE, False
     try:
         yield
     finally:
         Integrator.handle_emission, LightSampler.sample = handle, sample
+        core.kernel.AVAILABLE = available
 
 
 # The sheet's interior (rows, columns of the 64 x 48 image, row 0 at the bottom), away from

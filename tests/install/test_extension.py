@@ -4,7 +4,8 @@ Each run starts from an empty user folder, installs `dist/specula-<v>-linux_x64.
 the code behind `blender --command extension install-file -r user_default -e ZIP` (the bpy
 module has no command line), then opens every scene in blend_scenes/ that the version can
 read, selects Specula and renders 2 samples at 25 % (the version-range smoke test).
-embreex is hidden from the venv, so the extension's own wheel must provide it.
+embreex, numba and llvmlite are hidden from the venv, so the extension's own wheels must
+provide them, and the scenes the compiled kernels cover render with them.
 """
 
 import glob
@@ -46,6 +47,7 @@ def test_install_file_enable_render(release, dist, tmp_path):
     assert result["addons"] == ["bl_ext.user_default.specula"]
     ext_site = str(tmp_path / "user" / "extensions" / ".local")
     assert result["embreex"].startswith(ext_site), result["embreex"]
+    assert result["numba"].startswith(ext_site), result["numba"]
     assert result["core"] == ["bl_ext.user_default.specula.bundled.engine"]
     # Only Blender's own wheel folder joins sys.path; the add-on adds nothing.
     assert all(p.startswith(ext_site) for p in result["added_to_sys_path"])
@@ -54,4 +56,8 @@ def test_install_file_enable_render(release, dist, tmp_path):
         assert r["summary"]["error"] is None, (name, r)
         assert r["summary"]["samples"] == 2, (name, r)
         assert r["mean"] > 0.01, (name, r)  # not a black image
+    # The extension's numba compiles the kernels: the scenes they cover use them.
+    kernels = {name: r["kernel"] for name, r in result["renders"].items()}
+    assert kernels["v3.4_cbspheres"] == "compiled", kernels
+    assert kernels["v3.4_default"] == "numpy", kernels  # Principled and a point light
     print(sys.version, result["renders"])

@@ -16,16 +16,21 @@ import sys
 SITE = [p for p in sys.path if p.endswith("site-packages")]
 
 
+# The extension's wheels: embreex, and numba with llvmlite for the compiled kernels.
+BUNDLED = ("embreex", "numba", "llvmlite")
+
+
 class HideVenvEmbreex:
-    """Find `embreex` anywhere but the venv's site-packages (i.e. in the extension's)."""
+    """Find the BUNDLED packages anywhere but the venv's site-packages (i.e. in the
+    extension's)."""
 
     def find_spec(self, name, path=None, target=None):
-        if name != "embreex":
+        if name not in BUNDLED:
             return None
         spec = importlib.machinery.PathFinder.find_spec(
             name, [p for p in sys.path if p not in SITE])
         if spec is None:
-            raise ModuleNotFoundError("embreex is hidden outside Blender's extension folders")
+            raise ModuleNotFoundError(f"{name} is hidden outside Blender's extension folders")
         return spec
 
 
@@ -58,10 +63,14 @@ for scene_path in scenes:
     pixels = list(image.pixels[:])
     result["renders"][name] = {
         "summary": {k: session.last_summary.get(k) for k in ("error", "samples", "triangles")},
+        "kernel": (session.last_summary.get("plan") or {}).get("kernel"),
         "size": list(image.size), "mean": sum(pixels) / max(len(pixels), 1)}
 import embreex  # noqa: E402
 
 result["embreex"] = embreex.__file__
+import numba  # noqa: E402
+
+result["numba"] = numba.__file__
 result["core"] = sorted(m for m in sys.modules if m.endswith("bundled.engine"))
 result["added_to_sys_path"] = [p for p in sys.path if p not in path_before]
 print("RESULT " + json.dumps(result))
