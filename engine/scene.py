@@ -415,6 +415,10 @@ class Scene:
     smooth : (t,) bool, whether triangle t interpolates `normals`
     material_index : (t,) int32 into `materials`
     object_index : (t,) int32 into `object_names`
+    shared_vertices, shared_triangles : the same triangles as an indexed mesh, (m, 3) float64
+        relative to `origin` and (t, 3) int32 (shared_vertices[shared_triangles] equals
+        `vertices`): what the acceleration structure is built from, since embree's buffers
+        fill several times faster with a vertex shared by its triangles copied once
     """
 
     vertices: np.ndarray
@@ -429,6 +433,8 @@ class Scene:
     world: World
     warnings: list = field(default_factory=list)
     lights: list = field(default_factory=list)
+    shared_vertices: np.ndarray | None = None
+    shared_triangles: np.ndarray | None = None
 
     @property
     def num_triangles(self) -> int:
@@ -521,9 +527,11 @@ class SceneBuilder:
             if not ok.all():
                 normals = np.where(ok[:, None, None], normals, 0.0)
         if not keep.all():
-            corners, sm, mi = corners[keep], sm[keep], mi[keep]
+            corners, sm, mi, tri = corners[keep], sm[keep], mi[keep], tri[keep]
             normals = None if normals is None else normals[keep]
-        self._meshes.append((name, corners, normals, sm, mi))
+        if not finite_v.all():  # unreferenced now, but embree should see no NaN at all
+            v = np.where(finite_v[:, None], v, 0.0)
+        self._meshes.append((name, corners, normals, sm, mi, v, tri))
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -532,8 +540,9 @@ class SceneBuilder:
         world.validate()
         materials = Materials.from_list(self._materials)
         names, corners, normals, smooth, mat, obj = [], [], [], [], [], []
+        shared_v, shared_t, offset = [], [], 0
         any_normals = any(m[2] is not None for m in self._meshes)
-        for k, (name, c, n, s, mi) in enumerate(self._meshes):
+        for k, (name, c, n, s, mi, v, tri) in enumerate(self._meshes):
             if len(mi) and (mi.min() < 0 or mi.max() >= len(materials)):
                 raise ValueError(f"object '{name}': material index out of range "
                                  f"0..{len(materials) - 1}")
@@ -543,6 +552,9 @@ class SceneBuilder:
             normals.append(n if n is not None else np.zeros_like(c))
             mat.append(mi)
             obj.append(np.full(len(c), k, np.int32))
+            shared_v.append(v)
+            shared_t.append(tri + offset)
+            offset += len(v)
         verts = np.concatenate(corners) if corners else np.zeros((0, 3, 3))
         # Recentre before embree's float32 cast so far-from-origin scenes keep precision.
         origin = (0.5 * (verts.reshape(-1, 3).min(0) + verts.reshape(-1, 3).max(0))
@@ -562,4 +574,8 @@ class SceneBuilder:
             material_index=(np.concatenate(mat) if mat else np.zeros(0, np.int32)).astype(np.int32),
             object_index=np.concatenate(obj) if obj else np.zeros(0, np.int32),
             object_names=names, materials=materials, camera=camera, world=world,
-            warnings=list(self.warnings), lights=list(self._lights))
+            warnings=list(self.warnings), lights=list(self._lights),
+            # Recentred like `verts` (same float64 subtraction, so the same float32 values).
+            shared_vertices=(np.concatenate(shared_v) - origin) if shared_v else np.zeros((0, 3)),
+            shared_triangles=(np.concatenate(shared_t).astype(np.int32) if shared_t
+                              else np.zeros((0, 3), np.int32)))

@@ -48,7 +48,7 @@ class RecordingAccel(Accel):
 
 
 @contextmanager
-def profiled():
+def profiled_render():
     """Keep the Accel and Integrator of the renders inside the block (the last ones in
     `seen`), for embree's share and the per-stage split."""
     import engine.renderer as renderer
@@ -89,7 +89,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
     settings = replace(scenes.settings(width=width, height=height, samples=samples,
                                        threads=threads, max_bounces=max_bounces), kernel=kernel)
     render(scene, replace(settings, width=16, height=12, samples=1))  # load compiled code
-    with profiled() as seen:
+    with profiled_render() as seen:
         t0 = time.perf_counter()
         result = render(scene, settings)
         wall = time.perf_counter() - t0
@@ -110,6 +110,19 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
         getattr(raw, kind)(o, d, tmax)
     raw_seconds = time.perf_counter() - t0
     fraction, stages = shares(seen, wall, threads_used)
+    profiled = None
+    if result.plan.kernel == "compiled":
+        # Profile: the same render with `shade` counting cycles per stage, so its time
+        # splits into surface interaction, light sampling and BSDF sampling.
+        from engine import kernel as kernel_module
+        kernel_module.CompiledTracer.profile = True
+        try:
+            with profiled_render() as seen_p:
+                t0 = time.perf_counter()
+                render(scene, settings)
+                profiled = shares(seen_p, time.perf_counter() - t0, threads_used)[1]
+        finally:
+            kernel_module.CompiledTracer.profile = False
     return {
         "scene": "CBspheres", "kernel": result.plan.kernel, "resolution": f"{width}x{height}",
         "samples": result.samples,
@@ -122,6 +135,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
         "raw_embree_rays_per_second_1_thread": round(raw.rays / raw_seconds),
         "time_to_first_pass": round(result.time_to_first_pass, 3),
         "share_of_time_per_stage": stages,
+        **({"share_of_time_per_stage_profiled": profiled} if profiled else {}),
     }
 
 

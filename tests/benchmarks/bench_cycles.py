@@ -82,7 +82,7 @@ def render_specula(scene, samples=1 << 20, time_limit=0.0):
             first.append(time.perf_counter() - t0)
 
     t_render = time.perf_counter()
-    with bench_core.profiled() as seen:
+    with bench_core.profiled_render() as seen:
         result = core.render(core_scene, core.RenderSettings(**kw), on_pass=on_pass)
     wall = time.perf_counter() - t_render
     result.profile = bench_core.shares(seen, wall, renderers.THREADS)

@@ -30,9 +30,10 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 if REPO not in sys.path:
     sys.path.insert(0, REPO)
 
-import bpy  # noqa: E402, I001 - bmesh is importable only after bpy
-import bmesh  # noqa: E402
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
 
+from tests import scenes  # noqa: E402
 from tests.benchmarks import imaging  # noqa: E402
 from tests.cycles import renderers  # noqa: E402
 
@@ -78,13 +79,18 @@ def sphere_scene(triangles: int):
     renderers.open_blend_scene("cbspheres", (160, 120))
     for name in ("MirrorSphere", "GlassSphere"):
         bpy.data.objects.remove(bpy.data.objects[name])
-    # A UV sphere of u segments and v rings has 2 u (v - 2) + 2 u triangles; v = u / 2.
-    u = max(8, int(round(math.sqrt(triangles))))
-    bm = bmesh.new()
-    bmesh.ops.create_uvsphere(bm, u_segments=u, v_segments=u // 2, radius=0.45)
+    # A UV sphere of s segments and s / 2 rings has about s^2 triangles. Built with
+    # foreach_set (bmesh's create_uvsphere takes minutes at millions of faces).
+    s = max(8, int(round(math.sqrt(triangles))))
+    verts, tris, _ = scenes.uv_sphere((0.0, 0.0, 0.0), 0.45, segments=s, rings=s // 2)
     mesh = bpy.data.meshes.new("Sphere")
-    bm.to_mesh(mesh)
-    bm.free()
+    mesh.vertices.add(len(verts))
+    mesh.vertices.foreach_set("co", np.ascontiguousarray(verts, np.float32).ravel())
+    mesh.loops.add(3 * len(tris))
+    mesh.loops.foreach_set("vertex_index", np.ascontiguousarray(tris, np.int32).ravel())
+    mesh.polygons.add(len(tris))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tris), 3, dtype=np.int32))
+    mesh.update()
     mesh.shade_smooth()
     mesh.materials.append(bpy.data.materials[0])
     obj = bpy.data.objects.new("Sphere", mesh)

@@ -23,6 +23,21 @@ def test_nan_and_degenerate_triangles_are_dropped_and_counted():
     assert scene.num_triangles == 1 and "Suzanne" in scene.warnings[0]
 
 
+def test_shared_vertex_mesh_is_the_same_triangles():
+    """The indexed copy embree is built from gives exactly the kept triangles' corners, in
+    order, across meshes and after dropping bad triangles."""
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("grey", (0.5, 0.5, 0.5)))
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [np.nan, 0, 0], [2, 0, 0], [0, 3, 1.0]])
+    with pytest.warns(UserWarning):
+        b.add_mesh("a", v, np.array([[0, 1, 2], [3, 1, 2], [0, 0, 2], [4, 5, 0]]), m)
+    b.add_mesh("b", v[[1, 4, 5]] + 10.0, np.array([[0, 1, 2], [2, 1, 0]]), m)
+    s = b.build(Camera(), World())
+    assert s.num_triangles == 4
+    np.testing.assert_array_equal(s.shared_vertices[s.shared_triangles], s.vertices)
+    assert np.isfinite(s.shared_vertices).all()
+
+
 def test_geometry_is_recentred_before_the_float32_cast():
     b = SceneBuilder()
     b.add_material(Material.diffuse("grey", (0.5, 0.5, 0.5)))
