@@ -29,24 +29,11 @@ import time
 import numpy as np
 
 from . import sampling
+from .jit import NUMBA, cgutils, intrinsic, ir, njit, types
 from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
 from .scene import DIFFUSE, GLASS, METAL, MIRROR, NONE
 
-try:  # numba is optional: platforms without its wheel render with numpy.
-    from llvmlite import ir
-    from numba import njit, types
-    from numba.core import cgutils
-    from numba.extending import intrinsic
-    AVAILABLE = True
-except ImportError:  # pragma: no cover - exercised on platforms without numba
-    AVAILABLE = False
-
-    def njit(*args, **kwargs):
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
-    intrinsic = njit
+AVAILABLE = NUMBA  # the run-time switch (see jit.py)
 
 # Material kinds the kernels implement (everything else uses the numpy integrator).
 SUPPORTED = (NONE, DIFFUSE, MIRROR, METAL, GLASS)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .jit import njit
 from .sampling import cross_rows
 
 # BSDF kinds of the materials table (`Materials.kind`).
@@ -479,6 +480,9 @@ class SceneBuilder:
         material_index : int or (t,) int into the materials added so far
         corner_normals : optional (t, 3, 3) per-corner shading normals (world space)
         smooth : optional (t,) bool; triangles not smooth use their geometric normal
+
+        Only the checks run here; `build` gathers the corners of every mesh straight into
+        the scene's arrays (a million-triangle mesh is 72 MB per copy of its corners).
         """
         v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
         tri = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
@@ -486,31 +490,15 @@ class SceneBuilder:
         if t and (tri.min() < 0 or tri.max() >= len(v)):
             raise ValueError(f"object '{name}': triangle indices out of range 0..{len(v) - 1}")
         mi = np.broadcast_to(np.asarray(material_index, dtype=np.int32), (t,)).copy()
-        corners = v[tri]  # (t, 3, 3)
         normals = None
         if corner_normals is not None:
             normals = np.asarray(corner_normals, dtype=np.float64).reshape(t, 3, 3)
         sm = (np.ones(t, bool) if smooth is None else
               np.broadcast_to(np.asarray(smooth, bool), (t,)).copy())
 
-        # Drop NaN/inf and degenerate (zero-area) triangles, and say how many. Tests run
-        # per vertex where they can (a mesh has about half as many vertices as triangles,
-        # and 1/6 as many as corners): export time matters for million-triangle meshes.
+        # Drop NaN/inf and degenerate (zero-area) triangles, and say how many.
         finite_v = np.isfinite(v).all(axis=1)
-        if finite_v.all():
-            finite, safe = np.ones(t, bool), corners
-        else:
-            finite = finite_v[tri].all(axis=1)
-            # Copy only then (a 5M-triangle mesh is 360 MB per copy).
-            safe = np.where(finite[:, None, None], corners, 0.0)
-        cross = cross_rows(safe[:, 1] - safe[:, 0], safe[:, 2] - safe[:, 0])
-        area2_sq = np.einsum("ij,ij->i", cross, cross)
-        vertex_scale = np.where(finite_v, np.abs(v).max(axis=1, initial=0.0), 0.0)
-        scale = (vertex_scale[tri].max(axis=1, initial=0.0) if t else np.zeros(0)) \
-            + np.finfo(np.float64).tiny
-        # Relative test: an edge cross product below float64 noise has no usable normal
-        # (|cross| > 1e-24 scale^2, squared).
-        nondegenerate = area2_sq > 1e-48 * scale**4
+        finite, nondegenerate = _triangle_checks(v, tri, finite_v)
         keep = finite & nondegenerate
         if not np.all(keep):
             n_bad = int((~finite).sum())
@@ -521,17 +509,13 @@ class SceneBuilder:
             warnings.warn(msg, stacklevel=2)
         if normals is not None:
             # Unusable shading normals fall back to the flat normal for that triangle.
-            length2 = np.einsum("tci,tci->tc", normals, normals)
-            ok = (np.isfinite(length2) & (length2 > 0)).all(axis=1)
-            sm &= ok
-            if not ok.all():
-                normals = np.where(ok[:, None, None], normals, 0.0)
+            sm &= _normals_usable(normals)
         if not keep.all():
-            corners, sm, mi, tri = corners[keep], sm[keep], mi[keep], tri[keep]
+            sm, mi, tri = sm[keep], mi[keep], tri[keep]
             normals = None if normals is None else normals[keep]
         if not finite_v.all():  # unreferenced now, but embree should see no NaN at all
             v = np.where(finite_v[:, None], v, 0.0)
-        self._meshes.append((name, corners, normals, sm, mi, v, tri))
+        self._meshes.append((name, v, tri, normals, sm, mi))
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -539,43 +523,173 @@ class SceneBuilder:
         world = world or World()
         world.validate()
         materials = Materials.from_list(self._materials)
-        names, corners, normals, smooth, mat, obj = [], [], [], [], [], []
-        shared_v, shared_t, offset = [], [], 0
-        any_normals = any(m[2] is not None for m in self._meshes)
-        for k, (name, c, n, s, mi, v, tri) in enumerate(self._meshes):
+        meshes = self._meshes
+        for name, _, _, _, _, mi in meshes:
             if len(mi) and (mi.min() < 0 or mi.max() >= len(materials)):
                 raise ValueError(f"object '{name}': material index out of range "
                                  f"0..{len(materials) - 1}")
-            names.append(name)
-            corners.append(c)
-            smooth.append(s if n is not None else np.zeros(len(c), bool))
-            normals.append(n if n is not None else np.zeros_like(c))
-            mat.append(mi)
-            obj.append(np.full(len(c), k, np.int32))
-            shared_v.append(v)
-            shared_t.append(tri + offset)
-            offset += len(v)
-        verts = np.concatenate(corners) if corners else np.zeros((0, 3, 3))
-        # Recentre before embree's float32 cast so far-from-origin scenes keep precision.
-        origin = (0.5 * (verts.reshape(-1, 3).min(0) + verts.reshape(-1, 3).max(0))
-                  if len(verts) else np.zeros(3))
-        # In place: `verts` is a fresh array (concatenate copies), so no second full copy.
-        verts -= origin
-        smooth_all = np.concatenate(smooth) if smooth else np.zeros(0, bool)
-        norms = None
-        if any_normals and smooth_all.any():
-            norms = np.concatenate(normals)
-            length = np.sqrt(np.einsum("tci,tci->tc", norms, norms))
-            norms /= np.maximum(length, 1e-300)[:, :, None]
-        else:
-            smooth_all = np.zeros(len(verts), bool)
+        counts = [len(m[2]) for m in meshes]
+        total = sum(counts)
+        # Recentre before embree's float32 cast so far-from-origin scenes keep precision:
+        # the centre of the bounds of every vertex a kept triangle uses.
+        bounds = [_bounds(v, tri) for _, v, tri, *_ in meshes if len(tri)]
+        origin = (0.5 * (np.min([lo for lo, _ in bounds], axis=0)
+                         + np.max([hi for _, hi in bounds], axis=0)) if bounds else np.zeros(3))
+        verts = np.empty((total, 3, 3))
+        smooth_all = np.zeros(total, bool)
+        any_normals = any(m[3] is not None and m[4].any() for m in meshes)
+        norms = np.zeros((total, 3, 3)) if any_normals else None
+        start = 0
+        for (_, v, tri, n, sm, _), count in zip(meshes, counts):
+            part = slice(start, start + count)
+            _gather_corners(v, tri, origin, verts[part])
+            if n is not None and norms is not None:
+                smooth_all[part] = sm
+                _unit_normals(n, sm, norms[part])
+            start += count
+        if not smooth_all.any():
+            norms = None
+        offsets = np.cumsum([0] + [len(m[1]) for m in meshes])
         return Scene(
             vertices=verts, origin=origin, normals=norms, smooth=smooth_all,
-            material_index=(np.concatenate(mat) if mat else np.zeros(0, np.int32)).astype(np.int32),
-            object_index=np.concatenate(obj) if obj else np.zeros(0, np.int32),
-            object_names=names, materials=materials, camera=camera, world=world,
-            warnings=list(self.warnings), lights=list(self._lights),
+            material_index=(np.concatenate([m[5] for m in meshes]) if meshes
+                            else np.zeros(0)).astype(np.int32),
+            object_index=(np.concatenate([np.full(c, k, np.int32) for k, c in enumerate(counts)])
+                          if meshes else np.zeros(0, np.int32)),
+            object_names=[m[0] for m in meshes], materials=materials, camera=camera,
+            world=world, warnings=list(self.warnings), lights=list(self._lights),
             # Recentred like `verts` (same float64 subtraction, so the same float32 values).
-            shared_vertices=(np.concatenate(shared_v) - origin) if shared_v else np.zeros((0, 3)),
-            shared_triangles=(np.concatenate(shared_t).astype(np.int32) if shared_t
-                              else np.zeros((0, 3), np.int32)))
+            shared_vertices=(np.concatenate([m[1] for m in meshes]) - origin if meshes
+                             else np.zeros((0, 3))),
+            shared_triangles=(np.concatenate([m[2] + o for m, o in zip(meshes, offsets)])
+                              .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)))
+
+
+# -------------------------------------------------------------------- builder passes
+# One compiled loop each where numba is installed (a pass over a million triangles with no
+# temporaries); the numpy versions compute the same values.
+
+def _triangle_checks(v, tri, finite_v):
+    """(finite, nondegenerate) per triangle: all corners finite; the edge cross product
+    above float64 noise, |e1 x e2| > 1e-24 scale^2 (scale: the largest corner coordinate)."""
+    from . import kernel
+    if kernel.AVAILABLE:
+        return _triangle_checks_compiled(v, tri, finite_v)
+    finite = finite_v[tri].all(axis=1) if len(tri) else np.ones(0, bool)
+    corners = np.where(finite_v[:, None], v, 0.0)[tri]
+    cross = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area2_sq = np.einsum("ij,ij->i", cross, cross)
+    scale = np.abs(corners).max(axis=(1, 2), initial=0.0) + np.finfo(np.float64).tiny
+    return finite, (area2_sq > 1e-48 * scale**4) & finite
+
+
+@njit(cache=True, nogil=True)
+def _triangle_checks_compiled(v, tri, finite_v):
+    t = len(tri)
+    finite = np.empty(t, np.bool_)
+    nondegenerate = np.empty(t, np.bool_)
+    tiny = np.finfo(np.float64).tiny
+    for i in range(t):
+        a, b, c = tri[i, 0], tri[i, 1], tri[i, 2]
+        finite[i] = finite_v[a] and finite_v[b] and finite_v[c]
+        if not finite[i]:
+            nondegenerate[i] = False
+            continue
+        e1x, e1y, e1z = v[b, 0] - v[a, 0], v[b, 1] - v[a, 1], v[b, 2] - v[a, 2]
+        e2x, e2y, e2z = v[c, 0] - v[a, 0], v[c, 1] - v[a, 1], v[c, 2] - v[a, 2]
+        cx = e1y * e2z - e1z * e2y
+        cy = e1z * e2x - e1x * e2z
+        cz = e1x * e2y - e1y * e2x
+        scale = 0.0
+        for j in range(3):
+            scale = max(scale, abs(v[a, j]), abs(v[b, j]), abs(v[c, j]))
+        scale += tiny
+        nondegenerate[i] = cx * cx + cy * cy + cz * cz > 1e-48 * scale**4
+    return finite, nondegenerate
+
+
+def _normals_usable(normals):
+    """(t,) whether all three corner normals are finite and non-zero."""
+    from . import kernel
+    if kernel.AVAILABLE:
+        return _normals_usable_compiled(normals)
+    length2 = np.einsum("tci,tci->tc", normals, normals)
+    return (np.isfinite(length2) & (length2 > 0)).all(axis=1)
+
+
+@njit(cache=True, nogil=True)
+def _normals_usable_compiled(normals):
+    ok = np.empty(len(normals), np.bool_)
+    for i in range(len(normals)):
+        ok[i] = True
+        for k in range(3):
+            x, y, z = normals[i, k, 0], normals[i, k, 1], normals[i, k, 2]
+            length2 = x * x + y * y + z * z
+            if not (np.isfinite(length2) and length2 > 0):
+                ok[i] = False
+    return ok
+
+
+def _bounds(v, tri):
+    """(lo, hi) (3,) of the vertices the triangles use."""
+    from . import kernel
+    if kernel.AVAILABLE:
+        return _bounds_compiled(v, tri)
+    used = np.zeros(len(v), bool)
+    used[tri.ravel()] = True
+    return v[used].min(axis=0), v[used].max(axis=0)
+
+
+@njit(cache=True, nogil=True)
+def _bounds_compiled(v, tri):
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    for i in range(len(tri)):
+        for k in range(3):
+            for j in range(3):
+                x = v[tri[i, k], j]
+                lo[j] = min(lo[j], x)
+                hi[j] = max(hi[j], x)
+    return lo, hi
+
+
+def _gather_corners(v, tri, origin, out):
+    """out (t, 3, 3) = v[tri] - origin."""
+    from . import kernel
+    if kernel.AVAILABLE:
+        _gather_corners_compiled(v, tri, origin, out)
+    else:
+        np.subtract(v[tri], origin, out=out)
+
+
+@njit(cache=True, nogil=True)
+def _gather_corners_compiled(v, tri, origin, out):
+    for i in range(len(tri)):
+        for k in range(3):
+            for j in range(3):
+                out[i, k, j] = v[tri[i, k], j] - origin[j]
+
+
+def _unit_normals(normals, smooth, out):
+    """out (t, 3, 3): the corner normals of smooth triangles scaled to unit length, zero
+    elsewhere (unusable normals never reach the integrator)."""
+    from . import kernel
+    if kernel.AVAILABLE:
+        _unit_normals_compiled(normals, smooth, out)
+        return
+    length = np.sqrt(np.einsum("tci,tci->tc", normals, normals))
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        unit = normals / np.maximum(length, 1e-300)[:, :, None]
+    out[:] = np.where(smooth[:, None, None], unit, 0.0)
+
+
+@njit(cache=True, nogil=True)
+def _unit_normals_compiled(normals, smooth, out):
+    for i in range(len(normals)):
+        for k in range(3):
+            if smooth[i]:
+                x, y, z = normals[i, k, 0], normals[i, k, 1], normals[i, k, 2]
+                length = max(math.sqrt(x * x + y * y + z * z), 1e-300)
+                out[i, k, 0], out[i, k, 1], out[i, k, 2] = x / length, y / length, z / length
+            else:
+                out[i, k, 0] = out[i, k, 1] = out[i, k, 2] = 0.0

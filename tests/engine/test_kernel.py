@@ -188,3 +188,34 @@ def test_profile_mode_renders_the_same_image(monkeypatch):
     monkeypatch.setattr(kernel.CompiledTracer, "profile", True)
     profiled = render(scenes.cbspheres(), scenes.settings(width=24, height=18, samples=2))
     assert_same_image(plain, profiled)
+
+
+def _messy_builder():
+    """Two meshes with NaN vertices, degenerate triangles, unusable and unnormalised
+    shading normals, far from the origin."""
+    rng = np.random.default_rng(9)
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("grey", (0.5, 0.5, 0.5)))
+    v = rng.normal(size=(60, 3)) + 1e4
+    v[7] = np.nan
+    tri = rng.integers(0, 60, (80, 3))
+    tri[3] = (5, 5, 6)
+    normals = rng.normal(size=(80, 3, 3)) * 3.0
+    normals[10, 1] = 0.0
+    normals[11, 2] = np.inf
+    with pytest.warns(UserWarning):
+        b.add_mesh("messy", v, tri, m, corner_normals=normals)
+    b.add_mesh("flat", v[:3] * 2.0, [[0, 1, 2]], m)
+    return b
+
+
+def test_compiled_scene_building_matches_numpy(monkeypatch):
+    compiled = _messy_builder().build(Camera(), World())
+    monkeypatch.setattr(kernel, "AVAILABLE", False)
+    plain = _messy_builder().build(Camera(), World())
+    for name in ("vertices", "origin", "normals", "smooth", "material_index", "object_index",
+                 "shared_vertices", "shared_triangles"):
+        np.testing.assert_allclose(getattr(compiled, name), getattr(plain, name), rtol=1e-15,
+                                   atol=0, err_msg=name)
+    assert compiled.warnings == plain.warnings and compiled.num_triangles < 81
+    assert np.isfinite(compiled.normals).all()
