@@ -119,11 +119,14 @@ def measure(triangles: int, samples: int) -> dict:
     settings = core.RenderSettings(**kw)
     # Time per sample from the passes after the first (setup - plan, light tables, the
     # BVH the render builds for itself - is the export + build measured above).
-    stamps = []
     core.render(core_scene, core.RenderSettings(**{**kw, "samples": 2}))  # caches, page-ins
-    result = core.render(core_scene, settings,
-                         on_pass=lambda p: stamps.append(time.perf_counter()))
-    per_sample = (stamps[-1] - stamps[0]) / (len(stamps) - 1)
+    per_sample = []
+    for _ in range(3):  # the least of three: other jobs on the machine only add time
+        stamps = []
+        result = core.render(core_scene, settings,
+                             on_pass=lambda p: stamps.append(time.perf_counter()))
+        per_sample.append((stamps[-1] - stamps[0]) / (len(stamps) - 1))
+    per_sample = min(per_sample)
     n = int(core_scene.num_triangles)
     del accel, exported
     return dict(triangles=n, export_seconds=t1 - t0, build_seconds=t2 - t1,
