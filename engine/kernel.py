@@ -221,6 +221,19 @@ def _cycles(typingctx):
 
 
 @njit(**_JIT)
+def _concentric_disk(ua, ub):
+    """sampling.sample_uniform_disk_concentric for one point (Shirley-Chiu)."""
+    a = 2.0 * ua - 1.0
+    b = 2.0 * ub - 1.0
+    if abs(a) > abs(b):
+        r, theta = a, (np.pi / 4) * (b / a)
+    else:
+        r = b
+        theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
+    return r * math.cos(theta), r * math.sin(theta)
+
+
+@njit(**_JIT)
 def _build_frame(nx, ny, nz):
     sign = 1.0 if nz >= 0.0 else -1.0
     a = -1.0 / (sign + nz)
@@ -413,14 +426,7 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
         if k == DIFFUSE:
             ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _BSDF))
             # Concentric disk, then Malley's method about the shading normal.
-            a = 2.0 * ua - 1.0
-            b = 2.0 * ub - 1.0
-            if abs(a) > abs(b):
-                r, theta = a, (np.pi / 4) * (b / a)
-            else:
-                r = b
-                theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
-            lx, ly = r * math.cos(theta), r * math.sin(theta)
+            lx, ly = _concentric_disk(ua, ub)
             lz = math.sqrt(max(0.0, 1.0 - (lx * lx + ly * ly)))
             s, tt = _build_frame(sx, sy, sz)
             wx = lx * s[0] + ly * tt[0] + lz * sx
@@ -579,14 +585,7 @@ def generate_camera_rays(pixels, sample, seed, width, filter_cdf, filter_x, filt
                 c, sn = math.cos(phi), math.sin(phi)
                 lx, ly = c * tx - sn * ty, sn * tx + c * ty
             else:
-                a = 2.0 * ua - 1.0
-                b = 2.0 * ub - 1.0
-                if abs(a) > abs(b):
-                    r, theta = a, (np.pi / 4) * (b / a)
-                else:
-                    r = b
-                    theta = (np.pi / 2) - (np.pi / 4) * (a / (b if b != 0 else 1.0))
-                lx, ly = r * math.cos(theta), r * math.sin(theta)
+                lx, ly = _concentric_disk(ua, ub)
             lx, ly = lx * aperture / ratio, ly * aperture
         if ortho:
             px, py, pz = x, y, 0.0
