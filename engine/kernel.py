@@ -11,13 +11,14 @@ and no temporaries, with the GIL released so both cores work:
 `surface_interaction` handles escaped rays, emission (MIS-weighted), the bounce limit,
 Russian roulette and absorbers, and compacts the survivors; `sample_light` does
 next-event estimation on emissive triangles; `sample_bsdf` samples diffuse, mirror,
-metal and glass and writes the next rays straight into embree's float32 buffers.
+metal, glass and the layered GGX lobes (Principled, rough Glossy) and writes the next rays
+straight into embree's float32 buffers.
 Random numbers come from the same Owen-scrambled Sobol sequences as
 `sampling.SampleStream` (bit-identical: see tests/engine/test_kernel.py), so the
 compiled and numpy paths estimate the same integral with the same sample points.
 
 The kernels cover what `SUPPORTED` lists; the plan falls back to the numpy integrator
-for anything else (rough lobes, light objects, environment maps). numba is optional:
+for anything else (light objects, environment maps). numba is optional:
 without it `AVAILABLE` is False and every render takes the numpy path.
 """
 
@@ -31,12 +32,12 @@ import numpy as np
 from . import sampling
 from .jit import NUMBA, cgutils, intrinsic, ir, njit, types
 from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
-from .scene import DIFFUSE, GLASS, METAL, MIRROR, NONE
+from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED
 
 AVAILABLE = NUMBA  # the run-time switch (see jit.py)
 
 # Material kinds the kernels implement (everything else uses the numpy integrator).
-SUPPORTED = (NONE, DIFFUSE, MIRROR, METAL, GLASS)
+SUPPORTED = (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY)
 
 # Same constants as the numpy integrator (see integrator.py).
 RAY_EPSILON = 2.0**-18
@@ -264,6 +265,102 @@ def _fresnel_dielectric(cos_i, eta, exact):
     return min(max(f, 0.0), 1.0), cos_t
 
 
+
+# -------------------------------------------------------------------- rough (GGX) lobes
+# bsdf.py's layered lobe (Principled: GGX dielectric specular over a diffuse base; rough
+# Glossy: the specular alone) for one vertex, in the same arithmetic order.
+@njit(**_JIT)
+def _interp_table(x, xp, fp):
+    """np.interp for one x over a short increasing table xp."""
+    n = len(xp)
+    if x < xp[0]:
+        return fp[0]
+    if x >= xp[n - 1]:
+        return fp[n - 1]
+    lo, hi = 0, n - 1  # xp[lo] <= x < xp[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    if xp[lo] == x:
+        return fp[lo]
+    slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
+    return slope * (x - xp[lo]) + fp[lo]
+
+
+@njit(**_JIT)
+def _ggx_lambda(cos_n, a2):
+    c2 = max(cos_n * cos_n, 1e-300)
+    return 0.5 * (math.sqrt(1.0 + a2 * max(1.0 / c2 - 1.0, 0.0)) - 1.0)
+
+
+@njit(**_JIT)
+def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                  tint0, tint1, tint2, alpha, eta, fresnel_on, comp, p_spec):
+    """bsdf.eval_layered: f * cos_i per channel and the lobe-mixture pdf, for shading
+    normal s, geometric normal n (both on wo's side) and the diffuse weight dw."""
+    cos_o = sx * wox + sy * woy + sz * woz
+    cos_i = sx * wix + sy * wiy + sz * wiz
+    hx, hy, hz = wox + wix, woy + wiy, woz + wiz
+    hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
+    hx, hy, hz = hx / hl, hy / hl, hz / hl
+    a2 = alpha * alpha
+    spec = 0.0
+    pdf_s = 0.0
+    if cos_o > 0 and cos_i > 0:
+        ch = sx * hx + sy * hy + sz * hz
+        c2 = min(ch * ch, 1.0)
+        dd = 1.0 - c2 + a2 * c2
+        d = a2 / (np.pi * (dd * dd))
+        lo = _ggx_lambda(cos_o, a2)
+        li = _ggx_lambda(cos_i, a2)
+        f = 1.0
+        if fresnel_on:
+            f = _fresnel_dielectric(hx * wox + hy * woy + hz * woz, eta, True)[0]
+        common = d / (4.0 * cos_o)
+        spec = f * common / (1.0 + lo + li)
+        pdf_s = common / (1.0 + lo)
+    cos_d = 0.0
+    if wix * nx + wiy * ny + wiz * nz > 0.0:
+        cos_d = max(cos_i, 0.0)
+    else:
+        spec = 0.0
+        pdf_s = 0.0
+    sc = spec * comp
+    c = cos_d / np.pi
+    return (dw0 * c + tint0 * sc, dw1 * c + tint1 * sc, dw2 * c + tint2 * sc,
+            p_spec * pdf_s + (1.0 - p_spec) * cos_d / np.pi)
+
+
+@njit(**_JIT)
+def _ggx_half_vector(v0, v1, v2, alpha, ua, ub):
+    """bsdf.sample_ggx_vndf for one local view direction (Heitz 2018), z up."""
+    a, b, c = alpha * v0, alpha * v1, v2
+    norm = math.sqrt(a * a + b * b + c * c)
+    a, b, c = a / norm, b / norm, c / norm
+    lensq = a * a + b * b
+    if lensq > 0:
+        inv = 1.0 / math.sqrt(lensq)
+        t1x, t1y, t1z = -b * inv, a * inv, 0.0
+    else:
+        t1x, t1y, t1z = 1.0, 0.0, 0.0
+    t2x, t2y, t2z = b * t1z - c * t1y, c * t1x - a * t1z, a * t1y - b * t1x
+    r = math.sqrt(ua)
+    phi = 2.0 * np.pi * ub
+    p1 = r * math.cos(phi)
+    p2 = r * math.sin(phi)
+    sv = 0.5 * (1.0 + c)
+    p2 = (1.0 - sv) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + sv * p2
+    p3 = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
+    hx = alpha * (p1 * t1x + p2 * t2x + p3 * a)
+    hy = alpha * (p1 * t1y + p2 * t2y + p3 * b)
+    hz = max(p1 * t1z + p2 * t2z + p3 * c, 1e-12)
+    norm = math.sqrt(hx * hx + hy * hy + hz * hz)
+    return hx / norm, hy / norm, hz / norm
+
+
 @njit(**_JIT)
 def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, world, camera,
           prim, tfar, bu, bv, m, live, pseed, d64, throughput, prev_pdf, radiance,
@@ -275,12 +372,12 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     surface interaction - escaped rays take the world; hit point, normals (flipped to the
         incoming side), depth and normal passes at depth 0, emission (MIS-weighted), the
         bounce limit, Russian roulette, absorbers;
-    sample light - next-event estimation at diffuse vertices: an emissive triangle chosen
-        by LightSampler's rule, a uniform point on it, MIS against BSDF sampling; the
-        shadow ray goes to the s* buffers;
-    sample BSDF - diffuse, mirror, metal or glass; the paths that go on are compacted to
-        the front of live, d64, throughput, prev_pdf, their next rays (offset origin) in
-        origin32, dir32, tmax32.
+    sample light - next-event estimation at diffuse and rough vertices: an emissive
+        triangle chosen by LightSampler's rule, a uniform point on it, MIS against BSDF
+        sampling; the shadow ray goes to the s* buffers;
+    sample BSDF - diffuse, mirror, metal, glass or the layered GGX lobe; the paths that go
+        on are compacted to the front of live, d64, throughput, prev_pdf, their next rays
+        (offset origin) in origin32, dir32, tmax32.
 
     One loop with the arrays unpacked once: per-ray helper functions taking the scene's
     arrays cost reference counting per call (measured 2-10x slower). profile (3,) uint64,
@@ -290,7 +387,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     """
     max_bounces, world_light, emitters, light_sampling, shading_normals = flags
     vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
-    kind, colour, ior, reflection_tint, transmission_tint, emission = materials
+    (kind, colour, ior, reflection_tint, transmission_tint, emission, layer_base, layer_tint,
+     layer_alpha, layer_fresnel, mu_grid, comp_table, albedo_table) = materials
     (pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass, entry_of_triangle,
      area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
     cam_pos, forward = camera
@@ -367,10 +465,28 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                 continue
             t0, t1, t2 = t0 / q, t1 / q, t2 / q
         scale = max(tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+        wox, woy, woz = -dx, -dy, -dz
+        rough = k == PRINCIPLED or k == GLOSSY
+        comp = albedo = alpha = eta_l = p_spec = 0.0
+        dw0 = dw1 = dw2 = tint0 = tint1 = tint2 = 0.0
+        fresnel_on = False
+        if rough:
+            # The layered lobe's parameters at this view direction (Integrator._layer).
+            mu = min(max(sx * wox + sy * woy + sz * woz, 0.0), 1.0)
+            comp = _interp_table(mu, mu_grid, comp_table[mat])
+            albedo = _interp_table(mu, mu_grid, albedo_table[mat])
+            dw0 = layer_base[mat, 0] * (1.0 - albedo)
+            dw1 = layer_base[mat, 1] * (1.0 - albedo)
+            dw2 = layer_base[mat, 2] * (1.0 - albedo)
+            tint0, tint1, tint2 = layer_tint[mat, 0], layer_tint[mat, 1], layer_tint[mat, 2]
+            sp = (tint0 + tint1 + tint2) / 3.0 * albedo
+            sd = (dw0 + dw1 + dw2) / 3.0
+            p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
+            alpha, eta_l, fresnel_on = layer_alpha[mat], ior[mat], layer_fresnel[mat]
         if timing:
             c_light = _cycles()
         # ---- sample light
-        if light_sampling and k == DIFFUSE:
+        if light_sampling and (k == DIFFUSE or rough):
             u_sel = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_SELECT))
             ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _LIGHT_POINT))
             if grid == 0:  # inline fast path: the general call costs ~35 ns a sample
@@ -393,15 +509,26 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             wx, wy, wz = tx / dist, ty / dist, tz / dist
             cos_l = abs(lnormal[e, 0] * wx + lnormal[e, 1] * wy + lnormal[e, 2] * wz)
             cos = wx * sx + wy * sy + wz * sz
-            # Lambert f cos over the solid-angle pdf, MIS-weighted.
-            if (dist > 0 and cos_l > 0 and p_sel > 0 and cos > 0.0
-                    and wx * nx + wy * ny + wz * nz > 0.0):
+            c0 = c1 = c2 = 0.0
+            if dist > 0 and cos_l > 0 and p_sel > 0:
                 pdf_sa = dist * dist / max(larea[e] * cos_l, 1e-300)
-                w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
-                weight = cos / np.pi / pdf_sa / p_sel * w
-                c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
-                c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
-                c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
+                if rough:
+                    # f cos of the layered lobe times radiance over the light's pdf.
+                    g0, g1, g2, pdf_b = _eval_layered(
+                        wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                        tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
+                    w = _power_heuristic(pdf_sa * p_sel, pdf_b)
+                    inv_pdf = 1.0 / pdf_sa
+                    c0 = t0 * g0 * (lradiance[e, 0] * inv_pdf / p_sel) * w
+                    c1 = t1 * g1 * (lradiance[e, 1] * inv_pdf / p_sel) * w
+                    c2 = t2 * g2 * (lradiance[e, 2] * inv_pdf / p_sel) * w
+                elif cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0:
+                    # Lambert f cos over the solid-angle pdf, MIS-weighted.
+                    w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
+                    weight = cos / np.pi / pdf_sa / p_sel * w
+                    c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
+                    c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
+                    c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
                 if max(c0, max(c1, c2)) > 0:
                     # Shadow ray from the offset point, aimed at the sampled point itself.
                     eps = RAY_EPSILON * max(scale, 1e-30)
@@ -421,9 +548,35 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
         # ---- sample BSDF
-        wox, woy, woz = -dx, -dy, -dz
         pdf = np.inf
-        if k == DIFFUSE:
+        if rough:
+            # Pick the specular or the diffuse layer, then evaluate the mixture (one-sample
+            # MIS over the lobes), as bsdf.sample_layered.
+            u_lobe = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LOBE))
+            ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _BSDF))
+            s, tt = _build_frame(sx, sy, sz)
+            if u_lobe < p_spec:
+                v0_ = wox * s[0] + woy * s[1] + woz * s[2]
+                v1_ = wox * tt[0] + woy * tt[1] + woz * tt[2]
+                v2_ = wox * sx + woy * sy + woz * sz
+                hx, hy, hz = _ggx_half_vector(v0_, v1_, v2_, alpha, ua, ub)
+                mx = hx * s[0] + hy * tt[0] + hz * sx
+                my = hx * s[1] + hy * tt[1] + hz * sy
+                mz = hx * s[2] + hy * tt[2] + hz * sz
+                c = 2.0 * (mx * wox + my * woy + mz * woz)
+                wx, wy, wz = c * mx - wox, c * my - woy, c * mz - woz
+            else:
+                lx, ly = _concentric_disk(ua, ub)
+                lz = math.sqrt(max(0.0, 1.0 - (lx * lx + ly * ly)))
+                wx = lx * s[0] + ly * tt[0] + lz * sx
+                wy = lx * s[1] + ly * tt[1] + lz * sy
+                wz = lx * s[2] + ly * tt[2] + lz * sz
+            g0, g1, g2, pdf = _eval_layered(
+                wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
+            ok = pdf > 0
+            f0, f1, f2 = (g0 / pdf, g1 / pdf, g2 / pdf) if ok else (0.0, 0.0, 0.0)
+        elif k == DIFFUSE:
             ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _BSDF))
             # Concentric disk, then Malley's method about the shading normal.
             lx, ly = _concentric_disk(ua, ub)
@@ -636,6 +789,26 @@ def unsupported(scene, plan) -> str:
     return ""
 
 
+def pack_layers(it) -> tuple:
+    """The rough materials' layered-lobe parameters per material (Integrator._layer):
+    base (k, 3), specular tint (k, 3), alpha (k,), dielectric Fresnel (k,) bool, the mu
+    grid (m,) and the compensation and albedo tables (k, m); zeros for other kinds."""
+    from .bsdf import ALBEDO_TABLE_SIZE
+    k = len(it.kind)
+    base, tint = np.zeros((k, 3)), np.zeros((k, 3))
+    alpha, fresnel = np.zeros(k), np.zeros(k, np.bool_)
+    mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
+    comp, albedo = np.zeros((k, len(mu))), np.zeros((k, len(mu)))
+    for j, tables in it.microfacet.items():
+        principled = it.kind[j] == PRINCIPLED
+        base[j] = it.colour[j] if principled else 0.0
+        tint[j] = 1.0 if principled else it.colour[j]
+        alpha[j], fresnel[j] = tables.alpha, principled
+        mu = tables.mu
+        comp[j], albedo[j] = tables.compensation_table, tables.albedo_table
+    return base, tint, alpha, fresnel, mu, comp, albedo
+
+
 def pack_lights(sampler, num_triangles: int) -> tuple:
     """The emitters as the kernels' tuple (layout above); empty arrays without emitters."""
     if sampler is None or sampler.num_triangles == 0:
@@ -671,7 +844,7 @@ class CompiledTracer:
                          scene.material_index.astype(np.int64), normals,
                          scene.smooth.astype(np.bool_))
         self.materials = (it.kind.astype(np.int64), it.colour, it.ior, it.reflection_tint,
-                          it.transmission_tint, it.emission)
+                          it.transmission_tint, it.emission, *pack_layers(it))
         self.lights = pack_lights(it.emitters, scene.num_triangles)
         self.world = it.world
         self.camera = (it.camera.position, it.camera.forward)

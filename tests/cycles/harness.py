@@ -32,13 +32,10 @@ def specula(name):
 DIAGNOSTICS = os.path.join(references.HERE, "..", "..", "out", "cycles")
 
 
-def compare_render(name, result, kind="agreement", seconds=0.0, crop=None) -> compare.Comparison:
-    """Compare a Specula render with the variant's Cycles runs, over the whole image or
-    `crop` = (row slice, column slice) of it."""
+def compare_render(name, result, kind="agreement", seconds=0.0) -> compare.Comparison:
+    """Compare a Specula render with the variant's Cycles runs."""
     runs = references.get(VARIANTS[name])
-    crop = crop or (slice(None), slice(None))
-    c = compare.compare(result.combined[crop][..., :3], result.variance[crop],
-                        runs[(slice(None),) + tuple(crop)])
+    c = compare.compare(result.combined[..., :3], result.variance, runs)
     RESULTS.append((kind, name, c, seconds))
     if not c.agree and kind == "agreement" or os.environ.get("SPECULA_CYCLES_DIAGNOSTICS"):
         save_diagnostics(f"{re.sub('[^a-z0-9_]+', '_', kind.lower())}_{name}", result, runs, c)
