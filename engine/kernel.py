@@ -361,11 +361,225 @@ def _ggx_half_vector(v0, v1, v2, alpha, ua, ub):
     return hx / norm, hy / norm, hz / norm
 
 
+
+# -------------------------------------------------------------------- light objects
+# Blender's light objects travel as one tuple (see `pack_objects`), LightObjects' arrays:
+#   0 type (j,), 1 power, 2 centre, 3 axis_u, 4 axis_v, 5 direction (j, 3),
+#   6 local_from_world (j, 3, 3), 7 radius, 8 soft, 9 cos_half_spot, 10 spot_smooth,
+#   11 cos_half_angle, 12 sun_radiance, 13 len_u, 14 len_v, 15 elliptic, 16 area,
+#   17 spread_on, 18 spread_tan, 19 spread_norm (spread_attenuation's constants),
+#   20 radiance_factor, 21 hit_camera, 22 hit_bsdf, 23 sun_camera, 24 sun_bsdf (j,) bool
+# (which lights camera rays and BSDF rays can hit, and which sun discs they can see).
+# The helpers are inlined into `shade`, so the tuple costs nothing per call.
+_POINT, _SPOT, _SUN, _AREA = 0, 1, 2, 3  # lights.POINT, SPOT, SUN, AREA
+
+
 @njit(**_JIT)
-def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, world, camera,
-          prim, tfar, bu, bv, m, live, pseed, d64, throughput, prev_pdf, radiance,
-          depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin, sdir, stmax,
-          scontrib, profile):
+def _spread(cos_theta, on, tan_half, norm):
+    """lights.spread_attenuation for one cosine, with the light's constants."""
+    if not on:
+        return 1.0
+    c = min(max(cos_theta, 1e-12), 1.0)
+    tan_a = math.sqrt(max(1.0 - c * c, 0.0)) / c
+    return max((tan_half - tan_a) * norm, 0.0)
+
+
+@njit(inline="always", **_JIT)
+def _spot(j, vx, vy, vz, objects):
+    """LightObjects.spot_attenuation for light j at direction v from the light."""
+    ltype, local, cos_half_spot, spot_smooth = objects[0], objects[6], objects[9], objects[10]
+    if ltype[j] != _SPOT:
+        return 1.0
+    a = local[j, 0, 0] * vx + local[j, 0, 1] * vy + local[j, 0, 2] * vz
+    b = local[j, 1, 0] * vx + local[j, 1, 1] * vy + local[j, 1, 2] * vz
+    c = local[j, 2, 0] * vx + local[j, 2, 1] * vy + local[j, 2, 2] * vz
+    n = math.sqrt(a * a + b * b + c * c)
+    if n > 0:
+        c = c / n
+    f = (-c - cos_half_spot[j]) * spot_smooth[j]
+    if math.isnan(f):
+        f = 0.0
+    elif math.isinf(f):
+        f = 1.0 if f > 0 else 0.0
+    f = min(max(f, 0.0), 1.0)
+    return f * f * (3.0 - 2.0 * f)
+
+
+@njit(inline="always", **_JIT)
+def _sample_object(j, px, py, pz, ua, ub, objects):
+    """LightObjects.sample for light j from point p: (wi, distance (inf for a sun),
+    radiance / solid-angle pdf per channel, pdf (inf for delta lights))."""
+    ltype, power, centre, axis_u, axis_v, direction = objects[:6]
+    radius, soft, cos_half_angle, sun_radiance = objects[7], objects[8], objects[11], objects[12]
+    len_u, len_v, elliptic, area = objects[13], objects[14], objects[15], objects[16]
+    spread_on, spread_tan, spread_norm, factor = objects[17], objects[18], objects[19], objects[20]
+    typ = ltype[j]
+    p0, p1, p2 = power[j, 0], power[j, 1], power[j, 2]
+    v0 = v1 = v2 = 0.0
+    if typ == _POINT or typ == _SPOT:
+        tx, ty, tz = centre[j, 0] - px, centre[j, 1] - py, centre[j, 2] - pz
+        d = math.sqrt(tx * tx + ty * ty + tz * tz)
+        dn = d if d > 0 else 1.0
+        cx, cy, cz = tx / dn, ty / dn, tz / dn
+        r = radius[j]
+        wx, wy, wz, dist, pdf = cx, cy, cz, d, np.inf
+        valid = True
+        if r <= 0:  # intensity P / (4 pi), a delta light
+            g = 4.0 * np.pi * max(d, 1e-300) ** 2
+            v0, v1, v2 = p0 / g, p1 / g, p2 / g
+        elif not soft[j] and d > r:  # a sphere: uniform in its visible cone
+            cos_max = math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
+            s, t = _build_frame(cx, cy, cz)
+            cos = 1.0 - ua * (1.0 - cos_max)
+            sin = math.sqrt(max(0.0, 1.0 - cos * cos))
+            phi = 2.0 * np.pi * ub
+            a, b = sin * math.cos(phi), sin * math.sin(phi)
+            wx = a * s[0] + b * t[0] + cos * cx
+            wy = a * s[1] + b * t[1] + cos * cy
+            wz = a * s[2] + b * t[2] + cos * cz
+            dist = d * cos - math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
+            pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
+            f = factor[j]
+            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+        elif soft[j] and d > 0:  # a disk of radius r facing the point
+            nx, ny, nz = -cx, -cy, -cz
+            s, t = _build_frame(nx, ny, nz)
+            qa, qb = _concentric_disk(ua, ub)
+            qa, qb = qa * r, qb * r
+            yx = centre[j, 0] + qa * s[0] + qb * t[0]
+            yy = centre[j, 1] + qa * s[1] + qb * t[1]
+            yz = centre[j, 2] + qa * s[2] + qb * t[2]
+            tx, ty, tz = yx - px, yy - py, yz - pz
+            dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+            wx, wy, wz = tx / dist, ty / dist, tz / dist
+            cos_l = -(wx * nx + wy * ny + wz * nz)
+            pdf = dist * dist / (np.pi * r ** 2 * max(cos_l, 1e-300))
+            f = factor[j]
+            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+        else:
+            valid = False
+        if valid:
+            att = _spot(j, -cx, -cy, -cz, objects)
+            v0, v1, v2 = v0 * att, v1 * att, v2 * att
+        else:
+            v0 = v1 = v2 = 0.0
+            pdf = 0.0
+        return wx, wy, wz, dist, v0, v1, v2, pdf
+    if typ == _SUN:
+        ax, ay, az = -direction[j, 0], -direction[j, 1], -direction[j, 2]
+        cos_max = cos_half_angle[j]
+        if cos_max < 1.0:  # a disc: uniform in its cone
+            s, t = _build_frame(ax, ay, az)
+            cos = 1.0 - ua * (1.0 - cos_max)
+            sin = math.sqrt(max(0.0, 1.0 - cos * cos))
+            phi = 2.0 * np.pi * ub
+            a, b = sin * math.cos(phi), sin * math.sin(phi)
+            pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
+            k = sun_radiance[j] / pdf
+            return (a * s[0] + b * t[0] + cos * ax, a * s[1] + b * t[1] + cos * ay,
+                    a * s[2] + b * t[2] + cos * az, np.inf, p0 * k, p1 * k, p2 * k, pdf)
+        return ax, ay, az, np.inf, p0, p1, p2, np.inf
+    # Area light: a uniform point on the rectangle or ellipse.
+    if elliptic[j]:
+        la, lb = _concentric_disk(ua, ub)
+        la, lb = la * 0.5, lb * 0.5
+    else:
+        la, lb = ua - 0.5, ub - 0.5
+    ka, kb = la * len_u[j], lb * len_v[j]
+    yx = centre[j, 0] + ka * axis_u[j, 0] + kb * axis_v[j, 0]
+    yy = centre[j, 1] + ka * axis_u[j, 1] + kb * axis_v[j, 1]
+    yz = centre[j, 2] + ka * axis_u[j, 2] + kb * axis_v[j, 2]
+    tx, ty, tz = yx - px, yy - py, yz - pz
+    d = math.sqrt(tx * tx + ty * ty + tz * tz)
+    dn = d if d > 0 else 1.0
+    wx, wy, wz = tx / dn, ty / dn, tz / dn
+    cos_l = -(wx * direction[j, 0] + wy * direction[j, 1] + wz * direction[j, 2])
+    pdf = 0.0
+    if cos_l > 0 and d > 0 and area[j] > 0:
+        pdf = d * d / max(area[j] * cos_l, 1e-300)
+        f = factor[j] * _spread(cos_l, spread_on[j], spread_tan[j], spread_norm[j])
+        v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+    return wx, wy, wz, d, v0, v1, v2, pdf
+
+
+@njit(inline="always", **_JIT)
+def _object_pdf(j, ox, oy, oz, dx, dy, dz, t, objects):
+    """LightObjects.pdf: the solid-angle density of sampling direction d from o toward
+    intersectable light j, hit at distance t."""
+    ltype, centre, direction, radius, soft, area = (objects[0], objects[2], objects[5],
+                                                    objects[7], objects[8], objects[16])
+    typ = ltype[j]
+    if typ == _AREA:
+        cos_a = -(dx * direction[j, 0] + dy * direction[j, 1] + dz * direction[j, 2])
+        return t * t / max(area[j] * cos_a, 1e-300)
+    tx, ty, tz = centre[j, 0] - ox, centre[j, 1] - oy, centre[j, 2] - oz
+    d = math.sqrt(tx * tx + ty * ty + tz * tz)
+    r = radius[j]
+    if (typ == _POINT or typ == _SPOT) and r > 0:
+        dn = d if d > 0 else 1.0
+        if soft[j]:
+            cos_d = tx / dn * dx + ty / dn * dy + tz / dn * dz
+            return t * t / (np.pi * max(r * r * cos_d, 1e-300))
+        if d > r:
+            cos_max = math.sqrt(max(0.0, 1.0 - (r / dn) ** 2))
+            return 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
+    return 0.0
+
+
+@njit(inline="always", **_JIT)
+def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, objects):
+    """LightObjects.intersect for one ray: (distance (inf: missed), radiance)."""
+    ltype, power, c, axis_u, axis_v, direction = objects[:6]
+    radius, soft, len_u, len_v, elliptic = (objects[7], objects[8], objects[13], objects[14],
+                                            objects[15])
+    spread_on, spread_tan, spread_norm, factor = objects[17], objects[18], objects[19], objects[20]
+    th = np.inf
+    f = factor[j]
+    if ltype[j] == _AREA:
+        nx, ny, nz = direction[j, 0], direction[j, 1], direction[j, 2]
+        denom = dx * nx + dy * ny + dz * nz
+        front = denom < 0  # travelling against the emission direction
+        t = ((c[j, 0] - ox) * nx + (c[j, 1] - oy) * ny + (c[j, 2] - oz) * nz) / (
+            denom if front else -1.0)
+        hx, hy, hz = ox + t * dx - c[j, 0], oy + t * dy - c[j, 1], oz + t * dz - c[j, 2]
+        lu = (hx * axis_u[j, 0] + hy * axis_u[j, 1] + hz * axis_u[j, 2]) / len_u[j]
+        lv = (hx * axis_v[j, 0] + hy * axis_v[j, 1] + hz * axis_v[j, 2]) / len_v[j]
+        if elliptic[j]:
+            inside = lu * lu + lv * lv <= 0.25
+        else:
+            inside = abs(lu) <= 0.5 and abs(lv) <= 0.5
+        if front and inside and t > 0 and t < tmax:
+            th = t
+        f = f * _spread(-denom, spread_on[j], spread_tan[j], spread_norm[j])
+    else:
+        r = radius[j]
+        ocx, ocy, ocz = ox - c[j, 0], oy - c[j, 1], oz - c[j, 2]
+        if soft[j]:  # a disk facing the ray's origin
+            dc = math.sqrt(ocx * ocx + ocy * ocy + ocz * ocz)
+            dn = dc if dc > 0 else 1.0
+            nx, ny, nz = ocx / dn, ocy / dn, ocz / dn
+            denom = dx * nx + dy * ny + dz * nz
+            t = (-ocx * nx + -ocy * ny + -ocz * nz) / (denom if denom < 0 else -1.0)
+            hx, hy, hz = ox + t * dx - c[j, 0], oy + t * dy - c[j, 1], oz + t * dz - c[j, 2]
+            ok = denom < 0 and hx * hx + hy * hy + hz * hz <= r * r and t > 0
+        else:
+            b = ocx * dx + ocy * dy + ocz * dz
+            disc = b * b - ((ocx * ocx + ocy * ocy + ocz * ocz) - r * r)
+            t = -b - math.sqrt(max(disc, 0.0))
+            ok = disc >= 0 and t > 0
+        if ok and t < tmax:
+            th = t
+        if ltype[j] == _SPOT:
+            att = _spot(j, -dx, -dy, -dz, objects)
+            return th, power[j, 0] * f * att, power[j, 1] * f * att, power[j, 2] * f * att
+    return th, power[j, 0] * f, power[j, 1] * f, power[j, 2] * f
+
+
+@njit(**_JIT)
+def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, objects, world,
+          camera, prim, tfar, bu, bv, m, live, pseed, o64, d64, throughput, prev_pdf,
+          radiance, depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin, sdir,
+          stmax, scontrib, profile):
     """One bounce for the m live rays (pixel-batch rows live[:m]) after embree's closest
     hits (prim, tfar, bu, bv), in three stages per ray:
 
@@ -385,13 +599,20 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     [1] sample light, [2] sample BSDF; the rest of the loop is surface interaction.
     Returns (paths that go on, shadow rays written).
     """
-    max_bounces, world_light, emitters, light_sampling, shading_normals = flags
+    max_bounces, world_light, emitters, light_sampling, shading_normals, light_hits, sun_discs = \
+        flags
     vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
     (kind, colour, ior, reflection_tint, transmission_tint, emission, layer_base, layer_tint,
      layer_alpha, layer_fresnel, mu_grid, comp_table, albedo_table) = materials
     (pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass, entry_of_triangle,
      area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
     cam_pos, forward = camera
+    num_tri = len(v0)  # light entries 0..num_tri-1 are triangles, then the light objects
+    n_obj = len(objects[0])
+    hit_seen = objects[21] if depth == 0 else objects[22]  # camera rays / BSDF rays
+    sun_seen = objects[23] if depth == 0 else objects[24]
+    obj_dir, cos_half_angle, obj_power, sun_radiance = (objects[5], objects[11], objects[1],
+                                                        objects[12])
     timing = len(profile) == 3
     if timing:
         c_loop = _cycles()
@@ -403,6 +624,43 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
         t0, t1, t2 = throughput[i, 0], throughput[i, 1], throughput[i, 2]
         dx, dy, dz = d64[i, 0], d64[i, 1], d64[i, 2]
         f = prim[i]
+        if light_hits or sun_discs:
+            # Light objects crossed before the surface (lights are transparent), then sun
+            # discs for escaped rays, MIS-weighted after soft bounces
+            # (Integrator.handle_light_hits).
+            ox, oy, oz = o64[i, 0], o64[i, 1], o64[i, 2]
+            mis = light_sampling and not math.isinf(prev_pdf[i])
+            t_surface = np.float64(tfar[i]) if f >= 0 else np.float64(tmax32[i])
+            for j in range(n_obj):
+                if not hit_seen[j]:
+                    continue
+                th, l0, l1, l2 = _intersect_object(j, ox, oy, oz, dx, dy, dz, t_surface,
+                                                   objects)
+                if math.isinf(th):
+                    continue
+                w = 1.0
+                if mis:
+                    pdf_l = _entry_pmf(ox, oy, oz, num_tri + j, pmf, grid, lo, cell, local_pmf,
+                                       has_mass) * _object_pdf(j, ox, oy, oz, dx, dy, dz, th,
+                                                               objects)
+                    w = _power_heuristic(prev_pdf[i], pdf_l)
+                radiance[row, 0] += t0 * l0 * w
+                radiance[row, 1] += t1 * l1 * w
+                radiance[row, 2] += t2 * l2 * w
+            if sun_discs and f < 0:
+                for j in range(n_obj):
+                    if not sun_seen[j] or not (dx * -obj_dir[j, 0] + dy * -obj_dir[j, 1]
+                                               + dz * -obj_dir[j, 2] >= cos_half_angle[j]):
+                        continue
+                    w = 1.0
+                    if mis:
+                        pdf_l = _entry_pmf(ox, oy, oz, num_tri + j, pmf, grid, lo, cell,
+                                           local_pmf, has_mass) / (
+                            2.0 * np.pi * (1.0 - cos_half_angle[j]))
+                        w = _power_heuristic(prev_pdf[i], pdf_l)
+                    radiance[row, 0] += t0 * (obj_power[j, 0] * sun_radiance[j]) * w
+                    radiance[row, 1] += t1 * (obj_power[j, 1] * sun_radiance[j]) * w
+                    radiance[row, 2] += t2 * (obj_power[j, 2] * sun_radiance[j]) * w
         # ---- surface interaction
         if f < 0:
             if world_light:
@@ -495,55 +753,99 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             else:
                 e, p_sel = _choose(px, py, pz, u_sel, pmf, cdf, grid, lo, cell, local_pmf,
                                    local_cdf_flat, has_mass)
-            # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
-            if ua < ub:
-                b0, b1 = ua / 2, ub - ua / 2
+            if e < num_tri:
+                # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
+                if ua < ub:
+                    b0, b1 = ua / 2, ub - ua / 2
+                else:
+                    b0, b1 = ua - ub / 2, ub / 2
+                b2 = 1.0 - b0 - b1
+                yx = v0[e, 0] + b1 * e1[e, 0] + b2 * e2[e, 0]
+                yy = v0[e, 1] + b1 * e1[e, 1] + b2 * e2[e, 1]
+                yz = v0[e, 2] + b1 * e1[e, 2] + b2 * e2[e, 2]
+                tx, ty, tz = yx - px, yy - py, yz - pz
+                dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+                wx, wy, wz = tx / dist, ty / dist, tz / dist
+                cos_l = abs(lnormal[e, 0] * wx + lnormal[e, 1] * wy + lnormal[e, 2] * wz)
+                cos = wx * sx + wy * sy + wz * sz
+                c0 = c1 = c2 = 0.0
+                if dist > 0 and cos_l > 0 and p_sel > 0:
+                    pdf_sa = dist * dist / max(larea[e] * cos_l, 1e-300)
+                    if rough:
+                        # f cos of the layered lobe times radiance over the light's pdf.
+                        g0, g1, g2, pdf_b = _eval_layered(
+                            wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                            tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
+                        w = _power_heuristic(pdf_sa * p_sel, pdf_b)
+                        inv_pdf = 1.0 / pdf_sa
+                        c0 = t0 * g0 * (lradiance[e, 0] * inv_pdf / p_sel) * w
+                        c1 = t1 * g1 * (lradiance[e, 1] * inv_pdf / p_sel) * w
+                        c2 = t2 * g2 * (lradiance[e, 2] * inv_pdf / p_sel) * w
+                    elif cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0:
+                        # Lambert f cos over the solid-angle pdf, MIS-weighted.
+                        w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
+                        weight = cos / np.pi / pdf_sa / p_sel * w
+                        c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
+                        c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
+                        c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
+                    if max(c0, max(c1, c2)) > 0:
+                        # Shadow ray from the offset point, aimed at the sampled point itself.
+                        eps = RAY_EPSILON * max(scale, 1e-30)
+                        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+                        gx, gy, gz = yx - ox, yy - oy, yz - oz
+                        seg = math.sqrt(gx * gx + gy * gy + gz * gz)
+                        inv = 1.0 / max(seg, 1e-300)
+                        srow[shadow] = row
+                        sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
+                        sdir[shadow, 0] = gx * inv
+                        sdir[shadow, 1] = gy * inv
+                        sdir[shadow, 2] = gz * inv
+                        stmax[shadow] = max(seg - RAY_EPSILON * max(lscale[e], 1e-30), 0.0)
+                        scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
+                        shadow += 1
             else:
-                b0, b1 = ua - ub / 2, ub / 2
-            b2 = 1.0 - b0 - b1
-            yx = v0[e, 0] + b1 * e1[e, 0] + b2 * e2[e, 0]
-            yy = v0[e, 1] + b1 * e1[e, 1] + b2 * e2[e, 1]
-            yz = v0[e, 2] + b1 * e1[e, 2] + b2 * e2[e, 2]
-            tx, ty, tz = yx - px, yy - py, yz - pz
-            dist = math.sqrt(tx * tx + ty * ty + tz * tz)
-            wx, wy, wz = tx / dist, ty / dist, tz / dist
-            cos_l = abs(lnormal[e, 0] * wx + lnormal[e, 1] * wy + lnormal[e, 2] * wz)
-            cos = wx * sx + wy * sy + wz * sz
-            c0 = c1 = c2 = 0.0
-            if dist > 0 and cos_l > 0 and p_sel > 0:
-                pdf_sa = dist * dist / max(larea[e] * cos_l, 1e-300)
+                # A light object (LightSampler.sample): radiance over the pdf, both with the
+                # selection probability; suns have no distance and no pdf for MIS.
+                j = e - num_tri
+                wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(j, px, py, pz, ua, ub,
+                                                                     objects)
+                ps = p_sel if p_sel > 0 else 1.0
+                q0, q1, q2 = q0 / ps, q1 / ps, q2 / ps
+                pdf_l = pdf_o * p_sel
+                g0 = g1 = g2 = pdf_b = 0.0
                 if rough:
-                    # f cos of the layered lobe times radiance over the light's pdf.
                     g0, g1, g2, pdf_b = _eval_layered(
                         wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
                         tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
-                    w = _power_heuristic(pdf_sa * p_sel, pdf_b)
-                    inv_pdf = 1.0 / pdf_sa
-                    c0 = t0 * g0 * (lradiance[e, 0] * inv_pdf / p_sel) * w
-                    c1 = t1 * g1 * (lradiance[e, 1] * inv_pdf / p_sel) * w
-                    c2 = t2 * g2 * (lradiance[e, 2] * inv_pdf / p_sel) * w
-                elif cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0:
-                    # Lambert f cos over the solid-angle pdf, MIS-weighted.
-                    w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
-                    weight = cos / np.pi / pdf_sa / p_sel * w
-                    c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
-                    c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
-                    c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
-                if max(c0, max(c1, c2)) > 0:
-                    # Shadow ray from the offset point, aimed at the sampled point itself.
-                    eps = RAY_EPSILON * max(scale, 1e-30)
-                    ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
-                    gx, gy, gz = yx - ox, yy - oy, yz - oz
-                    seg = math.sqrt(gx * gx + gy * gy + gz * gz)
-                    inv = 1.0 / max(seg, 1e-300)
-                    srow[shadow] = row
-                    sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
-                    sdir[shadow, 0] = gx * inv
-                    sdir[shadow, 1] = gy * inv
-                    sdir[shadow, 2] = gz * inv
-                    stmax[shadow] = max(seg - RAY_EPSILON * max(lscale[e], 1e-30), 0.0)
-                    scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
-                    shadow += 1
+                else:
+                    cos = wx * sx + wy * sy + wz * sz
+                    if cos > 0 and wx * nx + wy * ny + wz * nz > 0:
+                        pdf_b = cos / np.pi
+                        g0, g1, g2 = colour[mat, 0] * pdf_b, colour[mat, 1] * pdf_b, \
+                            colour[mat, 2] * pdf_b
+                if max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0:
+                    w = 1.0 if math.isinf(pdf_l) else _power_heuristic(pdf_l, pdf_b)
+                    c0, c1, c2 = t0 * g0 * q0 * w, t1 * g1 * q1 * w, t2 * g2 * q2 * w
+                    if max(c0, max(c1, c2)) > 0:
+                        eps = RAY_EPSILON * max(scale, 1e-30)
+                        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+                        srow[shadow] = row
+                        sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
+                        if math.isinf(dist):
+                            sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = wx, wy, wz
+                            stmax[shadow] = 3e38
+                        else:
+                            # Aim at the sampled point itself, stop just short of it.
+                            yx, yy, yz = px + wx * dist, py + wy * dist, pz + wz * dist
+                            gx, gy, gz = yx - ox, yy - oy, yz - oz
+                            seg = math.sqrt(gx * gx + gy * gy + gz * gz)
+                            sl = max(seg, 1e-300)
+                            sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = (gx / sl, gy / sl,
+                                                                                 gz / sl)
+                            light_scale = max(abs(yx), max(abs(yy), abs(yz)))
+                            stmax[shadow] = seg - RAY_EPSILON * max(light_scale, 1e-30)
+                        scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
+                        shadow += 1
         if timing:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
@@ -636,9 +938,11 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             # Spawn: leave the surface toward the side of the new direction.
             side = 1.0 if wx * nx + wy * ny + wz * nz >= 0.0 else -1.0
             eps = side * RAY_EPSILON * max(scale, 1e-30)
-            origin32[out, 0] = px + eps * nx
-            origin32[out, 1] = py + eps * ny
-            origin32[out, 2] = pz + eps * nz
+            o64[out, 0] = px + eps * nx
+            o64[out, 1] = py + eps * ny
+            o64[out, 2] = pz + eps * nz
+            origin32[out, 0], origin32[out, 1], origin32[out, 2] = (o64[out, 0], o64[out, 1],
+                                                                    o64[out, 2])
             dir32[out, 0], dir32[out, 1], dir32[out, 2] = wx, wy, wz
             tmax32[out] = np.inf
             d64[out, 0], d64[out, 1], d64[out, 2] = wx, wy, wz
@@ -705,7 +1009,8 @@ def _interp(x, xp, fp, guide):
 @njit(**_JIT)
 def generate_camera_rays(pixels, sample, seed, width, filter_cdf, filter_x, filter_guide, view,
                          lens,
-                         world_from_camera, position, pseed, origin32, dir32, tmax32, d64):
+                         world_from_camera, position, pseed, origin32, dir32, tmax32, o64,
+                         d64):
     """Camera rays for pixel ids (n,) as CameraModel.generate_rays, with the filter
     offsets and lens points of the numpy path; also fills each pixel's sequence seed.
 
@@ -764,7 +1069,8 @@ def generate_camera_rays(pixels, sample, seed, width, filter_cdf, filter_x, filt
             px, py, pz = px + c * dx, py + c * dy, pz + c * dz
             tmax = (clip_end - clip_start) * z_inv
         for j in range(3):
-            origin32[i, j] = px * m[j, 0] + py * m[j, 1] + pz * m[j, 2] + position[j]
+            o64[i, j] = px * m[j, 0] + py * m[j, 1] + pz * m[j, 2] + position[j]
+            origin32[i, j] = o64[i, j]
             dj = dx * m[j, 0] + dy * m[j, 1] + dz * m[j, 2]
             dir32[i, j] = dj
             d64[i, j] = dj
@@ -782,8 +1088,6 @@ def unsupported(scene, plan) -> str:
     if extra:
         from .scene import KIND_NAMES
         return "material kinds " + ", ".join(KIND_NAMES[k] for k in extra)
-    if plan.light_objects:
-        return "light objects"
     if plan.environment:
         return "an environment map"
     return ""
@@ -809,9 +1113,31 @@ def pack_layers(it) -> tuple:
     return base, tint, alpha, fresnel, mu, comp, albedo
 
 
+def pack_objects(sampler) -> tuple:
+    """The light objects as the kernels' tuple (layout above); no rows without them."""
+    from .lights import AREA, LightObjects
+    objects = sampler.objects if sampler is not None else LightObjects([], np.zeros(3), 1.0)
+    o = objects
+    h = o.half_spread
+    spread_on = h < 0.5 * np.pi - 1e-6
+    # spread_attenuation's constants, computed as it does (numpy scalars).
+    tan_half = np.array([np.tan(x) for x in h])
+    norm = np.array([3.0 / x**3 if x <= 0.05 else 1.0 / (np.tan(x) - x) if on else 0.0
+                     for x, on in zip(h, spread_on)])
+    lit = o.power.max(axis=1) > 0 if o.count else np.zeros(0, np.bool_)
+    hit = o.intersectable & lit
+    sun = (o.type == 2) & (o.cos_half_angle < 1.0) & lit
+    return (o.type.astype(np.int64), o.power, o.centre, o.axis_u, o.axis_v, o.direction,
+            np.ascontiguousarray(o.local_from_world).reshape(-1, 3, 3), o.radius,
+            o.soft.astype(np.bool_), o.cos_half_spot, o.spot_smooth, o.cos_half_angle,
+            o.sun_radiance, o.len_u, o.len_v, o.elliptic.astype(np.bool_), o.area,
+            spread_on.astype(np.bool_), tan_half, norm, o.radiance_factor,
+            hit & o.visible_camera, hit & o.use_mis, sun & o.visible_camera, sun & o.use_mis)
+
+
 def pack_lights(sampler, num_triangles: int) -> tuple:
     """The emitters as the kernels' tuple (layout above); empty arrays without emitters."""
-    if sampler is None or sampler.num_triangles == 0:
+    if sampler is None:
         z3, z = np.zeros((0, 3)), np.zeros(0)
         return (z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z, np.zeros(1, np.bool_),
                 np.full(num_triangles, -1, np.int64), np.ones(num_triangles), z3, z3, z3, z3,
@@ -846,11 +1172,13 @@ class CompiledTracer:
         self.materials = (it.kind.astype(np.int64), it.colour, it.ior, it.reflection_tint,
                           it.transmission_tint, it.emission, *pack_layers(it))
         self.lights = pack_lights(it.emitters, scene.num_triangles)
+        self.objects = pack_objects(it.emitters)
         self.world = it.world
         self.camera = (it.camera.position, it.camera.forward)
         self.flags = (int(it.settings.max_bounces), bool(plan.world_light),
                       bool(plan.num_emitters), bool(plan.light_sampling),
-                      bool(plan.shading_normals))
+                      bool(plan.shading_normals), bool(plan.light_hits),
+                      bool(plan.sun_discs))
         self.exact_fresnel = it.settings.fresnel == "exact"
         cm, cam = it.camera, it.camera.cam
         self.filter_cdf, self.filter_x = it.pixel_filter._cdf, it.pixel_filter._x
@@ -885,12 +1213,12 @@ class CompiledTracer:
         t0 = time.perf_counter()
         pseed = np.empty(n, np.uint64)
         origin32, dir32, tmax32 = np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32)
-        d64 = np.empty((n, 3))
+        o64, d64 = np.empty((n, 3)), np.empty((n, 3))
         generate_camera_rays(np.asarray(pixels, np.int64), sample, seed, it.width,
                              self.filter_cdf, self.filter_x, self.filter_guide, self.view,
                              self.lens,
                              self.world_from_camera, self.position, pseed, origin32, dir32,
-                             tmax32, d64)
+                             tmax32, o64, d64)
         it._count("generate camera rays", time.perf_counter() - t0)
         live = np.arange(n, dtype=np.int64)
         throughput = np.ones((n, 3))
@@ -908,8 +1236,9 @@ class CompiledTracer:
             it._count("intersect", time.perf_counter() - t0)
             t0 = time.perf_counter()
             m, count = shade(depth, rev_sample, self.flags, self.exact_fresnel, self.geometry,
-                             self.materials, self.lights, self.world, self.camera, prim, tfar,
-                             bu, bv, m, live, pseed, d64, throughput, prev_pdf, radiance,
+                             self.materials, self.lights, self.objects, self.world, self.camera,
+                             prim, tfar, bu, bv, m, live, pseed, o64, d64, throughput,
+                             prev_pdf, radiance,
                              depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin,
                              sdir, stmax, scontrib, profile)
             self._count_shade(time.perf_counter() - t0, profile)

@@ -130,6 +130,66 @@ def test_principled_and_rough_glossy_match_numpy(emitters):
     assert_same_image(a, c)
 
 
+def _at(x, y, z, rx=0.0, ry=0.0, rz=0.0, scale=(1.0, 1.0, 1.0)):
+    """A light's matrix_world: rotations about X, Y, Z (Blender's XYZ Euler), then move."""
+    def rot(axis, a):
+        c, s_ = np.cos(a), np.sin(a)
+        i, j = [(1, 2), (2, 0), (0, 1)][axis]
+        m = np.eye(3)
+        m[i, i], m[i, j], m[j, i], m[j, j] = c, -s_, s_, c
+        return m
+    m = np.eye(4)
+    m[:3, :3] = rot(2, rz) @ rot(1, ry) @ rot(0, rx) @ np.diag(scale)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+LIGHTS = {
+    "point": [Light("bulb", "POINT", (3, 3, 2.5), _at(0.3, -0.2, 1.2))],
+    "point_soft_visible": [Light("bulb", "POINT", (4, 3, 3), _at(0.3, -0.2, 1.0), radius=0.15,
+                                 visible_camera=True)],
+    "point_sphere": [Light("ball", "POINT", (4, 4, 4), _at(-0.3, 0.0, 1.1), radius=0.1,
+                           soft_falloff=False, visible_camera=True)],
+    "spot": [Light("spot", "SPOT", (20, 18, 15), _at(0.0, -0.3, 1.4, rx=0.3, scale=(1, 2, 1)),
+                   radius=0.05, spot_size=0.9, spot_blend=0.3)],
+    "spot_hard": [Light("spot", "SPOT", (20, 18, 15), _at(0.2, 0.0, 1.4), spot_size=0.7,
+                        spot_blend=0.0)],
+    "sun": [Light("sun", "SUN", (2, 2, 1.8), _at(0, 0, 5, rx=0.5, ry=0.3))],
+    "sun_disc": [Light("sun", "SUN", (2, 2, 1.8), _at(0, 0, 5, rx=0.4, ry=0.2), angle=0.3,
+                       visible_camera=True)],
+    "area": [Light("panel", "AREA", (8, 8, 8), _at(0, 0, 1.45), shape="RECTANGLE",
+                   size_x=0.6, size_y=0.3, visible_camera=True)],
+    "area_disk_spread": [Light("disk", "AREA", (8, 7, 6), _at(0.2, 0.1, 1.4, rx=0.2),
+                               shape="ELLIPSE", size_x=0.5, size_y=0.3, spread=0.8)],
+    "mixed_no_mis": [Light("panel", "AREA", (5, 5, 5), _at(0, 0, 1.45), use_mis=False),
+                     Light("bulb", "POINT", (2, 1, 1), _at(0.5, 0, 0.8), radius=0.1),
+                     Light("sun", "SUN", (0.5, 0.5, 0.5), _at(0, 0, 5, ry=0.4), angle=0.2)],
+    # 2 emissive triangles + 9 lights: the spatial light grid picks among them.
+    "grid": [Light(f"bulb {i}", "POINT", (1.0, 0.8, 0.6), _at(-0.8 + 0.2 * i, 0.6, 1.3),
+                   radius=0.03 * (i % 3)) for i in range(9)],
+}
+
+
+@pytest.mark.parametrize("name", list(LIGHTS))
+def test_light_objects_match_numpy(name):
+    """Every light type and option: next-event estimation on diffuse and Principled
+    surfaces, lights and sun discs hit by camera and BSDF rays (MIS), a ceiling emitter
+    beside them."""
+    b = scenes.cornell_box(spheres=True, emitter_radiance=2.0)
+    plastic = b.add_material(Material.principled("plastic", (0.8, 0.3, 0.2), roughness=0.4))
+    v, t, n = scenes.uv_sphere((0.0, -0.3, 0.25), 0.2)
+    b.add_mesh("plastic", v, t, plastic, corner_normals=n)
+    for light in LIGHTS[name]:
+        b.add_light(light)
+    scene = b.build(scenes.cornell_camera(), World((0.02, 0.02, 0.03)))
+    a, c = both(scene)
+    assert a.combined[..., :3].mean() > 0.05
+    if name == "grid":
+        from engine.lights import LightSampler
+        assert hasattr(LightSampler(scene), "local_pmf")
+    assert_same_image(a, c)
+
+
 def test_many_emitters_use_the_light_grid_and_match_numpy():
     """24 emissive quads: the spatial light grid (LightSampler.GRID) is in use."""
     b = scenes.cornell_box(spheres=True, emitter_radiance=0.0)
@@ -164,10 +224,11 @@ def test_auto_takes_the_kernels_where_they_cover_the_scene():
 
     plan = make_plan(scenes.cbspheres(), scenes.settings())
     assert plan.kernel == "compiled" and "compiled kernel" in plan.describe()
-    b = scenes.cornell_box()
-    b.add_light(Light("lamp", "POINT", (10, 10, 10)))
-    lit = b.build(scenes.cornell_camera(), World((0, 0, 0)))
-    assert make_plan(lit, scenes.settings()).kernel_note == "numpy: light objects"
+    sky = scenes.cornell_box().build(scenes.cornell_camera(),
+                                     World((0, 0, 0), environment=np.ones((8, 16, 3))))
+    assert make_plan(sky, scenes.settings()).kernel_note == "numpy: an environment map"
+    with pytest.raises(ValueError, match="environment"):
+        make_plan(sky, scenes.settings(kernel="compiled"))
 
 
 def test_without_numba_everything_takes_the_numpy_path(monkeypatch):
