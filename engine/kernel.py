@@ -8,18 +8,20 @@ and no temporaries, with the GIL released so both cores work:
     intersect (embree) -> surface_interaction -> sample_light -> shadow rays (embree)
     -> accumulate_unoccluded -> sample_bsdf -> intersect (embree) ...
 
-`surface_interaction` handles escaped rays, emission (MIS-weighted), the bounce limit,
-Russian roulette and absorbers, and compacts the survivors; `sample_light` does
-next-event estimation on emissive triangles; `sample_bsdf` samples diffuse, mirror,
-metal, glass and the layered GGX lobes (Principled, rough Glossy) and writes the next rays
-straight into embree's float32 buffers.
-Random numbers come from the same Owen-scrambled Sobol sequences as
-`sampling.SampleStream` (bit-identical: see tests/engine/test_kernel.py), so the
-compiled and numpy paths estimate the same integral with the same sample points.
+`surface_interaction` handles light objects crossed on the way (lights are transparent),
+escaped rays (world colour or environment map), emission, the bounce limit, Russian
+roulette and absorbers, and compacts the survivors; `sample_light` does next-event
+estimation on emissive triangles, light objects (point, spot, sun, area) and the
+environment map, MIS-weighted; `sample_bsdf` samples diffuse, mirror, metal, glass and
+the layered GGX lobes (Principled, rough Glossy) and writes the next rays straight into
+embree's float32 buffers. Random numbers come from the same Owen-scrambled Sobol
+sequences as `sampling.SampleStream`, and every formula keeps the numpy stages' order of
+operations, so the two paths give the same image to the last bit on every scene tried
+(tests/engine/test_kernel.py).
 
-The kernels cover what `SUPPORTED` lists; the plan falls back to the numpy integrator
-for anything else (light objects, environment maps). numba is optional:
-without it `AVAILABLE` is False and every render takes the numpy path.
+The kernels cover every material kind (`SUPPORTED`); a kind added to the numpy stages
+first falls back to them through `unsupported` until it is ported here. numba is
+optional: without it `AVAILABLE` is False and every render takes the numpy path.
 """
 
 from __future__ import annotations
@@ -575,20 +577,89 @@ def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, objects):
     return th, power[j, 0] * f, power[j, 1] * f, power[j, 2] * f
 
 
+
+# -------------------------------------------------------------------- environment map
+# The world's equirectangular map as one tuple (see `pack_environment`):
+#   0 image (H, W, 3) float32, 1 texture_from_world, 2 world_from_texture (3, 3),
+#   3 pmf, 4 cdf (H W,) of its pixel distribution, 5 its light entry (-1: no map)
 @njit(**_JIT)
-def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, objects, world,
-          camera, prim, tfar, bu, bv, m, live, pseed, o64, d64, throughput, prev_pdf,
+def _env_uv(dx, dy, dz, m):
+    """EnvironmentMap.to_uv for one world direction."""
+    x = dx * m[0, 0] + dy * m[0, 1] + dz * m[0, 2]
+    y = dx * m[1, 0] + dy * m[1, 1] + dz * m[1, 2]
+    z = dx * m[2, 0] + dy * m[2, 1] + dz * m[2, 2]
+    u = 0.5 - math.atan2(y, x) / (2.0 * np.pi)
+    v = 0.5 + math.atan2(z, math.hypot(x, y)) / np.pi
+    return u % 1.0, min(max(v, 0.0), 1.0)
+
+
+@njit(inline="always", **_JIT)
+def _env_lookup(u, v, image):
+    """EnvironmentMap.lookup at (u, v): bilinear, wrapping in u."""
+    h, w = image.shape[0], image.shape[1]
+    x = u * w - 0.5
+    y = min(max(v * h - 0.5, 0.0), h - 1.0)
+    x0 = int(math.floor(x))
+    y0 = min(int(math.floor(y)), h - 1)
+    fx, fy = x - x0, y - y0
+    x0 %= w
+    x1 = (x0 + 1) % w
+    y1 = min(y0 + 1, h - 1)
+    a, b = 1 - fx, 1 - fy
+    r0 = ((np.float64(image[y0, x0, 0]) * a + np.float64(image[y0, x1, 0]) * fx) * b
+          + (np.float64(image[y1, x0, 0]) * a + np.float64(image[y1, x1, 0]) * fx) * fy)
+    r1 = ((np.float64(image[y0, x0, 1]) * a + np.float64(image[y0, x1, 1]) * fx) * b
+          + (np.float64(image[y1, x0, 1]) * a + np.float64(image[y1, x1, 1]) * fx) * fy)
+    r2 = ((np.float64(image[y0, x0, 2]) * a + np.float64(image[y0, x1, 2]) * fx) * b
+          + (np.float64(image[y1, x0, 2]) * a + np.float64(image[y1, x1, 2]) * fx) * fy)
+    return r0, r1, r2
+
+
+@njit(**_JIT)
+def _env_pdf(u, v, pk, w, h):
+    """The solid-angle density of a pixel of probability pk at (u, v)."""
+    cos_el = math.cos((v - 0.5) * np.pi)
+    return pk * w * h / (2.0 * np.pi**2 * max(cos_el, 1e-12))
+
+
+@njit(inline="always", **_JIT)
+def _sample_environment(ua, ub, env):
+    """EnvironmentMap.sample: a pixel by luminance x solid angle, a point in it; returns
+    the world direction and its solid-angle pdf."""
+    image, to_world, pmf, cdf = env[0], env[2], env[3], env[4]
+    h, w = image.shape[0], image.shape[1]
+    k = min(np.searchsorted(cdf, ua, side="right"), len(cdf) - 1)
+    cdf_lo = cdf[k - 1] if k > 0 else 0.0
+    pk = pmf[k]
+    fx = min(max((ua - cdf_lo) / (pk if pk > 0 else 1.0), 0.0), 1.0 - 1e-12)
+    row, col = k // w, k % w
+    u = (col + fx) / w
+    v = (row + ub) / h
+    azimuth = (0.5 - u) * 2.0 * np.pi
+    elevation = (v - 0.5) * np.pi
+    ce = math.cos(elevation)
+    x, y, z = ce * math.cos(azimuth), ce * math.sin(azimuth), math.sin(elevation)
+    m = to_world
+    return (x * m[0, 0] + y * m[0, 1] + z * m[0, 2], x * m[1, 0] + y * m[1, 1] + z * m[1, 2],
+            x * m[2, 0] + y * m[2, 1] + z * m[2, 2], _env_pdf(u, v, pk, w, h))
+
+
+@njit(**_JIT)
+def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, objects, env,
+          world, camera, prim, tfar, bu, bv, m, live, pseed, o64, d64, throughput, prev_pdf,
           radiance, depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin, sdir,
           stmax, scontrib, profile):
     """One bounce for the m live rays (pixel-batch rows live[:m]) after embree's closest
     hits (prim, tfar, bu, bv), in three stages per ray:
 
-    surface interaction - escaped rays take the world; hit point, normals (flipped to the
+    surface interaction - light objects crossed before the hit add their radiance;
+        escaped rays take the world (colour or map); hit point, normals (flipped to the
         incoming side), depth and normal passes at depth 0, emission (MIS-weighted), the
         bounce limit, Russian roulette, absorbers;
-    sample light - next-event estimation at diffuse and rough vertices: an emissive
-        triangle chosen by LightSampler's rule, a uniform point on it, MIS against BSDF
-        sampling; the shadow ray goes to the s* buffers;
+    sample light - next-event estimation at diffuse and rough vertices: an emitter
+        (emissive triangle, light object or the environment) chosen by LightSampler's
+        rule, a point or direction on it, MIS against BSDF sampling; the shadow ray goes
+        to the s* buffers;
     sample BSDF - diffuse, mirror, metal, glass or the layered GGX lobe; the paths that go
         on are compacted to the front of live, d64, throughput, prev_pdf, their next rays
         (offset origin) in origin32, dir32, tmax32.
@@ -599,8 +670,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     [1] sample light, [2] sample BSDF; the rest of the loop is surface interaction.
     Returns (paths that go on, shadow rays written).
     """
-    max_bounces, world_light, emitters, light_sampling, shading_normals, light_hits, sun_discs = \
-        flags
+    (max_bounces, world_light, emitters, light_sampling, shading_normals, light_hits, sun_discs,
+     environment) = flags
     vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
     (kind, colour, ior, reflection_tint, transmission_tint, emission, layer_base, layer_tint,
      layer_alpha, layer_fresnel, mu_grid, comp_table, albedo_table) = materials
@@ -613,6 +684,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     sun_seen = objects[23] if depth == 0 else objects[24]
     obj_dir, cos_half_angle, obj_power, sun_radiance = (objects[5], objects[11], objects[1],
                                                         objects[12])
+    env_image, env_from_world, env_pmf, env_entry = env[0], env[1], env[3], env[5]
+    env_h, env_w = env_image.shape[0], env_image.shape[1]
     timing = len(profile) == 3
     if timing:
         c_loop = _cycles()
@@ -663,7 +736,22 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                     radiance[row, 2] += t2 * (obj_power[j, 2] * sun_radiance[j]) * w
         # ---- surface interaction
         if f < 0:
-            if world_light:
+            if environment:
+                # The map, MIS-weighted against its light sampling after soft bounces.
+                u_e, v_e = _env_uv(dx, dy, dz, env_from_world)
+                l0, l1, l2 = _env_lookup(u_e, v_e, env_image)
+                w = 1.0
+                if light_sampling and not math.isinf(prev_pdf[i]):
+                    col = min(int(u_e * env_w), env_w - 1)
+                    erow = min(int(v_e * env_h), env_h - 1)
+                    pdf_l = _entry_pmf(o64[i, 0], o64[i, 1], o64[i, 2], env_entry, pmf, grid, lo,
+                                       cell, local_pmf, has_mass) * _env_pdf(
+                        u_e, v_e, env_pmf[erow * env_w + col], env_w, env_h)
+                    w = _power_heuristic(prev_pdf[i], pdf_l)
+                radiance[row, 0] += t0 * l0 * w
+                radiance[row, 1] += t1 * l1 * w
+                radiance[row, 2] += t2 * l2 * w
+            elif world_light:
                 radiance[row, 0] += t0 * world[0]
                 radiance[row, 1] += t1 * world[1]
                 radiance[row, 2] += t2 * world[2]
@@ -804,11 +892,18 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                         scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
                         shadow += 1
             else:
-                # A light object (LightSampler.sample): radiance over the pdf, both with the
-                # selection probability; suns have no distance and no pdf for MIS.
-                j = e - num_tri
-                wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(j, px, py, pz, ua, ub,
-                                                                     objects)
+                # A light object or the environment (LightSampler.sample): radiance over the
+                # pdf, both with the selection probability; suns and the map have no
+                # distance, delta lights no pdf for MIS.
+                if e == env_entry:  # the environment map: a direction, no distance
+                    wx, wy, wz, pdf_o = _sample_environment(ua, ub, env)
+                    u_e, v_e = _env_uv(wx, wy, wz, env_from_world)
+                    q0, q1, q2 = _env_lookup(u_e, v_e, env_image)
+                    pd = max(pdf_o, 1e-300)
+                    q0, q1, q2, dist = q0 / pd, q1 / pd, q2 / pd, np.inf
+                else:
+                    wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(
+                        e - num_tri, px, py, pz, ua, ub, objects)
                 ps = p_sel if p_sel > 0 else 1.0
                 q0, q1, q2 = q0 / ps, q1 / ps, q2 / ps
                 pdf_l = pdf_o * p_sel
@@ -1088,8 +1183,6 @@ def unsupported(scene, plan) -> str:
     if extra:
         from .scene import KIND_NAMES
         return "material kinds " + ", ".join(KIND_NAMES[k] for k in extra)
-    if plan.environment:
-        return "an environment map"
     return ""
 
 
@@ -1115,7 +1208,7 @@ def pack_layers(it) -> tuple:
 
 def pack_objects(sampler) -> tuple:
     """The light objects as the kernels' tuple (layout above); no rows without them."""
-    from .lights import AREA, LightObjects
+    from .lights import SUN, LightObjects
     objects = sampler.objects if sampler is not None else LightObjects([], np.zeros(3), 1.0)
     o = objects
     h = o.half_spread
@@ -1126,13 +1219,25 @@ def pack_objects(sampler) -> tuple:
                      for x, on in zip(h, spread_on)])
     lit = o.power.max(axis=1) > 0 if o.count else np.zeros(0, np.bool_)
     hit = o.intersectable & lit
-    sun = (o.type == 2) & (o.cos_half_angle < 1.0) & lit
+    sun = (o.type == SUN) & (o.cos_half_angle < 1.0) & lit
     return (o.type.astype(np.int64), o.power, o.centre, o.axis_u, o.axis_v, o.direction,
             np.ascontiguousarray(o.local_from_world).reshape(-1, 3, 3), o.radius,
             o.soft.astype(np.bool_), o.cos_half_spot, o.spot_smooth, o.cos_half_angle,
             o.sun_radiance, o.len_u, o.len_v, o.elliptic.astype(np.bool_), o.area,
             spread_on.astype(np.bool_), tan_half, norm, o.radiance_factor,
             hit & o.visible_camera, hit & o.use_mis, sun & o.visible_camera, sun & o.use_mis)
+
+
+def pack_environment(sampler) -> tuple:
+    """The environment map as the kernels' tuple (layout above); a 1-pixel stand-in and
+    entry -1 without one."""
+    env = sampler.environment if sampler is not None else None
+    if env is None:
+        return (np.zeros((1, 1, 3), np.float32), np.eye(3), np.eye(3), np.ones(1), np.ones(1),
+                -1)
+    return (env.image, np.ascontiguousarray(env.texture_from_world, np.float64),
+            np.ascontiguousarray(env.world_from_texture, np.float64), env.distribution.pmf,
+            env.distribution.cdf, int(sampler.environment_index))
 
 
 def pack_lights(sampler, num_triangles: int) -> tuple:
@@ -1173,12 +1278,13 @@ class CompiledTracer:
                           it.transmission_tint, it.emission, *pack_layers(it))
         self.lights = pack_lights(it.emitters, scene.num_triangles)
         self.objects = pack_objects(it.emitters)
+        self.environment = pack_environment(it.emitters)
         self.world = it.world
         self.camera = (it.camera.position, it.camera.forward)
         self.flags = (int(it.settings.max_bounces), bool(plan.world_light),
                       bool(plan.num_emitters), bool(plan.light_sampling),
                       bool(plan.shading_normals), bool(plan.light_hits),
-                      bool(plan.sun_discs))
+                      bool(plan.sun_discs), bool(plan.environment))
         self.exact_fresnel = it.settings.fresnel == "exact"
         cm, cam = it.camera, it.camera.cam
         self.filter_cdf, self.filter_x = it.pixel_filter._cdf, it.pixel_filter._x
@@ -1236,7 +1342,8 @@ class CompiledTracer:
             it._count("intersect", time.perf_counter() - t0)
             t0 = time.perf_counter()
             m, count = shade(depth, rev_sample, self.flags, self.exact_fresnel, self.geometry,
-                             self.materials, self.lights, self.objects, self.world, self.camera,
+                             self.materials, self.lights, self.objects, self.environment,
+                             self.world, self.camera,
                              prim, tfar, bu, bv, m, live, pseed, o64, d64, throughput,
                              prev_pdf, radiance,
                              depth_pass, normal_pass, origin32, dir32, tmax32, srow, sorigin,

@@ -56,8 +56,8 @@ def test_install_file_enable_render(release, dist, tmp_path):
         assert r["summary"]["error"] is None, (name, r)
         assert r["summary"]["samples"] == 2, (name, r)
         assert r["mean"] > 0.01, (name, r)  # not a black image
-    # The extension's numba compiles the kernels: the scenes they cover use them.
+    # The extension's numba compiles the kernels, and every scene renders with them
+    # (default.blend: Principled and a point light).
     kernels = {name: r["kernel"] for name, r in result["renders"].items()}
-    assert kernels["v3.4_cbspheres"] == "compiled", kernels
-    assert kernels["v3.4_default"] == "numpy", kernels  # Principled and a point light
+    assert set(kernels.values()) == {"compiled"}, kernels
     print(sys.version, result["renders"])
