@@ -159,9 +159,10 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                     first = elapsed
                 # The image-wide error costs a pass over the film: only when someone reads it.
                 needed = on_pass is not None or settings.target_error
-                rel = film.relative_error() if needed else float("nan")
+                stats = film.statistics() if needed else None
+                rel = stats[2] if needed else float("nan")
                 if on_pass is not None:
-                    on_pass(film.snapshot(sample, elapsed, rel, sample / settings.samples))
+                    on_pass(film.snapshot(sample, elapsed, sample / settings.samples, stats))
                 if sample >= settings.samples:
                     break
                 if settings.time_limit and elapsed >= settings.time_limit:
@@ -185,7 +186,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 for job in ahead[1]:
                     job.cancel()
     elapsed = time.perf_counter() - t0
-    snap = film.snapshot(sample, elapsed, film.relative_error(), sample / settings.samples)
+    snap = film.snapshot(sample, elapsed, sample / settings.samples)
     return RenderResult(**snap.__dict__, plan=plan, stop_reason=stop_reason, cancelled=cancelled,
                         warnings=list(scene.warnings) + film.rejected,
                         time_to_first_pass=first)

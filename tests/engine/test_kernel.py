@@ -322,3 +322,24 @@ def test_compiled_scene_building_matches_numpy(monkeypatch):
                                    atol=0, err_msg=name)
     assert compiled.warnings == plain.warnings and compiled.num_triangles < 81
     assert np.isfinite(compiled.normals).all()
+
+
+def test_film_statistics_match_numpy(monkeypatch):
+    """The compiled per-pass statistics (error, variance, relative error) against the numpy
+    methods, on a film with 0, 1 and several samples per pixel."""
+    from engine.film import Film
+
+    rng = np.random.default_rng(3)
+    film = Film(23, 17)
+    n = 23 * 17
+    for k in range(5):
+        pixels = np.arange(n)[rng.random(n) < 0.1 + 0.15 * k]
+        film.add(pixels, rng.gamma(0.5, 2.0, (len(pixels), 3)), rng.random(len(pixels)),
+                 rng.normal(size=(len(pixels), 3)))
+    assert {0, 1}.issubset(set(film.count.tolist())) and film.count.max() >= 3
+    error, variance, rel = film.statistics()
+    monkeypatch.setattr(kernel, "AVAILABLE", False)
+    e2, v2, r2 = film.statistics()
+    np.testing.assert_array_equal(error, e2)
+    np.testing.assert_array_equal(variance, v2)
+    assert rel == pytest.approx(r2, rel=1e-12) and np.isfinite(rel)
