@@ -365,15 +365,17 @@ def _ggx_half_vector(v0, v1, v2, alpha, ua, ub):
 
 
 # -------------------------------------------------------------------- light objects
-# Blender's light objects travel as one tuple (see `pack_objects`), LightObjects' arrays:
-#   0 type (j,), 1 power, 2 centre, 3 axis_u, 4 axis_v, 5 direction (j, 3),
-#   6 local_from_world (j, 3, 3), 7 radius, 8 soft, 9 cos_half_spot, 10 spot_smooth,
-#   11 cos_half_angle, 12 sun_radiance, 13 len_u, 14 len_v, 15 elliptic, 16 area,
-#   17 spread_on, 18 spread_tan, 19 spread_norm (spread_attenuation's constants),
-#   20 radiance_factor, 21 hit_camera, 22 hit_bsdf, 23 sun_camera, 24 sun_bsdf (j,) bool
-# (which lights camera rays and BSDF rays can hit, and which sun discs they can see).
-# The helpers are inlined into `shade`, so the tuple costs nothing per call.
+# Blender's light objects travel as one (j, _COLUMNS) float64 array (see `pack_objects`):
+# lights.LightObjects' per-light values in the columns named below (booleans as 0/1),
+# plus which lights camera rays and BSDF rays can hit and which sun discs they can see.
+# One array, not a tuple of 25: an inlined helper reading a tuple of arrays paid their
+# reference counts on every call (~380 ns a light sample, measured; ~40 ns now).
 _POINT, _SPOT, _SUN, _AREA = 0, 1, 2, 3  # lights.POINT, SPOT, SUN, AREA
+(_TYPE, _POWER, _CENTRE, _AXIS_U, _AXIS_V, _DIRECTION, _LOCAL, _RADIUS, _SOFT, _COS_SPOT,
+ _SPOT_SMOOTH, _COS_ANGLE, _SUN_RADIANCE, _LEN_U, _LEN_V, _ELLIPTIC, _AREA_SIZE, _SPREAD_ON,
+ _SPREAD_TAN, _SPREAD_NORM, _FACTOR, _HIT_CAMERA, _HIT_BSDF, _SUN_CAMERA, _SUN_BSDF,
+ _COLUMNS) = (0, 1, 4, 7, 10, 13, 16, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38,
+              39, 40, 41, 42, 43)
 
 
 @njit(**_JIT)
@@ -387,18 +389,17 @@ def _spread(cos_theta, on, tan_half, norm):
 
 
 @njit(inline="always", **_JIT)
-def _spot(j, vx, vy, vz, objects):
+def _spot(j, vx, vy, vz, L):
     """LightObjects.spot_attenuation for light j at direction v from the light."""
-    ltype, local, cos_half_spot, spot_smooth = objects[0], objects[6], objects[9], objects[10]
-    if ltype[j] != _SPOT:
+    if L[j, _TYPE] != _SPOT:
         return 1.0
-    a = local[j, 0, 0] * vx + local[j, 0, 1] * vy + local[j, 0, 2] * vz
-    b = local[j, 1, 0] * vx + local[j, 1, 1] * vy + local[j, 1, 2] * vz
-    c = local[j, 2, 0] * vx + local[j, 2, 1] * vy + local[j, 2, 2] * vz
+    a = L[j, _LOCAL] * vx + L[j, _LOCAL + 1] * vy + L[j, _LOCAL + 2] * vz
+    b = L[j, _LOCAL + 3] * vx + L[j, _LOCAL + 4] * vy + L[j, _LOCAL + 5] * vz
+    c = L[j, _LOCAL + 6] * vx + L[j, _LOCAL + 7] * vy + L[j, _LOCAL + 8] * vz
     n = math.sqrt(a * a + b * b + c * c)
     if n > 0:
         c = c / n
-    f = (-c - cos_half_spot[j]) * spot_smooth[j]
+    f = (-c - L[j, _COS_SPOT]) * L[j, _SPOT_SMOOTH]
     if math.isnan(f):
         f = 0.0
     elif math.isinf(f):
@@ -408,28 +409,26 @@ def _spot(j, vx, vy, vz, objects):
 
 
 @njit(inline="always", **_JIT)
-def _sample_object(j, px, py, pz, ua, ub, objects):
+def _sample_object(j, px, py, pz, ua, ub, L):
     """LightObjects.sample for light j from point p: (wi, distance (inf for a sun),
     radiance / solid-angle pdf per channel, pdf (inf for delta lights))."""
-    ltype, power, centre, axis_u, axis_v, direction = objects[:6]
-    radius, soft, cos_half_angle, sun_radiance = objects[7], objects[8], objects[11], objects[12]
-    len_u, len_v, elliptic, area = objects[13], objects[14], objects[15], objects[16]
-    spread_on, spread_tan, spread_norm, factor = objects[17], objects[18], objects[19], objects[20]
-    typ = ltype[j]
-    p0, p1, p2 = power[j, 0], power[j, 1], power[j, 2]
+    typ = L[j, _TYPE]
+    p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
     v0 = v1 = v2 = 0.0
     if typ == _POINT or typ == _SPOT:
-        tx, ty, tz = centre[j, 0] - px, centre[j, 1] - py, centre[j, 2] - pz
+        cx0, cy0, cz0 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
+        tx, ty, tz = cx0 - px, cy0 - py, cz0 - pz
         d = math.sqrt(tx * tx + ty * ty + tz * tz)
         dn = d if d > 0 else 1.0
         cx, cy, cz = tx / dn, ty / dn, tz / dn
-        r = radius[j]
+        r = L[j, _RADIUS]
+        soft = L[j, _SOFT] != 0
         wx, wy, wz, dist, pdf = cx, cy, cz, d, np.inf
         valid = True
         if r <= 0:  # intensity P / (4 pi), a delta light
             g = 4.0 * np.pi * max(d, 1e-300) ** 2
             v0, v1, v2 = p0 / g, p1 / g, p2 / g
-        elif not soft[j] and d > r:  # a sphere: uniform in its visible cone
+        elif not soft and d > r:  # a sphere: uniform in its visible cone
             cos_max = math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
             s, t = _build_frame(cx, cy, cz)
             cos = 1.0 - ua * (1.0 - cos_max)
@@ -441,35 +440,35 @@ def _sample_object(j, px, py, pz, ua, ub, objects):
             wz = a * s[2] + b * t[2] + cos * cz
             dist = d * cos - math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
             pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
-            f = factor[j]
+            f = L[j, _FACTOR]
             v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
-        elif soft[j] and d > 0:  # a disk of radius r facing the point
+        elif soft and d > 0:  # a disk of radius r facing the point
             nx, ny, nz = -cx, -cy, -cz
             s, t = _build_frame(nx, ny, nz)
             qa, qb = _concentric_disk(ua, ub)
             qa, qb = qa * r, qb * r
-            yx = centre[j, 0] + qa * s[0] + qb * t[0]
-            yy = centre[j, 1] + qa * s[1] + qb * t[1]
-            yz = centre[j, 2] + qa * s[2] + qb * t[2]
+            yx = cx0 + qa * s[0] + qb * t[0]
+            yy = cy0 + qa * s[1] + qb * t[1]
+            yz = cz0 + qa * s[2] + qb * t[2]
             tx, ty, tz = yx - px, yy - py, yz - pz
             dist = math.sqrt(tx * tx + ty * ty + tz * tz)
             wx, wy, wz = tx / dist, ty / dist, tz / dist
             cos_l = -(wx * nx + wy * ny + wz * nz)
             pdf = dist * dist / (np.pi * r ** 2 * max(cos_l, 1e-300))
-            f = factor[j]
+            f = L[j, _FACTOR]
             v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
         else:
             valid = False
         if valid:
-            att = _spot(j, -cx, -cy, -cz, objects)
+            att = _spot(j, -cx, -cy, -cz, L)
             v0, v1, v2 = v0 * att, v1 * att, v2 * att
         else:
             v0 = v1 = v2 = 0.0
             pdf = 0.0
         return wx, wy, wz, dist, v0, v1, v2, pdf
     if typ == _SUN:
-        ax, ay, az = -direction[j, 0], -direction[j, 1], -direction[j, 2]
-        cos_max = cos_half_angle[j]
+        ax, ay, az = -L[j, _DIRECTION], -L[j, _DIRECTION + 1], -L[j, _DIRECTION + 2]
+        cos_max = L[j, _COS_ANGLE]
         if cos_max < 1.0:  # a disc: uniform in its cone
             s, t = _build_frame(ax, ay, az)
             cos = 1.0 - ua * (1.0 - cos_max)
@@ -477,49 +476,49 @@ def _sample_object(j, px, py, pz, ua, ub, objects):
             phi = 2.0 * np.pi * ub
             a, b = sin * math.cos(phi), sin * math.sin(phi)
             pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
-            k = sun_radiance[j] / pdf
+            k = L[j, _SUN_RADIANCE] / pdf
             return (a * s[0] + b * t[0] + cos * ax, a * s[1] + b * t[1] + cos * ay,
                     a * s[2] + b * t[2] + cos * az, np.inf, p0 * k, p1 * k, p2 * k, pdf)
         return ax, ay, az, np.inf, p0, p1, p2, np.inf
     # Area light: a uniform point on the rectangle or ellipse.
-    if elliptic[j]:
+    if L[j, _ELLIPTIC] != 0:
         la, lb = _concentric_disk(ua, ub)
         la, lb = la * 0.5, lb * 0.5
     else:
         la, lb = ua - 0.5, ub - 0.5
-    ka, kb = la * len_u[j], lb * len_v[j]
-    yx = centre[j, 0] + ka * axis_u[j, 0] + kb * axis_v[j, 0]
-    yy = centre[j, 1] + ka * axis_u[j, 1] + kb * axis_v[j, 1]
-    yz = centre[j, 2] + ka * axis_u[j, 2] + kb * axis_v[j, 2]
+    ka, kb = la * L[j, _LEN_U], lb * L[j, _LEN_V]
+    yx = L[j, _CENTRE] + ka * L[j, _AXIS_U] + kb * L[j, _AXIS_V]
+    yy = L[j, _CENTRE + 1] + ka * L[j, _AXIS_U + 1] + kb * L[j, _AXIS_V + 1]
+    yz = L[j, _CENTRE + 2] + ka * L[j, _AXIS_U + 2] + kb * L[j, _AXIS_V + 2]
     tx, ty, tz = yx - px, yy - py, yz - pz
     d = math.sqrt(tx * tx + ty * ty + tz * tz)
     dn = d if d > 0 else 1.0
     wx, wy, wz = tx / dn, ty / dn, tz / dn
-    cos_l = -(wx * direction[j, 0] + wy * direction[j, 1] + wz * direction[j, 2])
+    cos_l = -(wx * L[j, _DIRECTION] + wy * L[j, _DIRECTION + 1] + wz * L[j, _DIRECTION + 2])
     pdf = 0.0
-    if cos_l > 0 and d > 0 and area[j] > 0:
-        pdf = d * d / max(area[j] * cos_l, 1e-300)
-        f = factor[j] * _spread(cos_l, spread_on[j], spread_tan[j], spread_norm[j])
+    area = L[j, _AREA_SIZE]
+    if cos_l > 0 and d > 0 and area > 0:
+        pdf = d * d / max(area * cos_l, 1e-300)
+        f = L[j, _FACTOR] * _spread(cos_l, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
+                                    L[j, _SPREAD_NORM])
         v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
     return wx, wy, wz, d, v0, v1, v2, pdf
 
 
 @njit(inline="always", **_JIT)
-def _object_pdf(j, ox, oy, oz, dx, dy, dz, t, objects):
+def _object_pdf(j, ox, oy, oz, dx, dy, dz, t, L):
     """LightObjects.pdf: the solid-angle density of sampling direction d from o toward
     intersectable light j, hit at distance t."""
-    ltype, centre, direction, radius, soft, area = (objects[0], objects[2], objects[5],
-                                                    objects[7], objects[8], objects[16])
-    typ = ltype[j]
+    typ = L[j, _TYPE]
     if typ == _AREA:
-        cos_a = -(dx * direction[j, 0] + dy * direction[j, 1] + dz * direction[j, 2])
-        return t * t / max(area[j] * cos_a, 1e-300)
-    tx, ty, tz = centre[j, 0] - ox, centre[j, 1] - oy, centre[j, 2] - oz
+        cos_a = -(dx * L[j, _DIRECTION] + dy * L[j, _DIRECTION + 1] + dz * L[j, _DIRECTION + 2])
+        return t * t / max(L[j, _AREA_SIZE] * cos_a, 1e-300)
+    tx, ty, tz = L[j, _CENTRE] - ox, L[j, _CENTRE + 1] - oy, L[j, _CENTRE + 2] - oz
     d = math.sqrt(tx * tx + ty * ty + tz * tz)
-    r = radius[j]
+    r = L[j, _RADIUS]
     if (typ == _POINT or typ == _SPOT) and r > 0:
         dn = d if d > 0 else 1.0
-        if soft[j]:
+        if L[j, _SOFT] != 0:
             cos_d = tx / dn * dx + ty / dn * dy + tz / dn * dz
             return t * t / (np.pi * max(r * r * cos_d, 1e-300))
         if d > r:
@@ -529,40 +528,37 @@ def _object_pdf(j, ox, oy, oz, dx, dy, dz, t, objects):
 
 
 @njit(inline="always", **_JIT)
-def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, objects):
+def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
     """LightObjects.intersect for one ray: (distance (inf: missed), radiance)."""
-    ltype, power, c, axis_u, axis_v, direction = objects[:6]
-    radius, soft, len_u, len_v, elliptic = (objects[7], objects[8], objects[13], objects[14],
-                                            objects[15])
-    spread_on, spread_tan, spread_norm, factor = objects[17], objects[18], objects[19], objects[20]
     th = np.inf
-    f = factor[j]
-    if ltype[j] == _AREA:
-        nx, ny, nz = direction[j, 0], direction[j, 1], direction[j, 2]
+    f = L[j, _FACTOR]
+    p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
+    c0, c1, c2 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
+    if L[j, _TYPE] == _AREA:
+        nx, ny, nz = L[j, _DIRECTION], L[j, _DIRECTION + 1], L[j, _DIRECTION + 2]
         denom = dx * nx + dy * ny + dz * nz
         front = denom < 0  # travelling against the emission direction
-        t = ((c[j, 0] - ox) * nx + (c[j, 1] - oy) * ny + (c[j, 2] - oz) * nz) / (
-            denom if front else -1.0)
-        hx, hy, hz = ox + t * dx - c[j, 0], oy + t * dy - c[j, 1], oz + t * dz - c[j, 2]
-        lu = (hx * axis_u[j, 0] + hy * axis_u[j, 1] + hz * axis_u[j, 2]) / len_u[j]
-        lv = (hx * axis_v[j, 0] + hy * axis_v[j, 1] + hz * axis_v[j, 2]) / len_v[j]
-        if elliptic[j]:
+        t = ((c0 - ox) * nx + (c1 - oy) * ny + (c2 - oz) * nz) / (denom if front else -1.0)
+        hx, hy, hz = ox + t * dx - c0, oy + t * dy - c1, oz + t * dz - c2
+        lu = (hx * L[j, _AXIS_U] + hy * L[j, _AXIS_U + 1] + hz * L[j, _AXIS_U + 2]) / L[j, _LEN_U]
+        lv = (hx * L[j, _AXIS_V] + hy * L[j, _AXIS_V + 1] + hz * L[j, _AXIS_V + 2]) / L[j, _LEN_V]
+        if L[j, _ELLIPTIC] != 0:
             inside = lu * lu + lv * lv <= 0.25
         else:
             inside = abs(lu) <= 0.5 and abs(lv) <= 0.5
         if front and inside and t > 0 and t < tmax:
             th = t
-        f = f * _spread(-denom, spread_on[j], spread_tan[j], spread_norm[j])
+        f = f * _spread(-denom, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN], L[j, _SPREAD_NORM])
     else:
-        r = radius[j]
-        ocx, ocy, ocz = ox - c[j, 0], oy - c[j, 1], oz - c[j, 2]
-        if soft[j]:  # a disk facing the ray's origin
+        r = L[j, _RADIUS]
+        ocx, ocy, ocz = ox - c0, oy - c1, oz - c2
+        if L[j, _SOFT] != 0:  # a disk facing the ray's origin
             dc = math.sqrt(ocx * ocx + ocy * ocy + ocz * ocz)
             dn = dc if dc > 0 else 1.0
             nx, ny, nz = ocx / dn, ocy / dn, ocz / dn
             denom = dx * nx + dy * ny + dz * nz
             t = (-ocx * nx + -ocy * ny + -ocz * nz) / (denom if denom < 0 else -1.0)
-            hx, hy, hz = ox + t * dx - c[j, 0], oy + t * dy - c[j, 1], oz + t * dz - c[j, 2]
+            hx, hy, hz = ox + t * dx - c0, oy + t * dy - c1, oz + t * dz - c2
             ok = denom < 0 and hx * hx + hy * hy + hz * hz <= r * r and t > 0
         else:
             b = ocx * dx + ocy * dy + ocz * dz
@@ -571,11 +567,10 @@ def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, objects):
             ok = disc >= 0 and t > 0
         if ok and t < tmax:
             th = t
-        if ltype[j] == _SPOT:
-            att = _spot(j, -dx, -dy, -dz, objects)
-            return th, power[j, 0] * f * att, power[j, 1] * f * att, power[j, 2] * f * att
-    return th, power[j, 0] * f, power[j, 1] * f, power[j, 2] * f
-
+        if L[j, _TYPE] == _SPOT:
+            att = _spot(j, -dx, -dy, -dz, L)
+            return th, p0 * f * att, p1 * f * att, p2 * f * att
+    return th, p0 * f, p1 * f, p2 * f
 
 
 # -------------------------------------------------------------------- environment map
@@ -623,10 +618,9 @@ def _env_pdf(u, v, pk, w, h):
 
 
 @njit(inline="always", **_JIT)
-def _sample_environment(ua, ub, env):
+def _sample_environment(ua, ub, image, to_world, pmf, cdf):
     """EnvironmentMap.sample: a pixel by luminance x solid angle, a point in it; returns
     the world direction and its solid-angle pdf."""
-    image, to_world, pmf, cdf = env[0], env[2], env[3], env[4]
     h, w = image.shape[0], image.shape[1]
     k = min(np.searchsorted(cdf, ua, side="right"), len(cdf) - 1)
     cdf_lo = cdf[k - 1] if k > 0 else 0.0
@@ -679,12 +673,11 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
      area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
     cam_pos, forward = camera
     num_tri = len(v0)  # light entries 0..num_tri-1 are triangles, then the light objects
-    n_obj = len(objects[0])
-    hit_seen = objects[21] if depth == 0 else objects[22]  # camera rays / BSDF rays
-    sun_seen = objects[23] if depth == 0 else objects[24]
-    obj_dir, cos_half_angle, obj_power, sun_radiance = (objects[5], objects[11], objects[1],
-                                                        objects[12])
-    env_image, env_from_world, env_pmf, env_entry = env[0], env[1], env[3], env[5]
+    L = objects
+    n_obj = L.shape[0]
+    hit_seen = _HIT_CAMERA if depth == 0 else _HIT_BSDF  # camera rays / BSDF rays
+    sun_seen = _SUN_CAMERA if depth == 0 else _SUN_BSDF
+    env_image, env_from_world, env_to_world, env_pmf, env_cdf, env_entry = env
     env_h, env_w = env_image.shape[0], env_image.shape[1]
     timing = len(profile) == 3
     if timing:
@@ -705,35 +698,36 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             mis = light_sampling and not math.isinf(prev_pdf[i])
             t_surface = np.float64(tfar[i]) if f >= 0 else np.float64(tmax32[i])
             for j in range(n_obj):
-                if not hit_seen[j]:
+                if L[j, hit_seen] == 0:
                     continue
-                th, l0, l1, l2 = _intersect_object(j, ox, oy, oz, dx, dy, dz, t_surface,
-                                                   objects)
+                th, l0, l1, l2 = _intersect_object(j, ox, oy, oz, dx, dy, dz, t_surface, L)
                 if math.isinf(th):
                     continue
                 w = 1.0
                 if mis:
                     pdf_l = _entry_pmf(ox, oy, oz, num_tri + j, pmf, grid, lo, cell, local_pmf,
-                                       has_mass) * _object_pdf(j, ox, oy, oz, dx, dy, dz, th,
-                                                               objects)
+                                       has_mass) * _object_pdf(j, ox, oy, oz, dx, dy, dz, th, L)
                     w = _power_heuristic(prev_pdf[i], pdf_l)
                 radiance[row, 0] += t0 * l0 * w
                 radiance[row, 1] += t1 * l1 * w
                 radiance[row, 2] += t2 * l2 * w
             if sun_discs and f < 0:
                 for j in range(n_obj):
-                    if not sun_seen[j] or not (dx * -obj_dir[j, 0] + dy * -obj_dir[j, 1]
-                                               + dz * -obj_dir[j, 2] >= cos_half_angle[j]):
+                    cos_half = L[j, _COS_ANGLE]
+                    if L[j, sun_seen] == 0 or not (
+                            dx * -L[j, _DIRECTION] + dy * -L[j, _DIRECTION + 1]
+                            + dz * -L[j, _DIRECTION + 2] >= cos_half):
                         continue
                     w = 1.0
                     if mis:
                         pdf_l = _entry_pmf(ox, oy, oz, num_tri + j, pmf, grid, lo, cell,
                                            local_pmf, has_mass) / (
-                            2.0 * np.pi * (1.0 - cos_half_angle[j]))
+                            2.0 * np.pi * (1.0 - cos_half))
                         w = _power_heuristic(prev_pdf[i], pdf_l)
-                    radiance[row, 0] += t0 * (obj_power[j, 0] * sun_radiance[j]) * w
-                    radiance[row, 1] += t1 * (obj_power[j, 1] * sun_radiance[j]) * w
-                    radiance[row, 2] += t2 * (obj_power[j, 2] * sun_radiance[j]) * w
+                    sr = L[j, _SUN_RADIANCE]
+                    radiance[row, 0] += t0 * (L[j, _POWER] * sr) * w
+                    radiance[row, 1] += t1 * (L[j, _POWER + 1] * sr) * w
+                    radiance[row, 2] += t2 * (L[j, _POWER + 2] * sr) * w
         # ---- surface interaction
         if f < 0:
             if environment:
@@ -896,14 +890,15 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                 # pdf, both with the selection probability; suns and the map have no
                 # distance, delta lights no pdf for MIS.
                 if e == env_entry:  # the environment map: a direction, no distance
-                    wx, wy, wz, pdf_o = _sample_environment(ua, ub, env)
+                    wx, wy, wz, pdf_o = _sample_environment(ua, ub, env_image, env_to_world,
+                                                            env_pmf, env_cdf)
                     u_e, v_e = _env_uv(wx, wy, wz, env_from_world)
                     q0, q1, q2 = _env_lookup(u_e, v_e, env_image)
                     pd = max(pdf_o, 1e-300)
                     q0, q1, q2, dist = q0 / pd, q1 / pd, q2 / pd, np.inf
                 else:
                     wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(
-                        e - num_tri, px, py, pz, ua, ub, objects)
+                        e - num_tri, px, py, pz, ua, ub, L)
                 ps = p_sel if p_sel > 0 else 1.0
                 q0, q1, q2 = q0 / ps, q1 / ps, q2 / ps
                 pdf_l = pdf_o * p_sel
@@ -1206,26 +1201,36 @@ def pack_layers(it) -> tuple:
     return base, tint, alpha, fresnel, mu, comp, albedo
 
 
-def pack_objects(sampler) -> tuple:
-    """The light objects as the kernels' tuple (layout above); no rows without them."""
-    from .lights import SUN, LightObjects
-    objects = sampler.objects if sampler is not None else LightObjects([], np.zeros(3), 1.0)
-    o = objects
+def pack_objects(sampler) -> np.ndarray:
+    """The light objects as the kernels' (j, _COLUMNS) array (columns above)."""
+    from .lights import SUN
+    if sampler is None or sampler.objects.count == 0:
+        return np.zeros((0, _COLUMNS))
+    o = sampler.objects
     h = o.half_spread
     spread_on = h < 0.5 * np.pi - 1e-6
     # spread_attenuation's constants, computed as it does (numpy scalars).
     tan_half = np.array([np.tan(x) for x in h])
     norm = np.array([3.0 / x**3 if x <= 0.05 else 1.0 / (np.tan(x) - x) if on else 0.0
                      for x, on in zip(h, spread_on)])
-    lit = o.power.max(axis=1) > 0 if o.count else np.zeros(0, np.bool_)
+    lit = o.power.max(axis=1) > 0
     hit = o.intersectable & lit
     sun = (o.type == SUN) & (o.cos_half_angle < 1.0) & lit
-    return (o.type.astype(np.int64), o.power, o.centre, o.axis_u, o.axis_v, o.direction,
-            np.ascontiguousarray(o.local_from_world).reshape(-1, 3, 3), o.radius,
-            o.soft.astype(np.bool_), o.cos_half_spot, o.spot_smooth, o.cos_half_angle,
-            o.sun_radiance, o.len_u, o.len_v, o.elliptic.astype(np.bool_), o.area,
-            spread_on.astype(np.bool_), tan_half, norm, o.radiance_factor,
-            hit & o.visible_camera, hit & o.use_mis, sun & o.visible_camera, sun & o.use_mis)
+    columns = [(_TYPE, o.type), (_POWER, o.power), (_CENTRE, o.centre), (_AXIS_U, o.axis_u),
+               (_AXIS_V, o.axis_v), (_DIRECTION, o.direction),
+               (_LOCAL, o.local_from_world.reshape(-1, 9)), (_RADIUS, o.radius),
+               (_SOFT, o.soft), (_COS_SPOT, o.cos_half_spot), (_SPOT_SMOOTH, o.spot_smooth),
+               (_COS_ANGLE, o.cos_half_angle), (_SUN_RADIANCE, o.sun_radiance),
+               (_LEN_U, o.len_u), (_LEN_V, o.len_v), (_ELLIPTIC, o.elliptic),
+               (_AREA_SIZE, o.area), (_SPREAD_ON, spread_on), (_SPREAD_TAN, tan_half),
+               (_SPREAD_NORM, norm), (_FACTOR, o.radiance_factor),
+               (_HIT_CAMERA, hit & o.visible_camera), (_HIT_BSDF, hit & o.use_mis),
+               (_SUN_CAMERA, sun & o.visible_camera), (_SUN_BSDF, sun & o.use_mis)]
+    data = np.zeros((o.count, _COLUMNS))
+    for col, values in columns:
+        values = np.asarray(values, np.float64).reshape(o.count, -1)
+        data[:, col:col + values.shape[1]] = values
+    return data
 
 
 def pack_environment(sampler) -> tuple:
