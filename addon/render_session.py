@@ -29,6 +29,10 @@ def _stats(samples, total, seconds, rel):
     return f"Sample {samples}/{total} | Time {seconds:.1f} s | Est. error {err}"
 
 
+# At most this share of a render's wall time goes to showing intermediate images.
+DISPLAY_SHARE = 0.1
+
+
 def _set_rect(render_pass, image):
     """Write an (H, W[, C]) image into a RenderPass with one foreach_set.
 
@@ -123,9 +127,18 @@ class RenderSession:
         layer = result.layers[0]
         total = settings.samples
 
+        display = {"seconds": 0.0}
+
         def on_pass(p):
-            self._write(layer, p)
-            engine.update_result(result)
+            # Show the image after the first pass and then whenever showing it has cost at
+            # most a tenth of the render so far: copying a 1920x1080 result into Blender
+            # takes ~60 ms, as long as a whole pass of a simple scene. Progress and stats
+            # update every pass; the final image is written below in any case.
+            if p.samples == 1 or display["seconds"] <= DISPLAY_SHARE * p.seconds:
+                t = time.perf_counter()
+                self._write(layer, p)
+                engine.update_result(result)
+                display["seconds"] += time.perf_counter() - t
             engine.update_progress(float(min(p.progress, 1.0)))
             stats = _stats(p.samples, total, p.seconds, p.relative_error)
             engine.update_stats("", f"Specula | {stats}")

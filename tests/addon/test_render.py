@@ -108,6 +108,28 @@ def test_cancel_keeps_the_partial_image(fresh, tmp_path, monkeypatch, spy, core)
     assert np.isfinite(pixels).all() and pixels[..., :3].max() > 0
 
 
+def test_slow_image_updates_are_skipped_but_not_the_first_or_the_last(fresh, tmp_path,
+                                                                       monkeypatch, core):
+    """Copying the image into Blender may take at most DISPLAY_SHARE of the render: with a
+    50 ms copy and millisecond passes only the first pass and the final image are shown
+    (with every pass shown this test fails)."""
+    import time
+
+    small_scene(fresh)
+    calls = []
+    original = render_session.RenderSession._write
+
+    def slow_write(self, layer, p):
+        time.sleep(0.05)
+        calls.append(p.samples)
+        original(self, layer, p)
+
+    monkeypatch.setattr(render_session.RenderSession, "_write", slow_write)
+    pixels = render_to_exr(fresh, tmp_path / "slow.exr", samples=12, size=(16, 12))
+    assert calls[0] == 1 and calls[-1] == 12 and len(calls) < 12, calls
+    assert np.isfinite(pixels).all() and pixels[..., :3].max() > 0
+
+
 @pytest.mark.slow
 def test_errors_end_the_render_cleanly(fresh, tmp_path, monkeypatch, core):
     small_scene(fresh)
