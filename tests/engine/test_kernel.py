@@ -13,7 +13,7 @@ import pytest
 
 from engine import kernel, render
 from engine.sampling import SampleStream
-from engine.scene import Camera, Light, Material, SceneBuilder, World
+from engine.scene import GLASS, Camera, Light, Material, SceneBuilder, World
 from tests import scenes
 
 pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not installed")
@@ -251,11 +251,19 @@ def test_a_wrong_renderer_is_told_apart():
 
 
 # ----------------------------------------------------------------- the plan's choice
-def test_auto_takes_the_kernels_where_they_cover_the_scene():
+def test_auto_takes_the_kernels_where_they_cover_the_scene(monkeypatch):
+    """Every material kind is ported, so every scene takes the kernels; a kind the kernels
+    lacked (as glass here, pretending) would send the scene to the numpy stages, saying why,
+    and an explicit kernel="compiled" would refuse it."""
     from engine.plan import make_plan
 
     plan = make_plan(scenes.cbspheres(), scenes.settings())
     assert plan.kernel == "compiled" and "compiled kernel" in plan.describe()
+    monkeypatch.setattr(kernel, "SUPPORTED", tuple(k for k in kernel.SUPPORTED if k != GLASS))
+    plan = make_plan(scenes.cbspheres(), scenes.settings())
+    assert plan.kernel == "numpy" and plan.kernel_note == "numpy: material kinds glass"
+    with pytest.raises(ValueError, match="glass"):
+        make_plan(scenes.cbspheres(), scenes.settings(kernel="compiled"))
 
 
 def test_without_numba_everything_takes_the_numpy_path(monkeypatch):
