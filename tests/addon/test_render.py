@@ -55,8 +55,10 @@ def test_committed_scenes_render(path, tmp_path, spy, core):
     assert pixels[..., :3].max() > 0  # lit by emitters or the world
     summary = render_session.last_summary
     assert summary["samples"] == 2 and "plan" in summary
-    # One update per pass and a final write, each with the extra passes present.
-    assert [s for _, s in spy] == [1, 2, 2]
+    # The first pass is shown, later ones while showing them is cheap (DISPLAY_SHARE: a
+    # matter of timing), and the final image is written, each with the extra passes.
+    shown = [s for _, s in spy]
+    assert shown[0] == 1 and shown[-1] == 2 and shown == sorted(shown) and len(shown) <= 3
     names = spy[0][0]
     assert {"Combined", "Depth", "Normal", "Specula Error"} <= set(names)
 
