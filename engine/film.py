@@ -139,9 +139,11 @@ class Film:
 
     def relative_error(self) -> float:
         """Estimated relative RMS error of the image: RMS standard error / mean luminance."""
+        return self._relative_error(self.pixel_error())
+
+    def _relative_error(self, err: np.ndarray) -> float:
         if self.count.max(initial=0) < 2:
             return float("inf")
-        err = self.pixel_error()
         return _relative(float(np.mean(err * err)), float(np.mean(self.mean @ LUMINANCE)))
 
     def statistics(self) -> tuple[np.ndarray, np.ndarray, float]:
@@ -151,8 +153,9 @@ class Film:
         are the same either way; the image-wide error may differ in its last digits (the
         sums run in another order)."""
         if not kernel.AVAILABLE:
-            return (self.pixel_error().astype(np.float32), self.variance().astype(np.float32),
-                    self.relative_error())
+            err = self.pixel_error()
+            return (err.astype(np.float32), self.variance().astype(np.float32),
+                    self._relative_error(err))
         n = len(self.count)
         error, variance = np.empty(n, np.float32), np.empty((n, 3), np.float32)
         sum_e2, sum_y, most = _statistics(self.count, self.mean, self.m2, self.m2_luminance,

@@ -408,6 +408,19 @@ def _spot(j, vx, vy, vz, L):
     return f * f * (3.0 - 2.0 * f)
 
 
+@njit(**_JIT)
+def _sample_cone(ax, ay, az, cos_max, ua, ub):
+    """A direction uniform in the cone of half-angle acos(cos_max) about the unit axis a
+    (a sphere light's visible cone, a sun's disc): (w, its cosine to a, solid-angle pdf)."""
+    s, t = _build_frame(ax, ay, az)
+    cos = 1.0 - ua * (1.0 - cos_max)
+    sin = math.sqrt(max(0.0, 1.0 - cos * cos))
+    phi = 2.0 * np.pi * ub
+    a, b = sin * math.cos(phi), sin * math.sin(phi)
+    return (a * s[0] + b * t[0] + cos * ax, a * s[1] + b * t[1] + cos * ay,
+            a * s[2] + b * t[2] + cos * az, cos, 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300)))
+
+
 @njit(inline="always", **_JIT)
 def _sample_object(j, px, py, pz, ua, ub, L):
     """LightObjects.sample for light j from point p: (wi, distance (inf for a sun),
@@ -430,16 +443,8 @@ def _sample_object(j, px, py, pz, ua, ub, L):
             v0, v1, v2 = p0 / g, p1 / g, p2 / g
         elif not soft and d > r:  # a sphere: uniform in its visible cone
             cos_max = math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
-            s, t = _build_frame(cx, cy, cz)
-            cos = 1.0 - ua * (1.0 - cos_max)
-            sin = math.sqrt(max(0.0, 1.0 - cos * cos))
-            phi = 2.0 * np.pi * ub
-            a, b = sin * math.cos(phi), sin * math.sin(phi)
-            wx = a * s[0] + b * t[0] + cos * cx
-            wy = a * s[1] + b * t[1] + cos * cy
-            wz = a * s[2] + b * t[2] + cos * cz
+            wx, wy, wz, cos, pdf = _sample_cone(cx, cy, cz, cos_max, ua, ub)
             dist = d * cos - math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
-            pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
             f = L[j, _FACTOR]
             v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
         elif soft and d > 0:  # a disk of radius r facing the point
@@ -470,15 +475,9 @@ def _sample_object(j, px, py, pz, ua, ub, L):
         ax, ay, az = -L[j, _DIRECTION], -L[j, _DIRECTION + 1], -L[j, _DIRECTION + 2]
         cos_max = L[j, _COS_ANGLE]
         if cos_max < 1.0:  # a disc: uniform in its cone
-            s, t = _build_frame(ax, ay, az)
-            cos = 1.0 - ua * (1.0 - cos_max)
-            sin = math.sqrt(max(0.0, 1.0 - cos * cos))
-            phi = 2.0 * np.pi * ub
-            a, b = sin * math.cos(phi), sin * math.sin(phi)
-            pdf = 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
+            wx, wy, wz, _, pdf = _sample_cone(ax, ay, az, cos_max, ua, ub)
             k = L[j, _SUN_RADIANCE] / pdf
-            return (a * s[0] + b * t[0] + cos * ax, a * s[1] + b * t[1] + cos * ay,
-                    a * s[2] + b * t[2] + cos * az, np.inf, p0 * k, p1 * k, p2 * k, pdf)
+            return wx, wy, wz, np.inf, p0 * k, p1 * k, p2 * k, pdf
         return ax, ay, az, np.inf, p0, p1, p2, np.inf
     # Area light: a uniform point on the rectangle or ellipse.
     if L[j, _ELLIPTIC] != 0:
@@ -835,6 +834,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             else:
                 e, p_sel = _choose(px, py, pz, u_sel, pmf, cdf, grid, lo, cell, local_pmf,
                                    local_cdf_flat, has_mass)
+            # The emitter: direction, distance (inf: none), radiance / (selection x pdf)
+            # and the combined pdf, as LightSampler.sample.
             if e < num_tri:
                 # Uniform point on the triangle (Heitz's low-distortion map, as sampling.py).
                 if ua < ub:
@@ -842,100 +843,72 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                 else:
                     b0, b1 = ua - ub / 2, ub / 2
                 b2 = 1.0 - b0 - b1
-                yx = v0[e, 0] + b1 * e1[e, 0] + b2 * e2[e, 0]
-                yy = v0[e, 1] + b1 * e1[e, 1] + b2 * e2[e, 1]
-                yz = v0[e, 2] + b1 * e1[e, 2] + b2 * e2[e, 2]
-                tx, ty, tz = yx - px, yy - py, yz - pz
+                tx = v0[e, 0] + b1 * e1[e, 0] + b2 * e2[e, 0] - px
+                ty = v0[e, 1] + b1 * e1[e, 1] + b2 * e2[e, 1] - py
+                tz = v0[e, 2] + b1 * e1[e, 2] + b2 * e2[e, 2] - pz
                 dist = math.sqrt(tx * tx + ty * ty + tz * tz)
-                wx, wy, wz = tx / dist, ty / dist, tz / dist
+                dn = dist if dist > 0 else 1.0
+                wx, wy, wz = tx / dn, ty / dn, tz / dn
                 cos_l = abs(lnormal[e, 0] * wx + lnormal[e, 1] * wy + lnormal[e, 2] * wz)
-                cos = wx * sx + wy * sy + wz * sz
-                c0 = c1 = c2 = 0.0
-                if dist > 0 and cos_l > 0 and p_sel > 0:
-                    pdf_sa = dist * dist / max(larea[e] * cos_l, 1e-300)
-                    if rough:
-                        # f cos of the layered lobe times radiance over the light's pdf.
-                        g0, g1, g2, pdf_b = _eval_layered(
-                            wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                            tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
-                        w = _power_heuristic(pdf_sa * p_sel, pdf_b)
-                        inv_pdf = 1.0 / pdf_sa
-                        c0 = t0 * g0 * (lradiance[e, 0] * inv_pdf / p_sel) * w
-                        c1 = t1 * g1 * (lradiance[e, 1] * inv_pdf / p_sel) * w
-                        c2 = t2 * g2 * (lradiance[e, 2] * inv_pdf / p_sel) * w
-                    elif cos > 0.0 and wx * nx + wy * ny + wz * nz > 0.0:
-                        # Lambert f cos over the solid-angle pdf, MIS-weighted.
-                        w = _power_heuristic(pdf_sa * p_sel, cos / np.pi)
-                        weight = cos / np.pi / pdf_sa / p_sel * w
-                        c0 = t0 * colour[mat, 0] * lradiance[e, 0] * weight
-                        c1 = t1 * colour[mat, 1] * lradiance[e, 1] * weight
-                        c2 = t2 * colour[mat, 2] * lradiance[e, 2] * weight
-                    if max(c0, max(c1, c2)) > 0:
-                        # Shadow ray from the offset point, aimed at the sampled point itself.
-                        eps = RAY_EPSILON * max(scale, 1e-30)
-                        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
-                        gx, gy, gz = yx - ox, yy - oy, yz - oz
-                        seg = math.sqrt(gx * gx + gy * gy + gz * gz)
-                        inv = 1.0 / max(seg, 1e-300)
-                        srow[shadow] = row
-                        sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
-                        sdir[shadow, 0] = gx * inv
-                        sdir[shadow, 1] = gy * inv
-                        sdir[shadow, 2] = gz * inv
-                        stmax[shadow] = max(seg - RAY_EPSILON * max(lscale[e], 1e-30), 0.0)
-                        scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
-                        shadow += 1
+                q0 = q1 = q2 = pdf_o = 0.0
+                if cos_l > 0 and dist > 0:
+                    pdf_o = dist * dist / max(larea[e] * cos_l, 1e-300)
+                    inv = 1.0 / pdf_o
+                    q0, q1, q2 = lradiance[e, 0] * inv, lradiance[e, 1] * inv, lradiance[e, 2] * inv
+                light_scale = lscale[e]
+            elif e == env_entry:  # the environment map: a direction, no distance
+                wx, wy, wz, pdf_o = _sample_environment(ua, ub, env_image, env_to_world,
+                                                        env_pmf, env_cdf)
+                u_e, v_e = _env_uv(wx, wy, wz, env_from_world)
+                q0, q1, q2 = _env_lookup(u_e, v_e, env_image)
+                pd = max(pdf_o, 1e-300)
+                q0, q1, q2, dist, light_scale = q0 / pd, q1 / pd, q2 / pd, np.inf, 0.0
+            else:  # a light object
+                wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(
+                    e - num_tri, px, py, pz, ua, ub, L)
+                light_scale = 0.0
+                if not math.isinf(dist):
+                    light_scale = max(abs(px + wx * dist), max(abs(py + wy * dist),
+                                                               abs(pz + wz * dist)))
+            ps = p_sel if p_sel > 0 else 1.0
+            q0, q1, q2 = q0 / ps, q1 / ps, q2 / ps
+            pdf_l = pdf_o * p_sel
+            # The BSDF's f cos and pdf toward it (Integrator.eval_bsdf).
+            g0 = g1 = g2 = pdf_b = 0.0
+            if rough:
+                g0, g1, g2, pdf_b = _eval_layered(
+                    wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                    tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
             else:
-                # A light object or the environment (LightSampler.sample): radiance over the
-                # pdf, both with the selection probability; suns and the map have no
-                # distance, delta lights no pdf for MIS.
-                if e == env_entry:  # the environment map: a direction, no distance
-                    wx, wy, wz, pdf_o = _sample_environment(ua, ub, env_image, env_to_world,
-                                                            env_pmf, env_cdf)
-                    u_e, v_e = _env_uv(wx, wy, wz, env_from_world)
-                    q0, q1, q2 = _env_lookup(u_e, v_e, env_image)
-                    pd = max(pdf_o, 1e-300)
-                    q0, q1, q2, dist = q0 / pd, q1 / pd, q2 / pd, np.inf
-                else:
-                    wx, wy, wz, dist, q0, q1, q2, pdf_o = _sample_object(
-                        e - num_tri, px, py, pz, ua, ub, L)
-                ps = p_sel if p_sel > 0 else 1.0
-                q0, q1, q2 = q0 / ps, q1 / ps, q2 / ps
-                pdf_l = pdf_o * p_sel
-                g0 = g1 = g2 = pdf_b = 0.0
-                if rough:
-                    g0, g1, g2, pdf_b = _eval_layered(
-                        wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                        tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
-                else:
-                    cos = wx * sx + wy * sy + wz * sz
-                    if cos > 0 and wx * nx + wy * ny + wz * nz > 0:
-                        pdf_b = cos / np.pi
-                        g0, g1, g2 = colour[mat, 0] * pdf_b, colour[mat, 1] * pdf_b, \
-                            colour[mat, 2] * pdf_b
-                if max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0:
-                    w = 1.0 if math.isinf(pdf_l) else _power_heuristic(pdf_l, pdf_b)
-                    c0, c1, c2 = t0 * g0 * q0 * w, t1 * g1 * q1 * w, t2 * g2 * q2 * w
-                    if max(c0, max(c1, c2)) > 0:
-                        eps = RAY_EPSILON * max(scale, 1e-30)
-                        ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
-                        srow[shadow] = row
-                        sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
-                        if math.isinf(dist):
-                            sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = wx, wy, wz
-                            stmax[shadow] = 3e38
-                        else:
-                            # Aim at the sampled point itself, stop just short of it.
-                            yx, yy, yz = px + wx * dist, py + wy * dist, pz + wz * dist
-                            gx, gy, gz = yx - ox, yy - oy, yz - oz
-                            seg = math.sqrt(gx * gx + gy * gy + gz * gz)
-                            sl = max(seg, 1e-300)
-                            sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = (gx / sl, gy / sl,
-                                                                                 gz / sl)
-                            light_scale = max(abs(yx), max(abs(yy), abs(yz)))
-                            stmax[shadow] = seg - RAY_EPSILON * max(light_scale, 1e-30)
-                        scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
-                        shadow += 1
+                cos = wx * sx + wy * sy + wz * sz
+                if cos > 0 and wx * nx + wy * ny + wz * nz > 0:
+                    pdf_b = cos / np.pi
+                    g0, g1, g2 = colour[mat, 0] * pdf_b, colour[mat, 1] * pdf_b, \
+                        colour[mat, 2] * pdf_b
+            if max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0:
+                # MIS-weighted (delta lights take it all); the shadow ray starts at the
+                # offset point and aims at the sampled point itself, stopping just short.
+                w = 1.0 if math.isinf(pdf_l) else _power_heuristic(pdf_l, pdf_b)
+                c0, c1, c2 = t0 * g0 * q0 * w, t1 * g1 * q1 * w, t2 * g2 * q2 * w
+                if max(c0, max(c1, c2)) > 0:
+                    eps = RAY_EPSILON * max(scale, 1e-30)
+                    ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+                    srow[shadow] = row
+                    sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
+                    if math.isinf(dist):
+                        sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = wx, wy, wz
+                        stmax[shadow] = 3e38
+                    else:
+                        gx = px + wx * dist - ox
+                        gy = py + wy * dist - oy
+                        gz = pz + wz * dist - oz
+                        seg = math.sqrt(gx * gx + gy * gy + gz * gz)
+                        sl = max(seg, 1e-300)
+                        sdir[shadow, 0], sdir[shadow, 1], sdir[shadow, 2] = (gx / sl, gy / sl,
+                                                                             gz / sl)
+                        stmax[shadow] = seg - RAY_EPSILON * max(light_scale, 1e-30)
+                    scontrib[shadow, 0], scontrib[shadow, 1], scontrib[shadow, 2] = c0, c1, c2
+                    shadow += 1
         if timing:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light

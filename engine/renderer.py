@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import os
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -70,7 +71,6 @@ class _Gate:
     """Opens when a pass may be folded into the film; `discard` drops it instead."""
 
     def __init__(self):
-        import threading
         self.opened = threading.Event()
         self.discard = False
 
@@ -134,6 +134,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     starts = list(range(0, n_pixels, chunk))
     stop_reason, cancelled, first = "samples", False, 0.0
     sample = 0
+    snap = None  # the last pass handed to on_pass
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
@@ -162,7 +163,8 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 stats = film.statistics() if needed else None
                 rel = stats[2] if needed else float("nan")
                 if on_pass is not None:
-                    on_pass(film.snapshot(sample, elapsed, sample / settings.samples, stats))
+                    snap = film.snapshot(sample, elapsed, sample / settings.samples, stats)
+                    on_pass(snap)
                 if sample >= settings.samples:
                     break
                 if settings.time_limit and elapsed >= settings.time_limit:
@@ -186,7 +188,9 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 for job in ahead[1]:
                     job.cancel()
     elapsed = time.perf_counter() - t0
-    snap = film.snapshot(sample, elapsed, sample / settings.samples)
-    return RenderResult(**snap.__dict__, plan=plan, stop_reason=stop_reason, cancelled=cancelled,
+    # The film is final now; the last pass's snapshot already shows it, if there was one.
+    if snap is None or snap.samples != sample:
+        snap = film.snapshot(sample, elapsed, sample / settings.samples)
+    return RenderResult(**{**snap.__dict__, "seconds": elapsed}, plan=plan, stop_reason=stop_reason, cancelled=cancelled,
                         warnings=list(scene.warnings) + film.rejected,
                         time_to_first_pass=first)
