@@ -272,27 +272,6 @@ def _fresnel_dielectric(cos_i, eta, exact):
 # bsdf.py's layered lobe (Principled: GGX dielectric specular over a diffuse base; rough
 # Glossy: the specular alone) for one vertex, in the same arithmetic order.
 @njit(**_JIT)
-def _interp_table(x, xp, fp):
-    """np.interp for one x over a short increasing table xp."""
-    n = len(xp)
-    if x < xp[0]:
-        return fp[0]
-    if x >= xp[n - 1]:
-        return fp[n - 1]
-    lo, hi = 0, n - 1  # xp[lo] <= x < xp[hi]
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if xp[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    if xp[lo] == x:
-        return fp[lo]
-    slope = (fp[lo + 1] - fp[lo]) / (xp[lo + 1] - xp[lo])
-    return slope * (x - xp[lo]) + fp[lo]
-
-
-@njit(**_JIT)
 def _ggx_lambda(cos_n, a2):
     c2 = max(cos_n * cos_n, 1e-300)
     return 0.5 * (math.sqrt(1.0 + a2 * max(1.0 / c2 - 1.0, 0.0)) - 1.0)
@@ -667,7 +646,7 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
      environment) = flags
     vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
     (kind, colour, ior, reflection_tint, transmission_tint, emission, layer_base, layer_tint,
-     layer_alpha, layer_fresnel, mu_grid, comp_table, albedo_table) = materials
+     layer_alpha, layer_fresnel, mu_grid, mu_guide, comp_table, albedo_table) = materials
     (pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass, entry_of_triangle,
      area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
     cam_pos, forward = camera
@@ -812,8 +791,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
         if rough:
             # The layered lobe's parameters at this view direction (Integrator._layer).
             mu = min(max(sx * wox + sy * woy + sz * woz, 0.0), 1.0)
-            comp = _interp_table(mu, mu_grid, comp_table[mat])
-            albedo = _interp_table(mu, mu_grid, albedo_table[mat])
+            comp = _interp(mu, mu_grid, comp_table[mat], mu_guide)
+            albedo = _interp(mu, mu_grid, albedo_table[mat], mu_guide)
             dw0 = layer_base[mat, 0] * (1.0 - albedo)
             dw1 = layer_base[mat, 1] * (1.0 - albedo)
             dw2 = layer_base[mat, 2] * (1.0 - albedo)
@@ -1053,9 +1032,10 @@ def interp_guide(xp: np.ndarray, cells: int = 16384) -> np.ndarray:
 
 @njit(**_JIT)
 def _interp(x, xp, fp, guide):
-    """np.interp for one x in [0, 1], bit-identical. A binary search over the whole
-    16k-entry filter table mispredicts a branch per level (~150 ns a sample); the guide
-    starts at x's cell, a step or two short of the answer."""
+    """np.interp for one x in [0, 1], bit-identical (the pixel filter's inverse CDF, the
+    microfacet tables over mu). A binary search over the whole 16k-entry filter table
+    mispredicts a branch per level (~150 ns a sample); the guide starts at x's cell, a
+    step or two short of the answer."""
     cells = len(guide) - 1
     j = guide[min(int(x * cells), cells - 1)]
     n = len(xp)
@@ -1157,7 +1137,8 @@ def unsupported(scene, plan) -> str:
 def pack_layers(it) -> tuple:
     """The rough materials' layered-lobe parameters per material (Integrator._layer):
     base (k, 3), specular tint (k, 3), alpha (k,), dielectric Fresnel (k,) bool, the mu
-    grid (m,) and the compensation and albedo tables (k, m); zeros for other kinds."""
+    grid (m,) with its `_interp` guide, and the compensation and albedo tables (k, m);
+    zeros for other kinds."""
     from .bsdf import ALBEDO_TABLE_SIZE
     k = len(it.kind)
     base, tint = np.zeros((k, 3)), np.zeros((k, 3))
@@ -1171,7 +1152,7 @@ def pack_layers(it) -> tuple:
         alpha[j], fresnel[j] = tables.alpha, principled
         mu = tables.mu
         comp[j], albedo[j] = tables.compensation_table, tables.albedo_table
-    return base, tint, alpha, fresnel, mu, comp, albedo
+    return base, tint, alpha, fresnel, mu, interp_guide(mu, 256), comp, albedo
 
 
 def pack_objects(sampler) -> np.ndarray:

@@ -191,6 +191,6 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     # The film is final now; the last pass's snapshot already shows it, if there was one.
     if snap is None or snap.samples != sample:
         snap = film.snapshot(sample, elapsed, sample / settings.samples)
-    return RenderResult(**{**snap.__dict__, "seconds": elapsed}, plan=plan, stop_reason=stop_reason, cancelled=cancelled,
-                        warnings=list(scene.warnings) + film.rejected,
-                        time_to_first_pass=first)
+    return RenderResult(**{**snap.__dict__, "seconds": elapsed}, plan=plan,
+                        stop_reason=stop_reason, cancelled=cancelled,
+                        warnings=list(scene.warnings) + film.rejected, time_to_first_pass=first)
