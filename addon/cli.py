@@ -1,19 +1,26 @@
-"""`python -m addon render SCENE.blend [...]`: render a .blend through Blender's pipeline.
+"""`python -m addon render|compare SCENE.blend [...]`: Specula from the command line.
 
-Uses the bpy module in-process: registers the add-on, opens the file, applies the
-command-line overrides and runs `bpy.ops.render.render(write_still=True)`. `.exr` output is
-linear 32-bit float; `.png` goes through the scene's view transform. The last line printed
-is one JSON object describing the render. Exit codes: 0 success, 1 unreadable scene or a
-failed render, 2 bad arguments (argparse).
+`render` uses the bpy module in-process: registers the add-on, opens the file, applies the
+command-line overrides and runs `bpy.ops.render.render()`, then saves the Render Result.
+`.exr` output is linear 32-bit float; `.png` goes through the scene's view transform. Exit
+codes: 0 success, 1 unreadable scene or a failed render, 2 bad arguments (argparse).
+
+`compare` renders the scene with Specula and with Cycles and tests whether they agree
+(compare.py; exit 0 agree, 1 differ, 2 bad arguments or scipy missing, 3 no comparison).
+
+Both print warnings as one `warning: ...` line each on stderr, repeats grouped, Blender's
+own output on stderr too, and the JSON summary as the last line of stdout (console.py);
+`--json PATH` also writes it to a file.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
+
+from . import console
 
 ENGINES = ("SPECULA", "CYCLES")
 FORMATS = {".exr": "OPEN_EXR", ".png": "PNG"}
@@ -55,6 +62,15 @@ def _output(text):
     return text
 
 
+def _png(text):
+    if os.path.splitext(text)[1].lower() != ".png":
+        raise argparse.ArgumentTypeError(f"the comparison image must end in .png, got {text!r}")
+    return text
+
+
+_positive_float = _number(float, 1e-3, "a number of seconds >= 0.001")
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="python -m addon",
                                      description="Specula for Blender, from the command line")
@@ -71,6 +87,27 @@ def build_parser():
     r.add_argument("--output", type=_output, action="append",
                    help="image path, .exr (linear float) or .png (view transform); repeat to "
                    "save one render in several files; default out/<scene>.exr")
+    r.add_argument("--json", metavar="PATH", help="also write the JSON summary to PATH")
+
+    c = sub.add_parser(
+        "compare", help="render a .blend with Specula and with Cycles and test if they agree",
+        description="Render the scene with Specula and with Cycles (set up unbiased, same "
+        "pixel filter, bounces and threads; Cycles twice, for its variance) and compare them "
+        "block by block. Exit 0 when they agree, 1 when they differ, 2 on bad arguments, "
+        "3 when no comparison could be made.")
+    c.add_argument("scene", help="the .blend file to compare")
+    c.add_argument("--samples", type=_positive_int,
+                   help="samples per pixel for each render (default: the scene's Specula "
+                   "samples; an upper bound with --time)")
+    c.add_argument("--time", type=_positive_float, metavar="SECONDS",
+                   help="equal time: each render stops after SECONDS")
+    c.add_argument("--max-bounces", type=_non_negative_int, help="total bounce limit")
+    c.add_argument("--resolution", type=_resolution, help="WIDTHxHEIGHT at 100%%")
+    c.add_argument("--seed", type=_non_negative_int,
+                   help="Specula's seed; Cycles uses seed + 1 and seed + 2")
+    c.add_argument("--output", type=_png,
+                   help="the report image (PNG); default out/compare/<scene>.png")
+    c.add_argument("--json", metavar="PATH", help="also write the JSON summary to PATH")
     return parser
 
 
@@ -87,29 +124,19 @@ def _configure_specula(scene, args):
 
 
 def _configure_cycles(scene, args):
-    """Cycles without its biased defaults, so it can be compared with Specula."""
-    c = scene.cycles
+    """Cycles without its biased defaults (renderers.configure_cycles_unbiased), with the
+    command line's values or else the scene's Specula settings."""
+    from .renderers import configure_cycles_unbiased
+
     s = scene.specula
-    c.device = "CPU"
-    c.samples = args.samples if args.samples is not None else s.samples
-    c.time_limit = args.time_limit if args.time_limit is not None else s.time_limit
-    c.seed = args.seed if args.seed is not None else s.seed
-    c.use_denoising = False
-    c.use_adaptive_sampling = False
-    c.sample_clamp_direct = 0.0
-    c.sample_clamp_indirect = 0.0
-    c.blur_glossy = 0.0
-    c.light_sampling_threshold = 0.0
-    bounces = args.max_bounces if args.max_bounces is not None else s.max_bounces
-    # Every per-type limit equals the total, so only the total limits a path, as in Specula;
-    # transparent bounces are left as they are.
-    for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
-                 "volume_bounces"):
-        setattr(c, name, bounces)
-    c.pixel_filter_type = s.filter_type
-    scene.cycles.filter_width = s.filter_width  # Film > Pixel Filter width
-    for layer in scene.view_layers:
-        layer.cycles.use_denoising = False
+
+    def pick(value, default):
+        return value if value is not None else default
+
+    configure_cycles_unbiased(scene, samples=pick(args.samples, s.samples),
+                              time_limit=pick(args.time_limit, s.time_limit),
+                              seed=pick(args.seed, s.seed),
+                              max_bounces=pick(args.max_bounces, s.max_bounces))
 
 
 def _fail(message, code=1):
@@ -127,7 +154,9 @@ def _save(bpy, scene, output):
     image.color_mode = "RGBA"
     image.color_depth = "32" if ext == ".exr" else "8"
     os.makedirs(os.path.dirname(output), exist_ok=True)
-    result = bpy.data.images.get("Render Result")
+    # By type, not by name: a file with its own image called "Render Result" (or a renamed
+    # one) gets "Render Result.001".
+    result = next((img for img in bpy.data.images if img.type == "RENDER_RESULT"), None)
     if result is None:
         return "the render produced no image"
     try:
@@ -147,15 +176,28 @@ def render(args):
         return _fail(f"scene file is not readable: {args.scene}")
     outputs = [os.path.abspath(o) for o in (args.output or [os.path.join(
         "out", os.path.splitext(os.path.basename(path))[0] + ".exr")])]
+    log = console.Warnings()
+    with console.captured_output(log):
+        summary, error = _render(args, path, outputs)
+    log.print()
+    if error:
+        return _fail(error)
+    summary["warnings"] = log.lines()
+    console.emit_json(summary, args.json)
+    return 0
 
+
+def _render(args, path, outputs):
+    """(summary, None) or (None, error message); Blender's output is captured meanwhile."""
     import bpy  # after argument checks: importing bpy takes a second
 
     from . import register, render_session
-    register()
+    if not hasattr(bpy.types.Scene, "specula"):
+        register()
     try:
         bpy.ops.wm.open_mainfile(filepath=path)
     except RuntimeError as exc:
-        return _fail(f"cannot read {args.scene}: {str(exc).strip()}")
+        return None, f"cannot read {args.scene}: {str(exc).strip()}"
     scene = bpy.context.scene
     scene.render.engine = args.engine
     if args.resolution is not None:
@@ -170,30 +212,36 @@ def render(args):
     try:
         bpy.ops.render.render()
     except RuntimeError as exc:
-        return _fail(f"render failed: {str(exc).strip()}")
+        return None, f"render failed: {str(exc).strip()}"
     seconds = time.perf_counter() - t0
     if args.engine == "SPECULA":
         summary = dict(render_session.last_summary)
         if not summary or "error" in summary:
-            return _fail(summary.get("error", "render failed (no result)"))
+            return None, summary.get("error", "render failed (no result)")
     else:
         summary = {"engine": "CYCLES", "samples": int(scene.cycles.samples),
                    "seconds": seconds, "relative_error": None, "plan": None}
     for output in outputs:
         error = _save(bpy, scene, output)
         if error:
-            return _fail(error)
+            return None, error
     summary["output"] = outputs[0] if len(outputs) == 1 else outputs
     summary["scene"] = path
-    print(json.dumps(summary, default=str))
-    return 0
+    return summary, None
 
 
 def main(argv=None):
+    """Run a command; argv None means this process is the command (`python -m addon`)."""
+    console.install_warning_format()
     args = build_parser().parse_args(argv)
     if args.command == "render":
-        return render(args)
-    return 2
+        code = render(args)
+    else:
+        from . import compare
+        code = compare.run(args)
+    if argv is None:
+        console.close_stdout()
+    return code
 
 
 classes = ()

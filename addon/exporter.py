@@ -57,6 +57,8 @@ class Instance:
     matrix_world: np.ndarray
     material_lut: np.ndarray
     is_instance: bool = False
+    # Object > Shading > Shadow Terminator > Geometry Offset (Cycles' default 0.1).
+    terminator_offset: float = 0.1
 
 
 @dataclass
@@ -152,6 +154,7 @@ class _Exporter:
         self.scene = depsgraph.scene
         self.out = ExportedScene()
         self._material_index = {}  # material pointer (or None) -> index in out.materials
+        self._image_means = {}  # image means shared by this export's materials
         self._warned = set()
 
     def warn(self, text):
@@ -163,7 +166,7 @@ class _Exporter:
         key = None if mat is None else mat.original.as_pointer()
         index = self._material_index.get(key)
         if index is None:
-            spec, warnings = materials.convert(mat)
+            spec, warnings = materials.convert(mat, self._image_means)
             for w in warnings:
                 self.warn(w)
             index = self._material_index[key] = len(self.out.materials)
@@ -212,7 +215,17 @@ class _Exporter:
         name = obj.name if not inst.is_instance or inst.parent is None else \
             f"{inst.parent.name}/{obj.name}"
         self.out.instances.append(Instance(name, key, np.array(inst.matrix_world.copy()), lut,
-                                           bool(inst.is_instance)))
+                                           bool(inst.is_instance),
+                                           self.terminator_offset(obj)))
+
+    def terminator_offset(self, obj) -> float:
+        """The object's shadow terminator geometry offset (Blender 3.0+; Cycles' default
+        0.1 where it is missing); its Shading Offset is not supported and is warned."""
+        shading = float(getattr(obj, "shadow_terminator_shading_offset", 0.0))
+        if shading > 0.0:
+            self.warn(f"object '{obj.name}': Shadow Terminator Shading Offset {shading:.3g} is "
+                      f"not supported; rendered as 0")
+        return min(max(float(getattr(obj, "shadow_terminator_geometry_offset", 0.1)), 0.0), 1.0)
 
     def light(self, inst, obj):
         if not inst.is_instance and (obj.original.hide_render or not inst.show_self):
@@ -520,7 +533,7 @@ def _group_instances(exported: ExportedScene):
             yield inst.name, mesh, inst.material_lut, [inst]
             continue
         mirrored = bool(np.linalg.det(inst.matrix_world[:3, :3]) < 0)
-        key = (inst.mesh_key, inst.material_lut.tobytes(), mirrored)
+        key = (inst.mesh_key, inst.material_lut.tobytes(), mirrored, inst.terminator_offset)
         groups.setdefault(key, []).append(inst)
     for insts in groups.values():
         mesh = exported.meshes[insts[0].mesh_key]
@@ -548,7 +561,8 @@ def to_core(exported: ExportedScene, core):
         k = len(insts)
         builder.add_mesh(name, vertices, triangles, np.tile(mat_index, k),
                          corner_normals=normals,
-                         smooth=np.tile(mesh.smooth, k) if normals is not None else False)
+                         smooth=np.tile(mesh.smooth, k) if normals is not None else False,
+                         terminator_offset=insts[0].terminator_offset)
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
     world = core.World(exported.world_colour, **(exported.environment or {}))

@@ -3,29 +3,64 @@
 The core understands Lambert diffuse, perfect mirror, smooth metal, smooth glass and
 emission (see engine/scene.py `Material`). This module reads a material's Cycles output
 and maps the nodes it knows onto those; anything else becomes a documented fallback with
-a warning that names the material and the node, so nothing renders silently black.
+a warning that names the material, the node and the input, so nothing renders silently black
+and no fallback changes what kind of thing an object is (a surface never becomes a light, a
+volume never becomes an opaque wall).
 
 Fallbacks:
   * no node tree / no Cycles output / nothing linked to Surface: diffuse of the
-    material's viewport colour (`diffuse_color`).
+    material's viewport colour (`diffuse_color`); but nothing on Surface and something on
+    Volume: an invisible boundary (glass of IOR 1, white), since volumes are not rendered.
+  * Volume or Displacement linked beside a Surface: ignored, warned.
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
-  * Glossy BSDF with roughness > 0: mirror. Glass BSDF with roughness > 0: smooth glass.
+  * Glass BSDF with roughness > 0: smooth glass.
   * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR), else Metallic >= 0.5 ->
-    metal, else diffuse of Base Color; roughness ignored for metal and glass (warned),
-    the dielectric specular layer of the diffuse case is dropped (documented, not warned).
+    metal, else a Lambert base under a GGX dielectric layer; roughness ignored for metal and
+    glass (warned). Inputs Specula does not render (Alpha, Coat, Sheen, Subsurface,
+    Anisotropic, Specular Tint, Thin Film, Diffuse Roughness, normal maps) warn when used.
   * any other shader node (Mix, Add, Toon, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
-  * a linked input (texture): the socket's unlinked default value.
+  * an input driven by other nodes (textures): the constant the chain reduces to (see
+    `_Constants`: an image's mean colour in scene-linear space, RGB / Value / Math / Mix /
+    Separate Color ... applied to such constants), warned when approximate. A chain that cannot
+    be reduced uses the input's own value, except the Principled BSDF's emission, which is
+    then off: a hidden white default must not turn a textured surface into a light.
 """
 
+import colorsys
+import math
 from dataclasses import dataclass, field
 
 import bpy
+import mathutils
+import numpy as np
 
 DEFAULT_GREY = (0.8, 0.8, 0.8)
 # Cycles treats roughness below this as a perfect delta lobe (alpha = r^2 <= 2e-10 there).
 ROUGHNESS_EPSILON = 1e-5
 GLOSSY_NODES = ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
+# Colour -> float socket conversion: luminance with the Rec.709 coefficients of Blender's
+# default configuration (what Cycles' `linear_rgb_to_gray` uses there).
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+# Image means are taken over at most about this many texels per side (a strided subsample):
+# a 4k texture's mean does not need all 16M texels.
+MEAN_SIDE = 512
+# The Principled BSDF's inputs Specula does not render yet: (input, the value at which it has
+# no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
+PRINCIPLED_IGNORED = (
+    ("Alpha", 1.0, "rendered opaque"),
+    ("Coat Weight", 0.0, "rendered without a coat"),
+    ("Sheen Weight", 0.0, "rendered without sheen"),
+    ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
+    ("Anisotropic", 0.0, "rendered isotropic"),
+    ("Specular Tint", (1.0, 1.0, 1.0), "rendered white"),
+    ("Thin Film Thickness", 0.0, "rendered without thin film"),
+    ("Diffuse Roughness", 0.0, "rendered Lambert"),
+)
+# Material Output inputs beside Surface that Specula ignores, with what that means.
+OUTPUT_IGNORED = (("Volume", "volumes are not rendered"),
+                  ("Displacement", "displacement is not applied"),
+                  ("Thickness", "thickness is not used"))
 
 
 @dataclass(frozen=True)
@@ -44,38 +79,505 @@ def default_material():
     return MaterialSpec("diffuse", "Specula default", {"colour": DEFAULT_GREY})
 
 
+def invisible_boundary(name):
+    """What a Volume-only material renders as: glass of IOR 1 refracts and reflects nothing."""
+    return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0})
+
+
 def _rgb(value):
     return tuple(float(c) for c in tuple(value)[:3])
+
+
+def _fmt(value):
+    if isinstance(value, tuple):
+        return "(" + ", ".join(f"{c:.3g}" for c in value) + ")"
+    return f"{value:.3g}"
+
+
+def _label(node):
+    return node.bl_label or node.bl_idname
+
+
+def _live_link(socket):
+    """The link that drives `socket`, or None: muted and invalid links do not count (Blender
+    then evaluates the socket's own value)."""
+    if not socket.is_linked:
+        return None
+    return next((k for k in socket.links if not k.is_muted and k.is_valid), None)
+
+
+def _enabled_input(node, name):
+    """`node`'s input called `name`; nodes like Mix have one per data type, only one enabled."""
+    found = [s for s in node.inputs if s.name == name]
+    return next((s for s in found if s.enabled), found[0] if found else None)
+
+
+def _own_value(socket):
+    """The socket's unlinked value: float for scalars, (r, g, b) / (x, y, z) otherwise."""
+    v = getattr(socket, "default_value", None)
+    if v is None:
+        return None
+    try:
+        return _rgb(v) if socket.type in ("RGBA", "VECTOR") else float(v)
+    except (TypeError, ValueError):  # strings, menus, rotations: nothing Specula reduces
+        return None
+
+
+def _convert(value, from_type, to_type):
+    """Blender's implicit socket conversions: float <-> colour / vector, colour -> float by
+    luminance, vector -> float by the component average."""
+    scalar = to_type in ("VALUE", "INT", "BOOLEAN")
+    if not isinstance(value, tuple):
+        return float(value) if scalar else (float(value),) * 3
+    if not scalar:
+        return value
+    if from_type == "RGBA":
+        return sum(w * c for w, c in zip(LUMINANCE, value))
+    return sum(value) / 3.0
+
+
+# ---- Image means -----------------------------------------------------------------------------
+# `Image.pixels` holds byte images as their stored 8-bit values / 255, still encoded in the
+# image's colour space (an sRGB 128 reads 0.502, not 0.216), and float images as the
+# scene-linear buffer Blender decoded on loading (a 16-bit sRGB PNG's 0.5 reads 0.214; as
+# Non-Color, 0.5): read back in bpy 5.0.1. Byte texels are decoded one by one, since the
+# transfer function is not linear; the primaries are, so they convert the mean.
+
+def srgb_to_linear(c):
+    """The sRGB transfer function, encoded -> linear (IEC 61966-2-1), elementwise."""
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+# Linear Display P3 (D65) -> CIE XYZ, to reach scene linear through mathutils' XYZ conversion.
+_P3_TO_XYZ = np.array([[0.4865709, 0.2656677, 0.1982173],
+                       [0.2289746, 0.6917385, 0.0792869],
+                       [0.0000000, 0.0451134, 1.0439444]])
+
+
+def _xyz_to_scene(rgb):
+    return tuple(mathutils.Color(rgb).from_xyz_d65_to_scene_linear())
+
+
+def _via(method):
+    def to_scene(rgb):
+        # Blender releases without this conversion work in linear Rec.709: keep the values.
+        convert = getattr(mathutils.Color(rgb), method, None)
+        return tuple(rgb) if convert is None else tuple(convert())
+    return to_scene
+
+
+# Byte image colour space -> (per-texel transfer function, linear primaries -> scene linear).
+# Spaces not listed are decoded as sRGB, with a note in the warning.
+_COLOUR_SPACES = {
+    "sRGB": (srgb_to_linear, _via("from_rec709_linear_to_scene_linear")),
+    "Linear Rec.709": (None, _via("from_rec709_linear_to_scene_linear")),
+    "Linear Rec.2020": (None, _via("from_rec2020_linear_to_scene_linear")),
+    "ACEScg": (None, _via("from_acescg_to_scene_linear")),
+    "ACES2065-1": (None, _via("from_aces_to_scene_linear")),
+    "Linear CIE-XYZ D65": (None, _xyz_to_scene),
+    "Display P3": (srgb_to_linear, lambda rgb: _xyz_to_scene(tuple(_P3_TO_XYZ @ rgb))),
+}
+
+
+def image_mean(image, alpha_weighted):
+    """Mean of what an Image Texture node outputs for `image`, in scene-linear space.
+
+    Returns ((r, g, b), alpha, notes), or None when the image has no pixels (a missing
+    file). The colour follows Cycles' Image Texture: with its Alpha output linked the Color
+    output is straight (unassociated) colour, and since that alpha usually cuts the surface
+    away where it is 0, the mean is weighted by alpha (the colour of what is seen); with
+    Alpha unlinked the Color output is premultiplied by alpha (images whose alpha mode is
+    Straight or Premultiplied) or the plain colour (Channel Packed, None, Non-Color data).
+    """
+    width, height = image.size
+    count = len(image.pixels) if width * height else 0  # reading the length loads the image
+    if count == 0:
+        return None
+    channels = count // (width * height)
+    px = np.empty(count, np.float32)
+    image.pixels.foreach_get(px)
+    step = max(1, -(-max(width, height) // MEAN_SIDE))
+    px = px.reshape(height, width, channels)[::step, ::step].reshape(-1, channels)
+    px = px.astype(np.float64)
+    rgb = px[:, :3] if channels >= 3 else np.repeat(px[:, :1], 3, axis=1)
+    mode = image.alpha_mode
+    alpha = px[:, 3] if channels >= 4 and mode != "NONE" else np.ones(len(px))
+    # Blender keeps float buffers premultiplied, byte buffers as the file stores them.
+    if mode in ("STRAIGHT", "PREMUL") and (image.is_float or mode == "PREMUL"):
+        rgb = np.divide(rgb, alpha[:, None], out=np.zeros_like(rgb), where=alpha[:, None] > 0)
+    notes = [f"the mean of image '{image.name}'"]
+    space = image.colorspace_settings
+    to_scene = None
+    if not image.is_float and not space.is_data:
+        known = space.name in _COLOUR_SPACES
+        transfer, to_scene = _COLOUR_SPACES[space.name if known else "sRGB"]
+        if not known:
+            notes.append(f"its colour space '{space.name}' decoded as sRGB")
+        if transfer is not None:
+            rgb = transfer(rgb)
+    associated = mode in ("STRAIGHT", "PREMUL") and not space.is_data
+    if alpha_weighted and alpha.sum() > 0:
+        mean = (rgb * alpha[:, None]).sum(axis=0) / alpha.sum()
+    elif associated:
+        mean = (rgb * alpha[:, None]).mean(axis=0)
+    else:
+        mean = rgb.mean(axis=0)
+    mean = tuple(float(c) for c in mean)
+    if to_scene is not None:
+        mean = tuple(max(float(c), 0.0) for c in to_scene(mean))
+    return mean, float(alpha.mean()), notes
+
+
+# ---- Constant folding of node chains ----------------------------------------------------------
+# Until Specula has textures, a linked input is reduced to one constant. One small function per
+# node kind (as Cycles' SVM has one per node), each `f(k, node, out)` -> the value of output
+# socket `out` (float, or an (r, g, b) / (x, y, z) tuple) or None when it cannot be reduced;
+# `k` is the `_Constants` evaluating the chain. A later issue with real textures replaces this
+# table. Linear nodes (Mix, Multiply, Separate Color ...) applied to means give exact means;
+# non-linear ones (Power, Color Ramp ...) applied to means are approximations.
+
+def _c_value(k, node, out):
+    return _own_value(node.outputs[0])
+
+
+def _c_reroute(k, node, out):
+    return k.input(node.inputs[0])
+
+
+def _c_image(k, node, out):
+    image = node.image
+    if image is None:
+        k.notes.append(f"node '{node.name}' has no image")
+        return None
+    weighted = out.name == "Color" and node.outputs["Alpha"].is_linked
+    stats = k.image_stats(image, weighted)
+    if stats is None:
+        k.notes.append(f"image '{image.name}' has no pixels")
+        return None
+    colour, alpha, notes = stats
+    k.notes.extend(notes)
+    return alpha if out.name == "Alpha" else colour
+
+
+def _c_checker(k, node, out):
+    # The checker's two colours cover equal areas: its means are their mean and Fac 0.5.
+    c1, c2 = k.input(_enabled_input(node, "Color1")), k.input(_enabled_input(node, "Color2"))
+    if out.name != "Fac" and (c1 is None or c2 is None):
+        return None
+    k.notes.append(f"the mean of checker '{node.name}'")
+    return 0.5 if out.name == "Fac" else tuple(0.5 * (a + b) for a, b in zip(c1, c2))
+
+
+def _blend(blend_type, t, c1, c2):
+    """Cycles' colour Mix (kernel/svm/color_util.h) of two constant colours."""
+    def lerp(b):
+        return tuple((1 - t) * a + t * x for a, x in zip(c1, b))
+    if blend_type == "MULTIPLY":
+        return tuple(a * ((1 - t) + t * b) for a, b in zip(c1, c2))
+    if blend_type == "ADD":
+        return tuple(a + t * b for a, b in zip(c1, c2))
+    if blend_type == "SUBTRACT":
+        return tuple(a - t * b for a, b in zip(c1, c2))
+    if blend_type == "SCREEN":
+        return tuple(1 - ((1 - t) + t * (1 - b)) * (1 - a) for a, b in zip(c1, c2))
+    if blend_type == "DIVIDE":
+        return tuple((1 - t) * a + t * a / b if b != 0 else a for a, b in zip(c1, c2))
+    if blend_type == "DIFFERENCE":
+        return lerp(tuple(abs(a - b) for a, b in zip(c1, c2)))
+    if blend_type == "DARKEN":
+        return lerp(tuple(min(a, b) for a, b in zip(c1, c2)))
+    if blend_type == "LIGHTEN":
+        return tuple(max(a, t * b) for a, b in zip(c1, c2))
+    return lerp(c2)
+
+
+def _mix(k, node, t, a, b, blend_type, clamp):
+    """Shared by Mix and the legacy MixRGB: an operand that cannot be reduced (a Color
+    Attribute, say) is left out, keeping the other one, the best constant at hand."""
+    if a is None or b is None:
+        if a is None and b is None:
+            return None
+        k.notes.append(f"node '{node.name}' ({_label(node)}) reduced to its one constant input")
+        return a if b is None else b
+    if t is None:
+        t = 0.5
+        k.notes.append(f"node '{node.name}' factor taken as 0.5")
+    if not isinstance(a, tuple):
+        return (1 - t) * a + t * b
+    if blend_type not in ("MIX", "MULTIPLY", "ADD", "SUBTRACT", "SCREEN", "DIVIDE",
+                          "DIFFERENCE", "DARKEN", "LIGHTEN"):
+        k.notes.append(f"node '{node.name}' blend {blend_type} taken as Mix")
+    if isinstance(t, tuple):  # non-uniform vector factor
+        out = tuple((1 - f) * x + f * y for f, x, y in zip(t, a, b))
+    else:
+        out = _blend(blend_type, t, a, b)
+    return tuple(min(max(c, 0.0), 1.0) for c in out) if clamp else out
+
+
+def _c_mix(k, node, out):
+    t = k.input(_enabled_input(node, "Factor"))
+    if t is not None and node.clamp_factor:
+        t = tuple(min(max(f, 0.0), 1.0) for f in t) if isinstance(t, tuple) \
+            else min(max(t, 0.0), 1.0)
+    colour = node.data_type == "RGBA"
+    return _mix(k, node, t, k.input(_enabled_input(node, "A")),
+                k.input(_enabled_input(node, "B")), node.blend_type if colour else "MIX",
+                colour and node.clamp_result)
+
+
+def _c_mix_rgb(k, node, out):
+    t = k.input(node.inputs[0])
+    t = None if t is None else min(max(t, 0.0), 1.0)
+    return _mix(k, node, t, k.input(node.inputs[1]), k.input(node.inputs[2]),
+                node.blend_type, node.use_clamp)
+
+
+def _to_mode(mode, rgb):
+    if mode == "HSV":
+        return colorsys.rgb_to_hsv(*rgb)
+    if mode == "HSL":
+        h, lum, s = colorsys.rgb_to_hls(*rgb)
+        return h, s, lum
+    return rgb
+
+
+def _c_separate(k, node, out):
+    """Separate Color / RGB / XYZ: one channel of the mean is the mean of that channel."""
+    c = k.input(node.inputs[0])
+    if c is None:
+        return None
+    c = _to_mode(getattr(node, "mode", "RGB"), c)
+    return c[[s.identifier for s in node.outputs].index(out.identifier) % 3]
+
+
+def _c_combine(k, node, out):
+    c = [k.input(s) for s in node.inputs[:3]]
+    if any(v is None for v in c):
+        return None
+    mode = getattr(node, "mode", "RGB")
+    if mode == "HSV":
+        return colorsys.hsv_to_rgb(*c)
+    if mode == "HSL":
+        return colorsys.hls_to_rgb(c[0], c[2], c[1])
+    return tuple(c)
+
+
+def _c_invert(k, node, out):
+    t, c = k.input(node.inputs[0]), k.input(node.inputs[1])
+    if t is None or c is None:
+        return None
+    return tuple((1 - t) * x + t * (1 - x) for x in c)
+
+
+def _c_gamma(k, node, out):
+    c, g = k.input(node.inputs[0]), k.input(node.inputs[1])
+    if c is None or g is None:
+        return None
+    return tuple(x ** g if x > 0 else x for x in c)
+
+
+def _c_bright_contrast(k, node, out):
+    c, bright, contrast = (k.input(s) for s in node.inputs[:3])
+    if c is None or bright is None or contrast is None:
+        return None
+    a, b = 1 + contrast, bright - contrast * 0.5
+    return tuple(max(a * x + b, 0.0) for x in c)
+
+
+def _c_color_ramp(k, node, out):
+    t = k.input(node.inputs[0])
+    if t is None:
+        return None
+    rgba = tuple(node.color_ramp.evaluate(min(max(t, 0.0), 1.0)))
+    return rgba[3] if out.name == "Alpha" else rgba[:3]
+
+
+_MATH = {
+    "ADD": lambda a, b, c: a + b,
+    "SUBTRACT": lambda a, b, c: a - b,
+    "MULTIPLY": lambda a, b, c: a * b,
+    "DIVIDE": lambda a, b, c: a / b if b != 0 else 0.0,
+    "MULTIPLY_ADD": lambda a, b, c: a * b + c,
+    "POWER": lambda a, b, c: a ** b if a > 0 or float(b).is_integer() else 0.0,
+    "MINIMUM": lambda a, b, c: min(a, b),
+    "MAXIMUM": lambda a, b, c: max(a, b),
+    "LESS_THAN": lambda a, b, c: float(a < b),
+    "GREATER_THAN": lambda a, b, c: float(a > b),
+    "ABSOLUTE": lambda a, b, c: abs(a),
+    "SQRT": lambda a, b, c: math.sqrt(a) if a > 0 else 0.0,
+}
+
+
+def _c_math(k, node, out):
+    op = _MATH.get(node.operation)
+    args = [k.input(s) for s in node.inputs if s.enabled]
+    if op is None or any(v is None for v in args):
+        return None
+    v = op(*(args + [0.0, 0.0])[:3])
+    return min(max(v, 0.0), 1.0) if node.use_clamp else v
+
+
+NODE_CONSTANTS = {
+    "NodeReroute": _c_reroute,
+    "ShaderNodeRGB": _c_value,
+    "ShaderNodeValue": _c_value,
+    "ShaderNodeTexImage": _c_image,
+    "ShaderNodeTexChecker": _c_checker,
+    "ShaderNodeMix": _c_mix,
+    "ShaderNodeMixRGB": _c_mix_rgb,
+    "ShaderNodeSeparateColor": _c_separate,
+    "ShaderNodeSeparateRGB": _c_separate,
+    "ShaderNodeSeparateXYZ": _c_separate,
+    "ShaderNodeCombineColor": _c_combine,
+    "ShaderNodeCombineRGB": _c_combine,
+    "ShaderNodeCombineXYZ": _c_combine,
+    "ShaderNodeInvert": _c_invert,
+    "ShaderNodeGamma": _c_gamma,
+    "ShaderNodeBrightContrast": _c_bright_contrast,
+    "ShaderNodeValToRGB": _c_color_ramp,
+    "ShaderNodeMath": _c_math,
+}
+# Node trees are acyclic, but a chain this deep is not worth folding.
+MAX_CHAIN_DEPTH = 64
+
+
+class _Constants:
+    """Reduces the node chain behind a socket to one constant; `notes` lists the
+    approximations made (empty: the constant is exact, e.g. an RGB node)."""
+
+    def __init__(self, image_cache):
+        self.image_cache = image_cache
+        self.notes = []
+        self.depth = 0
+
+    def image_stats(self, image, alpha_weighted):
+        key = (image.as_pointer(), alpha_weighted)
+        if key not in self.image_cache:
+            self.image_cache[key] = image_mean(image, alpha_weighted)
+        return self.image_cache[key]
+
+    def input(self, socket):
+        """Value of an input socket: its own, or its chain's constant converted to its type."""
+        if socket is None:
+            return None
+        link = _live_link(socket)
+        if link is None:
+            return _own_value(socket)
+        v = self.output(link.from_socket)
+        return None if v is None else _convert(v, link.from_socket.type, socket.type)
+
+    def output(self, out):
+        node = out.node
+        if self.depth > MAX_CHAIN_DEPTH:
+            return None
+        self.depth += 1
+        try:
+            if node.mute:
+                # A muted node passes its matching input through (Blender's internal links).
+                through = next((k.from_socket for k in node.internal_links
+                                if k.to_socket == out), None)
+                return None if through is None else self.input(through)
+            fn = NODE_CONSTANTS.get(node.bl_idname)
+            return fn(self, node, out) if fn is not None else self.pass_through(node, out)
+        except (ArithmeticError, ValueError):  # e.g. Power overflowing: not a usable constant
+            self.notes.append(f"node '{node.name}' ({_label(node)}) has no finite value")
+            return None
+        finally:
+            self.depth -= 1
+
+    def pass_through(self, node, out):
+        """An unknown node that adjusts a linked input of its output's type (Hue/Saturation,
+        RGB Curves, a node group ...) is approximated by that input: the best constant
+        at hand. Nodes without such an input (Color Attribute, Noise, Fresnel ...) give None."""
+        for s in node.inputs:
+            if s.enabled and s.type == out.type and _live_link(s) is not None:
+                v = self.input(s)
+                if v is not None:
+                    self.notes.append(f"node '{node.name}' ({_label(node)}) taken as its input "
+                                      f"'{s.name}'")
+                    return v
+        return None
 
 
 class _Reader:
     """Reads one material, collecting warnings that name it."""
 
-    def __init__(self, material):
+    def __init__(self, material, image_cache=None):
         self.material = material
         self.warnings = []
+        self.constants = _Constants({} if image_cache is None else image_cache)
 
     def warn(self, text):
         self.warnings.append(f"material '{self.material.name}': {text}")
 
-    def value(self, node, socket_name, default=None):
-        """Unlinked value of `node`'s input `socket_name` (warning when it is linked)."""
-        sock = node.inputs.get(socket_name)
+    def value(self, node, socket_name, default=None, unknown=None):
+        """Value of `node`'s input `socket_name`: its own when unlinked, else the constant its
+        node chain reduces to (warned when approximate). A chain that cannot be reduced
+        gives `unknown`, or the input's own value when `unknown` is None (warned)."""
+        sock = _enabled_input(node, socket_name)
         if sock is None:
             return default
-        if sock.is_linked:
-            src = sock.links[0].from_node.name if sock.links else "?"
-            self.warn(f"node '{node.name}' input '{socket_name}' is driven by node '{src}', "
-                      f"which is not supported; using the input's own value")
-        return sock.default_value
+        link = _live_link(sock)
+        if link is None:
+            return _own_value(sock)
+        src = link.from_node
+        where = (f"node '{node.name}' input '{socket_name}' is driven by node '{src.name}' "
+                 f"({_label(src)})")
+        self.constants.notes = []
+        v = self.constants.input(sock)
+        notes = self.constants.notes
+        if v is None:
+            used = _own_value(sock) if unknown is None else unknown
+            why = "the input's own value" if unknown is None else "instead of the input's own " \
+                f"value {_fmt(_own_value(sock))}"
+            detail = f" ({'; '.join(notes)})" if notes else ""
+            self.warn(f"{where}, which Specula cannot reduce to a constant{detail}; using "
+                      f"{_fmt(used)}, {why}")
+            return used
+        if notes:
+            self.warn(f"{where}, which Specula approximates by the constant {_fmt(v)} (it has "
+                      f"no textures yet): {', '.join(notes)}")
+        return v
 
-    def colour(self, node, socket_name, default=DEFAULT_GREY):
-        v = self.value(node, socket_name, None)
-        return default if v is None else _rgb(v)
+    def colour(self, node, socket_name, default=DEFAULT_GREY, unknown=None):
+        """A colour input; a chain's negative or non-finite components are 0 (the core takes
+        no negative colours; Cycles clamps closure colours at 0 too)."""
+        v = self.value(node, socket_name, None, unknown)
+        if v is None:
+            return default
+        return tuple(c if math.isfinite(c) and c > 0 else 0.0
+                     for c in _rgb(_convert(v, "VALUE", "RGBA")))
 
-    def number(self, node, socket_name, default=0.0):
-        v = self.value(node, socket_name, None)
-        return default if v is None else float(v)
+    def number(self, node, socket_name, default=0.0, unknown=None):
+        v = self.value(node, socket_name, None, unknown)
+        v = None if v is None else float(_convert(v, "RGBA", "VALUE"))
+        return default if v is None or not math.isfinite(v) else v
+
+    def unit(self, node, socket_name, default=0.0):
+        """A weight or roughness, clamped to [0, 1] as Cycles clamps them."""
+        return min(max(self.number(node, socket_name, default), 0.0), 1.0)
+
+    def ignored(self, node, socket_name, neutral, rendered):
+        """Warn when an input Specula does not render is used: linked, or set away from the
+        value at which it has no effect."""
+        sock = _enabled_input(node, socket_name)
+        if sock is None:
+            return
+        link = _live_link(sock)
+        if link is not None:
+            self.warn(f"node '{node.name}' input '{socket_name}' is driven by node "
+                      f"'{link.from_node.name}' ({_label(link.from_node)}), which Specula does "
+                      f"not support; {rendered}")
+            return
+        own = _own_value(sock)
+        if neutral is not None and own is not None and \
+                np.max(np.abs(np.subtract(own, neutral))) > 1e-6:
+            self.warn(f"node '{node.name}' input '{socket_name}' {_fmt(own)} is not supported; "
+                      f"{rendered}")
+
+    def normal(self, node):
+        self.ignored(node, "Normal", None,
+                     "normal and bump maps are not supported: rendered with the mesh's normals")
 
     def viewport_fallback(self, why):
         self.warn(f"{why}; rendered as diffuse of its viewport colour")
@@ -93,19 +595,40 @@ class _Reader:
         if out is None:
             return self.viewport_fallback("no active Material Output node for Cycles")
         surface = out.inputs.get("Surface")
-        if surface is None or not surface.is_linked or not surface.links:
+        link = None if surface is None else _live_link(surface)
+        volume = out.inputs.get("Volume")
+        volume_link = None if volume is None else _live_link(volume)
+        if link is None and volume_link is not None:
+            # A Volume-only material (smoke, fog, an absorbing liquid) has no surface: the
+            # closest Specula renders is a boundary that light crosses unchanged.
+            src = volume_link.from_node
+            self.warn(f"'{out.name}' has only a Volume, from node '{src.name}' ({_label(src)}); "
+                      f"volumes are not rendered: rendered as an invisible boundary (glass of "
+                      f"IOR 1)")
+            return invisible_boundary(mat.name)
+        if link is None:
             return self.viewport_fallback(f"nothing is linked to '{out.name}' Surface")
-        node = surface.links[0].from_node
+        for socket_name, meaning in OUTPUT_IGNORED:
+            sock = out.inputs.get(socket_name)
+            ignored = None if sock is None else _live_link(sock)
+            if ignored is not None:
+                src = ignored.from_node
+                self.warn(f"'{out.name}' input '{socket_name}' is driven by node '{src.name}' "
+                          f"({_label(src)}), which Specula ignores: {meaning}")
+        node = link.from_node
         while node.bl_idname == "NodeReroute":
-            if not node.inputs[0].is_linked:
+            link = _live_link(node.inputs[0])
+            if link is None:
                 return self.viewport_fallback(f"reroute '{node.name}' leads nowhere")
-            node = node.inputs[0].links[0].from_node
+            node = link.from_node
         return self.shader(node)
 
     def shader(self, node):
         name, kind = self.material.name, node.bl_idname
+        if kind in ("ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass") or kind in GLOSSY_NODES:
+            self.normal(node)
         if kind == "ShaderNodeBsdfDiffuse":
-            if self.number(node, "Roughness") > ROUGHNESS_EPSILON:
+            if self.unit(node, "Roughness") > ROUGHNESS_EPSILON:
                 self.warn(f"node '{node.name}' roughness > 0 (Oren-Nayar) is not supported; "
                           f"rendered as Lambert (roughness 0)")
             return MaterialSpec("diffuse", name, {"colour": self.colour(node, "Color")})
@@ -113,18 +636,20 @@ class _Reader:
             # Rough Glossy is Multiscatter GGX (Cycles' default for the node); at Cycles'
             # delta threshold it is a perfect mirror.
             return MaterialSpec("glossy", name, {"colour": self.colour(node, "Color"),
-                                                 "roughness": self.number(node, "Roughness")})
+                                                 "roughness": self.unit(node, "Roughness")})
         if kind == "ShaderNodeBsdfGlass":
-            r = self.number(node, "Roughness")
+            r = self.unit(node, "Roughness")
             if r > ROUGHNESS_EPSILON:
                 self.warn(f"node '{node.name}' roughness {r:.3g} is not supported; rendered as "
                           f"smooth glass (roughness 0)")
             return MaterialSpec("glass", name, {"colour": self.colour(node, "Color"),
                                                 "ior": self.ior(node)})
         if kind == "ShaderNodeEmission":
+            # An Emission shader is a light whatever its colour: an unreducible chain keeps
+            # the socket's own colour.
             return MaterialSpec("emission_only", name, {
                 "colour": self.colour(node, "Color", (1.0, 1.0, 1.0)),
-                "strength": self.number(node, "Strength", 1.0)})
+                "strength": max(self.number(node, "Strength", 1.0), 0.0)})
         if kind == "ShaderNodeBsdfPrincipled":
             return self.principled(node)
         colour_socket = next((s for s in ("Color", "Base Color") if s in node.inputs), None)
@@ -140,19 +665,33 @@ class _Reader:
             ior = 1.5
         return ior
 
+    def principled_ignored(self, node):
+        self.normal(node)
+        for socket_name, neutral, rendered in PRINCIPLED_IGNORED:
+            if socket_name == "Specular Tint" and socket_name in node.inputs \
+                    and node.inputs[socket_name].type != "RGBA":
+                continue  # a float before 4.0, where 0 meant untinted
+            self.ignored(node, socket_name, neutral, rendered)
+        coat = _enabled_input(node, "Coat Weight")
+        if coat is not None and (_live_link(coat) is not None or coat.default_value > 0):
+            self.ignored(node, "Coat Normal", None, "no coat is rendered")
+
     def principled(self, node):
         name = self.material.name
+        self.principled_ignored(node)
         base = self.colour(node, "Base Color")
-        metallic = self.number(node, "Metallic")
-        transmission = self.number(node, "Transmission Weight",
-                                   self.number(node, "Transmission"))
-        roughness = self.number(node, "Roughness")
-        strength = self.number(node, "Emission Strength", 0.0)
+        metallic = self.unit(node, "Metallic")
+        transmission = self.unit(node, "Transmission Weight", self.unit(node, "Transmission"))
+        roughness = self.unit(node, "Roughness")
+        # A linked emission that cannot be reduced is off, not the sockets' own values:
+        # Emission Color's is white, and a textured surface must not become a white light.
+        strength = self.number(node, "Emission Strength", 0.0, unknown=0.0)
         # The colour input is "Emission Color" since 4.0 and "Emission" before.
         emission_socket = "Emission Color" if "Emission Color" in node.inputs else "Emission"
         emission = tuple(strength * c for c in self.colour(node, emission_socket,
-                                                           (1.0, 1.0, 1.0)))
-        kwargs = {"emission": emission} if strength > 0 else {}
+                                                           (1.0, 1.0, 1.0),
+                                                           unknown=(0.0, 0.0, 0.0)))
+        kwargs = {"emission": emission} if strength > 0 and max(emission) > 0 else {}
         for label, w in (("Metallic", metallic), ("Transmission Weight", transmission)):
             if 0.0 < w < 1.0:
                 self.warn(f"node '{node.name}' {label} {w:.3g} is not supported (only 0 or 1); "
@@ -164,13 +703,8 @@ class _Reader:
             ctor, kwargs = "metal", {"base_colour": base, **kwargs}
         else:
             # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
-            level = self.number(node, "Specular IOR Level", 0.5) \
+            level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
                 if "Specular IOR Level" in node.inputs else 0.5
-            tint = self.colour(node, "Specular Tint", (1.0, 1.0, 1.0)) \
-                if "Specular Tint" in node.inputs and node.inputs["Specular Tint"].type == "RGBA" \
-                else (1.0, 1.0, 1.0)
-            if any(abs(c - 1.0) > 1e-6 for c in tint):
-                self.warn(f"node '{node.name}' Specular Tint is not supported; rendered white")
             return MaterialSpec("principled", name, {
                 "base_colour": base, "roughness": roughness, "ior": self.ior(node),
                 "specular_ior_level": level, **kwargs})
@@ -180,11 +714,15 @@ class _Reader:
         return MaterialSpec(ctor, name, kwargs)
 
 
-def convert(material):
-    """Map a bpy Material (or None) to (MaterialSpec, [warning, ...]). Never raises."""
+def convert(material, image_cache=None):
+    """Map a bpy Material (or None) to (MaterialSpec, [warning, ...]). Never raises.
+
+    image_cache : dict shared by the materials of one export, so an image used by several
+        materials is averaged once (keyed by image pointer; not to be kept across exports,
+        since the image may be edited in between)."""
     if material is None:
         return default_material(), []
-    reader = _Reader(material)
+    reader = _Reader(material, image_cache)
     try:
         return reader.read(), reader.warnings
     except Exception as exc:  # noqa: BLE001 - a bad node tree must not stop the render

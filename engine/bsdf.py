@@ -113,11 +113,14 @@ def sample_diffuse(wo, n, ng, colour, u):
     return wi, weight, np.where(ok, sampling.cosine_hemisphere_pdf(cos), 0.0)
 
 
-def eval_diffuse(wi, n, ng, colour):
-    """Lambert f * cos for light directions wi (n, 3) and its sampling pdf."""
-    cos = dot(wi, n)
-    ok = (cos > 0.0) & (dot(wi, ng) > 0.0)
-    cos = np.where(ok, cos, 0.0)
+def eval_diffuse(wi, n, colour):
+    """Lambert f * cos for light directions wi (n, 3) and its sampling pdf.
+
+    Only the shading normal counts, as in Cycles' bsdf_diffuse_eval: a light below the
+    geometric surface but above the shading horizon (a smooth mesh's terminator) is left
+    to the shadow ray, which the shadow terminator offset (terminator.py) may let through;
+    sampling (`sample_diffuse`) still never goes below the geometric surface."""
+    cos = np.maximum(dot(wi, n), 0.0)
     return colour * (cos / np.pi)[:, None], cos / np.pi
 
 
@@ -165,6 +168,10 @@ def sample_dielectric(wo, n, eta, reflection_tint, transmission_tint, u, fresnel
 # 1 + Fms (1 - E(mu_o)) / E(mu_o), with E the white-furnace albedo of the single-scatter
 # lobe, E_avg its cosine-weighted mean and Fms = Fss E_avg / (1 - Fss (1 - E_avg)) for a
 # Fresnel whose hemispherical average is Fss (Cycles' microfacet_ggx_preserve_energy).
+# Fss is per channel: the dielectric Fresnel's average for the Principled layer, and the
+# Glossy BSDF's colour for the Glossy node (Cycles' bsdf_microfacet_setup_fresnel_constant:
+# the colour is its constant Fresnel, so a darker colour gets less of the missing energy
+# back, not the same share scaled afterwards).
 # The Principled BSDF layers this specular over its diffuse base, which keeps the weight
 # 1 - albedo_spec(mu_o) (Cycles' closure_layering_weight).
 
@@ -245,22 +252,43 @@ class MicrofacetTables:
             e_white[i] = w.mean()
             e_fresnel[i] = (w * _fresnel_for(fresnel, cos_hv, eta)).mean()
         e_white = np.clip(e_white, 1e-6, 1.0)
-        e_avg = 2.0 * trapezoid(e_white * self.mu, self.mu)
+        self.e_avg = float(2.0 * trapezoid(e_white * self.mu, self.mu))
         if fresnel == "none":
             fss = 1.0
         else:
             m = np.linspace(0.0, 1.0, 2049)
             fss = 2.0 * trapezoid(fresnel_dielectric(m, np.full_like(m, eta))[0] * m, m)
-        fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
-        self.compensation_table = 1.0 + fms * (1.0 - e_white) / e_white
+        # The energy the single-scatter lobe misses, (1 - E) / E, per mu_o.
+        self.missing_table = (1.0 - e_white) / e_white
+        self.fms = float(self.multiscatter_fresnel(fss))
+        self.compensation_table = 1.0 + self.fms * self.missing_table
         self.albedo_table = np.clip(e_fresnel * self.compensation_table, 0.0, 1.0)
         self.fresnel, self.eta = fresnel, float(eta)
 
-    def compensation(self, mu):
-        return np.interp(mu, self.mu, self.compensation_table)
+    def multiscatter_fresnel(self, fss):
+        """Fms for a single-scatter Fresnel average Fss (scalar or per channel)."""
+        fss = np.asarray(fss, np.float64)
+        return fss * self.e_avg / (1.0 - fss * (1.0 - self.e_avg))
+
+    def compensation(self, mu, fms=None):
+        """1 + Fms (1 - E(mu)) / E(mu): (n,) for the table's own Fresnel, or (n, 3) for
+        per-channel fms (3,) (the Glossy colour's, `multiscatter_fresnel(colour)`)."""
+        if fms is None:
+            return np.interp(mu, self.mu, self.compensation_table)
+        missing = np.interp(mu, self.mu, self.missing_table)
+        return 1.0 + np.asarray(fms)[None, :] * missing[:, None]
 
     def albedo(self, mu):
         return np.interp(mu, self.mu, self.albedo_table)
+
+
+def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
+    """(3,) Fms of a rough material's specular lobe: the Principled layer's dielectric
+    Fresnel on every channel, or the Glossy colour as its constant Fresnel (Cycles clamps
+    it at 0)."""
+    if principled:
+        return np.full(3, tables.fms)
+    return tables.multiscatter_fresnel(np.maximum(np.asarray(colour, np.float64), 0.0))
 
 
 def eval_ggx(wo, wi, n, alpha, eta, fresnel):
@@ -293,21 +321,29 @@ def sample_ggx_reflection(wo, n, alpha, u):
     return reflect(wo, h)
 
 
-def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo):
+def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo,
+                 sampled=False):
     """Principled (diffuse base + GGX dielectric specular) or rough Glossy (specular only,
     base = 0): f * cos_i (n, 3) and the lobe-mixture pdf (n,), plus the probability of
     choosing the specular lobe (n,).
 
     base : (n, 3) diffuse colour (zero for Glossy); spec_tint : (n, 3) specular weight;
-    comp, albedo : (n,) the compensation and specular albedo at mu_o.
+    comp : (n, 3) the energy compensation per channel at mu_o; albedo : (n,) the
+    specular albedo at mu_o.
+    sampled : wi was sampled from the lobe (nothing below the geometric surface, as
+    Cycles' sampling routines); otherwise it is a light direction, where the specular lobe
+    still needs wi above the geometric surface but the diffuse base only above the shading
+    horizon (Cycles' microfacet and diffuse eval; see eval_diffuse).
     """
     diffuse_w = base * (1.0 - albedo)[:, None]
     p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
     spec, pdf_s = eval_ggx(wo, wi, n, alpha, eta, fresnel)
     geometric_ok = (dot(wi, ng) > 0.0)
-    cos_i = np.where(geometric_ok, np.maximum(dot(wi, n), 0.0), 0.0)
+    cos_i = np.maximum(dot(wi, n), 0.0)
+    if sampled:
+        cos_i = np.where(geometric_ok, cos_i, 0.0)
     spec = np.where(geometric_ok, spec, 0.0)
-    f_cos = diffuse_w * (cos_i / np.pi)[:, None] + spec_tint * (spec * comp)[:, None]
+    f_cos = diffuse_w * (cos_i / np.pi)[:, None] + spec_tint * (spec[:, None] * comp)
     pdf = p_spec * np.where(geometric_ok, pdf_s, 0.0) + (1.0 - p_spec) * cos_i / np.pi
     return f_cos, pdf, p_spec
 
@@ -330,7 +366,7 @@ def sample_layered(wo, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo
     wi_diff = local[:, :1] * s + local[:, 1:2] * t + local[:, 2:3] * n
     wi = np.where(choose_spec[:, None], wi_spec, wi_diff)
     f_cos, pdf, _ = eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp,
-                                 albedo)
+                                 albedo, sampled=True)
     ok = pdf > 0
     weight = np.where(ok[:, None], f_cos / np.where(ok, pdf, 1.0)[:, None], 0.0)
     return wi, weight, np.where(ok, pdf, 0.0)

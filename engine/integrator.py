@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import bsdf, kernel, sampling
+from . import bsdf, kernel, sampling, terminator
 from .film import BACKGROUND_DEPTH
 from .sampling import Dim
 from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, PRINCIPLED, RenderSettings, Scene
@@ -47,7 +47,8 @@ class Hits:
     p : (n, 3) hit points (float64, from barycentrics); ng, ns : (n, 3) geometric and
     shading normals flipped to the incoming side; wo : (n, 3) towards the ray origin;
     front : (n,) whether the ray hit the front face; prim, mat : (n,) ids; t : distances;
-    scale : (n,) local coordinate magnitude for ray offsets.
+    scale : (n,) local coordinate magnitude for ray offsets; bu, bv : (n,) barycentrics of
+    corners 1 and 2.
     """
 
     p: np.ndarray
@@ -59,6 +60,8 @@ class Hits:
     mat: np.ndarray
     t: np.ndarray
     scale: np.ndarray
+    bu: np.ndarray
+    bv: np.ndarray
 
 
 class NonFiniteSample(FloatingPointError):
@@ -279,7 +282,8 @@ class Integrator:
         wo = -d
         scale = np.maximum(self.tri_scale[prim], max3(np.abs(p)))
         self._count("surface interaction", time.perf_counter() - t0)
-        return Hits(p, ng, ns, wo, front, prim, self.scene.material_index[prim], t, scale)
+        return Hits(p, ng, ns, wo, front, prim, self.scene.material_index[prim], t, scale,
+                    bu, bv)
 
     def interpolate_normals(self, prim, w0, bu, bv, ng, sign):
         """Smooth shading normal, flipped with the geometric one; falls back to ng where
@@ -383,7 +387,10 @@ class Integrator:
         self._count("sample light", time.perf_counter() - t0)
         # Trace shadow rays: from the offset surface point to just short of the light.
         t1 = time.perf_counter()
-        origin = offset_ray_origin(p[ok], ng[ok], wi[ok], hits.scale[diffuse[ok]])
+        start = p[ok]
+        if self.plan.terminator:
+            start = start + self.terminator_offsets(_take(hits, diffuse[ok]), wi[ok])
+        origin = offset_ray_origin(start, ng[ok], wi[ok], hits.scale[diffuse[ok]])
         finite = np.isfinite(dist[ok])
         # Aim from the offset origin at the sampled point itself: reusing wi from the
         # un-offset point would reach a grazing emitter's plane early and self-occlude.
@@ -398,6 +405,17 @@ class Integrator:
         vis = ~blocked
         radiance[rows[ok][vis]] += contrib[vis]
 
+    def terminator_offsets(self, hits: Hits, wi):
+        """(n, 3) shadow-ray origin displacements by the objects' shadow terminator
+        geometry offset (terminator.py), zero on flat triangles."""
+        scene = self.scene
+        cutoff = np.where(scene.smooth[hits.prim],
+                          scene.terminator_offset[scene.object_index[hits.prim]], 0.0)
+        out = np.empty((len(wi), 3))
+        terminator.shadow_origin_offsets(scene.vertices, scene.normals, hits.prim.astype(np.int64),
+                                         hits.bu, hits.bv, hits.ns, hits.ng, wi, cutoff, out)
+        return out
+
     def _layer(self, k: int, wo, n):
         """Per-vertex parameters of rough material k's layered lobe at view directions wo."""
         tables = self.microfacet[k]
@@ -407,9 +425,10 @@ class Integrator:
             base, tint, fresnel = np.tile(self.colour[k], (m, 1)), np.ones((m, 3)), "dielectric"
         else:
             base, tint, fresnel = np.zeros((m, 3)), np.tile(self.colour[k], (m, 1)), "none"
+        comp = tables.compensation(mu, bsdf.layer_fms(tables, self.kind[k] == PRINCIPLED,
+                                                      self.colour[k]))
         return dict(base=base, alpha=np.full(m, tables.alpha), eta=np.full(m, self.ior[k]),
-                    spec_tint=tint, fresnel=fresnel, comp=tables.compensation(mu),
-                    albedo=tables.albedo(mu))
+                    spec_tint=tint, fresnel=fresnel, comp=comp, albedo=tables.albedo(mu))
 
     def eval_bsdf(self, wo, wi, ns, ng, mat):
         """f * cos (n, 3) and sampling pdf (n,) of the non-delta BSDFs, for light sampling."""
@@ -417,8 +436,7 @@ class Integrator:
         kind = self.kind[mat]
         sel = np.nonzero(kind == DIFFUSE)[0]
         if len(sel):
-            f_cos[sel], pdf[sel] = bsdf.eval_diffuse(wi[sel], ns[sel], ng[sel],
-                                                     self.colour[mat[sel]])
+            f_cos[sel], pdf[sel] = bsdf.eval_diffuse(wi[sel], ns[sel], self.colour[mat[sel]])
         for k in self.microfacet:
             sel = np.nonzero(mat == k)[0]
             if len(sel):

@@ -35,6 +35,7 @@ from . import sampling
 from .jit import NUMBA, cgutils, intrinsic, ir, njit, types
 from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
 from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED
+from .terminator import offset_amount, smooth_surface_offset
 
 AVAILABLE = NUMBA  # the run-time switch (see jit.py)
 
@@ -279,9 +280,11 @@ def _ggx_lambda(cos_n, a2):
 
 @njit(**_JIT)
 def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                  tint0, tint1, tint2, alpha, eta, fresnel_on, comp, p_spec):
+                  tint0, tint1, tint2, alpha, eta, fresnel_on, comp0, comp1, comp2, p_spec,
+                  sampled):
     """bsdf.eval_layered: f * cos_i per channel and the lobe-mixture pdf, for shading
-    normal s, geometric normal n (both on wo's side) and the diffuse weight dw."""
+    normal s, geometric normal n (both on wo's side), the diffuse weight dw and the
+    energy compensation per channel; `sampled` as in bsdf.eval_layered."""
     cos_o = sx * wox + sy * woy + sz * woz
     cos_i = sx * wix + sy * wiy + sz * wiz
     hx, hy, hz = wox + wix, woy + wiy, woz + wiz
@@ -303,15 +306,15 @@ def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1
         common = d / (4.0 * cos_o)
         spec = f * common / (1.0 + lo + li)
         pdf_s = common / (1.0 + lo)
-    cos_d = 0.0
-    if wix * nx + wiy * ny + wiz * nz > 0.0:
-        cos_d = max(cos_i, 0.0)
-    else:
+    cos_d = max(cos_i, 0.0)
+    if not wix * nx + wiy * ny + wiz * nz > 0.0:
         spec = 0.0
         pdf_s = 0.0
-    sc = spec * comp
+        if sampled:
+            cos_d = 0.0
     c = cos_d / np.pi
-    return (dw0 * c + tint0 * sc, dw1 * c + tint1 * sc, dw2 * c + tint2 * sc,
+    return (dw0 * c + tint0 * (spec * comp0), dw1 * c + tint1 * (spec * comp1),
+            dw2 * c + tint2 * (spec * comp2),
             p_spec * pdf_s + (1.0 - p_spec) * cos_d / np.pi)
 
 
@@ -443,8 +446,8 @@ def _sample_object(j, px, py, pz, ua, ub, L):
             v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
         else:
             valid = False
-        if valid:
-            att = _spot(j, -cx, -cy, -cz, L)
+        if valid:  # the cone along the sampled ray, as LightObjects._sample_point
+            att = _spot(j, -wx, -wy, -wz, L)
             v0, v1, v2 = v0 * att, v1 * att, v2 * att
         else:
             v0 = v1 = v2 = 0.0
@@ -643,10 +646,12 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
     Returns (paths that go on, shadow rays written).
     """
     (max_bounces, world_light, emitters, light_sampling, shading_normals, light_hits, sun_discs,
-     environment) = flags
-    vertices, tri_normal, tri_scale, material_index, normals, smooth = geometry
+     environment, terminator) = flags
+    (vertices, tri_normal, tri_scale, material_index, normals, smooth, object_index,
+     terminator_offset) = geometry
     (kind, colour, ior, reflection_tint, transmission_tint, emission, layer_base, layer_tint,
-     layer_alpha, layer_fresnel, mu_grid, mu_guide, comp_table, albedo_table) = materials
+     layer_alpha, layer_fresnel, mu_grid, mu_guide, layer_fms, missing_table,
+     albedo_table) = materials
     (pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass, entry_of_triangle,
      area_by_triangle, v0, e1, e2, lnormal, larea, lradiance, lscale) = lights
     cam_pos, forward = camera
@@ -785,13 +790,16 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
         scale = max(tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
         wox, woy, woz = -dx, -dy, -dz
         rough = k == PRINCIPLED or k == GLOSSY
-        comp = albedo = alpha = eta_l = p_spec = 0.0
+        comp0 = comp1 = comp2 = albedo = alpha = eta_l = p_spec = 0.0
         dw0 = dw1 = dw2 = tint0 = tint1 = tint2 = 0.0
         fresnel_on = False
         if rough:
             # The layered lobe's parameters at this view direction (Integrator._layer).
             mu = min(max(sx * wox + sy * woy + sz * woz, 0.0), 1.0)
-            comp = _interp(mu, mu_grid, comp_table[mat], mu_guide)
+            missing = _interp(mu, mu_grid, missing_table[mat], mu_guide)
+            comp0 = 1.0 + layer_fms[mat, 0] * missing
+            comp1 = 1.0 + layer_fms[mat, 1] * missing
+            comp2 = 1.0 + layer_fms[mat, 2] * missing
             albedo = _interp(mu, mu_grid, albedo_table[mat], mu_guide)
             dw0 = layer_base[mat, 0] * (1.0 - albedo)
             dw1 = layer_base[mat, 1] * (1.0 - albedo)
@@ -857,10 +865,11 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             if rough:
                 g0, g1, g2, pdf_b = _eval_layered(
                     wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                    tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
-            else:
+                    tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp0, comp1, comp2,
+                    p_spec, False)
+            else:  # Lambert: the shading normal alone, as bsdf.eval_diffuse
                 cos = wx * sx + wy * sy + wz * sz
-                if cos > 0 and wx * nx + wy * ny + wz * nz > 0:
+                if cos > 0:
                     pdf_b = cos / np.pi
                     g0, g1, g2 = colour[mat, 0] * pdf_b, colour[mat, 1] * pdf_b, \
                         colour[mat, 2] * pdf_b
@@ -871,7 +880,21 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                 c0, c1, c2 = t0 * g0 * q0 * w, t1 * g1 * q1 * w, t2 * g2 * q2 * w
                 if max(c0, max(c1, c2)) > 0:
                     eps = RAY_EPSILON * max(scale, 1e-30)
-                    ox, oy, oz = px + eps * nx, py + eps * ny, pz + eps * nz
+                    ox, oy, oz = px, py, pz
+                    if terminator and smooth[f]:
+                        # Lifted toward the smooth surface near the terminator (as
+                        # Integrator.terminator_offsets).
+                        cutoff = terminator_offset[object_index[f]]
+                        if cutoff > 0.0:
+                            amount, gx, gy, gz = offset_amount(cutoff, sx, sy, sz, nx, ny, nz,
+                                                               wx, wy, wz)
+                            if amount > 0.0:
+                                lx, ly, lz = smooth_surface_offset(vertices[f], normals[f], w0,
+                                                                   u, v, gx, gy, gz)
+                                ox, oy, oz = ox + lx * amount, oy + ly * amount, oz + lz * amount
+                    if wx * nx + wy * ny + wz * nz < 0.0:  # toward wi's side, as
+                        eps = -eps  # integrator.offset_ray_origin
+                    ox, oy, oz = ox + eps * nx, oy + eps * ny, oz + eps * nz
                     srow[shadow] = row
                     sorigin[shadow, 0], sorigin[shadow, 1], sorigin[shadow, 2] = ox, oy, oz
                     if math.isinf(dist):
@@ -917,7 +940,8 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
                 wz = lx * s[2] + ly * tt[2] + lz * sz
             g0, g1, g2, pdf = _eval_layered(
                 wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp, p_spec)
+                tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp0, comp1, comp2,
+                    p_spec, True)
             ok = pdf > 0
             f0, f1, f2 = (g0 / pdf, g1 / pdf, g2 / pdf) if ok else (0.0, 0.0, 0.0)
         elif k == DIFFUSE:
@@ -1137,22 +1161,23 @@ def unsupported(scene, plan) -> str:
 def pack_layers(it) -> tuple:
     """The rough materials' layered-lobe parameters per material (Integrator._layer):
     base (k, 3), specular tint (k, 3), alpha (k,), dielectric Fresnel (k,) bool, the mu
-    grid (m,) with its `_interp` guide, and the compensation and albedo tables (k, m);
-    zeros for other kinds."""
-    from .bsdf import ALBEDO_TABLE_SIZE
+    grid (m,) with its `_interp` guide, Fms per channel (k, 3) (bsdf.layer_fms), and the
+    missing-energy and albedo tables (k, m); zeros for other kinds."""
+    from .bsdf import ALBEDO_TABLE_SIZE, layer_fms
     k = len(it.kind)
     base, tint = np.zeros((k, 3)), np.zeros((k, 3))
-    alpha, fresnel = np.zeros(k), np.zeros(k, np.bool_)
+    alpha, fresnel, fms = np.zeros(k), np.zeros(k, np.bool_), np.zeros((k, 3))
     mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
-    comp, albedo = np.zeros((k, len(mu))), np.zeros((k, len(mu)))
+    missing, albedo = np.zeros((k, len(mu))), np.zeros((k, len(mu)))
     for j, tables in it.microfacet.items():
         principled = it.kind[j] == PRINCIPLED
         base[j] = it.colour[j] if principled else 0.0
         tint[j] = 1.0 if principled else it.colour[j]
         alpha[j], fresnel[j] = tables.alpha, principled
+        fms[j] = layer_fms(tables, principled, it.colour[j])
         mu = tables.mu
-        comp[j], albedo[j] = tables.compensation_table, tables.albedo_table
-    return base, tint, alpha, fresnel, mu, interp_guide(mu, 256), comp, albedo
+        missing[j], albedo[j] = tables.missing_table, tables.albedo_table
+    return base, tint, alpha, fresnel, mu, interp_guide(mu, 256), fms, missing, albedo
 
 
 def pack_objects(sampler) -> np.ndarray:
@@ -1232,7 +1257,8 @@ class CompiledTracer:
         normals = scene.normals if scene.normals is not None else np.zeros((1, 3, 3))
         self.geometry = (scene.vertices, it.tri_normal, it.tri_scale,
                          scene.material_index.astype(np.int64), normals,
-                         scene.smooth.astype(np.bool_))
+                         scene.smooth.astype(np.bool_), scene.object_index.astype(np.int64),
+                         np.asarray(scene.terminator_offset, np.float64))
         self.materials = (it.kind.astype(np.int64), it.colour, it.ior, it.reflection_tint,
                           it.transmission_tint, it.emission, *pack_layers(it))
         self.lights = pack_lights(it.emitters, scene.num_triangles)
@@ -1243,7 +1269,7 @@ class CompiledTracer:
         self.flags = (int(it.settings.max_bounces), bool(plan.world_light),
                       bool(plan.num_emitters), bool(plan.light_sampling),
                       bool(plan.shading_normals), bool(plan.light_hits),
-                      bool(plan.sun_discs), bool(plan.environment))
+                      bool(plan.sun_discs), bool(plan.environment), bool(plan.terminator))
         self.exact_fresnel = it.settings.fresnel == "exact"
         cm, cam = it.camera, it.camera.cam
         self.filter_cdf, self.filter_x = it.pixel_filter._cdf, it.pixel_filter._x

@@ -256,8 +256,11 @@ class LightObjects:
             pdf_sa = dd * dd / (np.pi * r[k] ** 2 * np.maximum(cos_l, 1e-300))
             w_out[k], d_out[k], pdf_out[k] = w, dd, pdf_sa
             out[k] = le[k] / pdf_sa[:, None]
-        # Spot cone, measured from the light toward the shading point.
-        att = self.spot_attenuation(j, -w_c)
+        # Spot cone along each sampled ray, from the sampled point on the light toward the
+        # shading point (Cycles' spot_light_sample), as light hits evaluate it along the ray
+        # that hit: toward the centre instead, a light of radius > 0 had a sharper cone edge
+        # than Cycles and than its own hits.
+        att = self.spot_attenuation(j, -w_out)
         valid = delta | sphere | disk
         wi[rows] = w_out
         dist[rows] = d_out

@@ -51,6 +51,8 @@ class Plan:
     triangles: int
     kernel: str = "numpy"
     kernel_note: str = ""
+    # Some smooth triangle's object has a shadow terminator geometry offset > 0.
+    terminator: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -71,7 +73,8 @@ class Plan:
         if self.num_emitters:
             s.append("handle emission")
         if self.light_sampling:
-            s += ["sample light", "trace shadow rays"]
+            s += ["sample light", "trace shadow rays"
+                  + (" (shadow terminator offset)" if self.terminator else "")]
         kinds = [n for n, f in (("diffuse", self.diffuse), ("principled", self.principled),
                                 ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass)) if f]
@@ -118,6 +121,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         shading_normals=scene.normals is not None and bool(scene.smooth.any()),
         world_light=bool(np.max(scene.world.colour) > 0) or environment,
         environment=environment, fresnel=settings.fresnel,
+        terminator=bool(scene.normals is not None and np.any(
+            scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)
     return _choose_kernel(plan, scene, settings)
 

@@ -416,6 +416,8 @@ class Scene:
     smooth : (t,) bool, whether triangle t interpolates `normals`
     material_index : (t,) int32 into `materials`
     object_index : (t,) int32 into `object_names`
+    terminator_offset : (objects,) float64, each object's shadow terminator geometry
+        offset (Cycles' Object > Shading setting; 0: none; see terminator.py)
     shared_vertices, shared_triangles : the same triangles as an indexed mesh, (m, 3) float64
         relative to `origin` and (t, 3) int32 (shared_vertices[shared_triangles] equals
         `vertices`): what the acceleration structure is built from, since embree's buffers
@@ -436,6 +438,11 @@ class Scene:
     lights: list = field(default_factory=list)
     shared_vertices: np.ndarray | None = None
     shared_triangles: np.ndarray | None = None
+    terminator_offset: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.terminator_offset is None:
+            self.terminator_offset = np.zeros(len(self.object_names))
 
     @property
     def num_triangles(self) -> int:
@@ -472,7 +479,7 @@ class SceneBuilder:
         self._lights.append(light)
 
     def add_mesh(self, name: str, vertices, triangles, material_index=0,
-                 corner_normals=None, smooth=None) -> int:
+                 corner_normals=None, smooth=None, terminator_offset=0.0) -> int:
         """Add one object's triangles in world space; returns how many were kept.
 
         vertices : (n, 3) float, world-space positions
@@ -480,6 +487,8 @@ class SceneBuilder:
         material_index : int or (t,) int into the materials added so far
         corner_normals : optional (t, 3, 3) per-corner shading normals (world space)
         smooth : optional (t,) bool; triangles not smooth use their geometric normal
+        terminator_offset : the object's shadow terminator geometry offset, 0..1 (Cycles'
+            default for a Blender object is 0.1; 0 starts shadow rays on the flat triangles)
 
         Only the checks run here; `build` gathers the corners of every mesh straight into
         the scene's arrays (a million-triangle mesh is 72 MB per copy of its corners).
@@ -490,6 +499,10 @@ class SceneBuilder:
         if t and (tri.min() < 0 or tri.max() >= len(v)):
             raise ValueError(f"object '{name}': triangle indices out of range 0..{len(v) - 1}")
         mi = np.broadcast_to(np.asarray(material_index, dtype=np.int32), (t,)).copy()
+        terminator_offset = float(terminator_offset)
+        if not 0.0 <= terminator_offset <= 1.0:
+            raise ValueError(f"object '{name}': shadow terminator geometry offset must be in "
+                             f"0..1, got {terminator_offset!r}")
         normals = None
         if corner_normals is not None:
             normals = np.asarray(corner_normals, dtype=np.float64).reshape(t, 3, 3)
@@ -515,7 +528,7 @@ class SceneBuilder:
             normals = None if normals is None else normals[keep]
         if not finite_v.all():  # unreferenced now, but embree should see no NaN at all
             v = np.where(finite_v[:, None], v, 0.0)
-        self._meshes.append((name, v, tri, normals, sm, mi))
+        self._meshes.append((name, v, tri, normals, sm, mi, terminator_offset))
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -524,7 +537,7 @@ class SceneBuilder:
         world.validate()
         materials = Materials.from_list(self._materials)
         meshes = self._meshes
-        for name, _, _, _, _, mi in meshes:
+        for name, _, _, _, _, mi, _ in meshes:
             if len(mi) and (mi.min() < 0 or mi.max() >= len(materials)):
                 raise ValueError(f"object '{name}': material index out of range "
                                  f"0..{len(materials) - 1}")
@@ -540,7 +553,7 @@ class SceneBuilder:
         any_normals = any(m[3] is not None and m[4].any() for m in meshes)
         norms = np.zeros((total, 3, 3)) if any_normals else None
         start = 0
-        for (_, v, tri, n, sm, _), count in zip(meshes, counts):
+        for (_, v, tri, n, sm, _, _), count in zip(meshes, counts):
             part = slice(start, start + count)
             _gather_corners(v, tri, origin, verts[part])
             if n is not None and norms is not None:
@@ -557,6 +570,7 @@ class SceneBuilder:
             object_index=(np.concatenate([np.full(c, k, np.int32) for k, c in enumerate(counts)])
                           if meshes else np.zeros(0, np.int32)),
             object_names=[m[0] for m in meshes], materials=materials, camera=camera,
+            terminator_offset=np.array([m[6] for m in meshes], np.float64),
             world=world, warnings=list(self.warnings), lights=list(self._lights),
             # Recentred like `verts` (same float64 subtraction, so the same float32 values).
             shared_vertices=(np.concatenate([m[1] for m in meshes]) - origin if meshes

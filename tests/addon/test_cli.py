@@ -147,3 +147,111 @@ def test_enables_as_an_installed_addon(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert last_json(proc.stdout)["samples"] == 2
     assert out.is_file()
+
+
+# ---------------------------------------------------------------------------------------
+# Real files: a renamed Render Result, warnings, the JSON line
+
+
+def _saved(tmp_path, name, edit):
+    """cbspheres.blend changed by `edit(scene)` (in this process), saved as tmp_path/name."""
+    bpy.ops.wm.open_mainfile(filepath=CBSPHERES)
+    edit(bpy.context.scene)
+    path = tmp_path / name
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("engine", ["SPECULA", "CYCLES"])
+def test_renamed_render_result_is_found_by_type(tmp_path, engine):
+    def rename_render_result(scene):
+        scene.render.resolution_percentage = 5
+        scene.specula.samples = 1
+        bpy.ops.render.render()
+        image = next(i for i in bpy.data.images if i.type == "RENDER_RESULT")
+        image.name = "My Render"  # saved with the file, and reused by the next render
+        image.use_fake_user = True
+    scene = _saved(tmp_path, "renamed.blend", rename_render_result)
+    out = tmp_path / "r.exr"
+    proc = run("render", scene, "--engine", engine, "--samples", 1, "--resolution", "24x18",
+               "--output", out)
+    assert proc.returncode == 0, proc.stderr
+    assert out.is_file()
+
+
+@pytest.mark.slow
+def test_json_file_and_last_line(tmp_path):
+    js = tmp_path / "sub" / "summary.json"
+    proc = run("render", CBSPHERES, "--samples", 2, "--resolution", "24x18", "--output",
+               tmp_path / "a.exr", "--json", js)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(js.read_text()) == last_json(proc.stdout)
+    # Blender's own lines ("Read blend: ...") go to stderr: stdout is the JSON alone.
+    assert len(proc.stdout.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_json_stays_last_when_blender_prints_at_exit(tmp_path):
+    """Blender prints at exit ("Not freed memory blocks", with C stdio, for files saved by
+    newer versions); after the JSON line that text must not reach stdout."""
+    code = (
+        "import atexit, ctypes, sys\n"
+        "from addon import cli\n"
+        "libc = ctypes.CDLL(None)\n"
+        "def chatter():\n"
+        "    libc.printf(b'Error: Not freed memory blocks: 3, total unfreed memory 0.1 MB\\n')\n"
+        "    libc.fflush(None)\n"
+        "    print('Python at exit')\n"
+        "atexit.register(chatter)\n"
+        f"sys.argv = ['addon', 'render', {CBSPHERES!r}, '--samples', '1', '--resolution',"
+        f" '16x12', '--output', {str(tmp_path / 'x.exr')!r}]\n"
+        "sys.exit(cli.main())\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                          text=True, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert last_json(proc.stdout)["samples"] == 1
+    assert "Not freed memory blocks" in proc.stderr and "Python at exit" in proc.stderr
+
+
+@pytest.mark.slow
+def test_warnings_are_one_line_each_and_grouped(tmp_path):
+    def degenerate_objects(scene):
+        for i in range(4):
+            mesh = bpy.data.meshes.new(f"Flat{i}")
+            # The second triangle has three collinear corners: zero area, dropped.
+            mesh.from_pydata([(0, 0, 0.5), (0.1, 0, 0.5), (0.2, 0, 0.5), (0, 0.1, 0.5)], [],
+                             [(0, 1, 3), (0, 1, 2)])
+            scene.collection.objects.link(bpy.data.objects.new(f"Flat{i}", mesh))
+    scene = _saved(tmp_path, "degenerate.blend", degenerate_objects)
+    proc = run("render", scene, "--samples", 1, "--resolution", "16x12", "--output",
+               tmp_path / "x.exr")
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    dropped = [ln for ln in lines if "dropped" in ln]
+    expected = ("warning: object 'Flat0': dropped 1 of 2 triangles (0 with NaN/inf "
+                "vertices, 1 degenerate) (and 3 more like it: 'Flat1', 'Flat2', 'Flat3')")
+    assert dropped == [expected], proc.stderr
+    assert "UserWarning" not in proc.stderr and "warnings.warn" not in proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert last_json(proc.stdout)["warnings"] == [dropped[0][len("warning: "):]]
+
+
+def test_python_warning_is_one_line():
+    code = ("from addon import console\nimport warnings\nconsole.install_warning_format()\n"
+            "warnings.warn('something odd about 3 objects')\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
+                          text=True, timeout=60, check=False)
+    assert proc.stderr == "warning: something odd about 3 objects\n"
+
+
+def test_warning_groups():
+    from addon import console
+    log = console.Warnings()
+    for name in "abcde":
+        log.add(f"Specula: object '{name}': dropped 1 of {len(name) + 9} triangles")
+    log.add("object 'a': dropped 1 of 10 triangles")  # the same text again: once
+    log.add("material 'M': node 'Mix' is not supported")
+    assert log.lines() == [
+        "object 'a': dropped 1 of 10 triangles (and 4 more like it: 'b', 'c', 'd', ...)",
+        "material 'M': node 'Mix' is not supported"]

@@ -1,6 +1,7 @@
 """Node trees -> core materials: supported nodes map exactly, the rest warn and fall back."""
 
 import bpy
+import numpy as np
 import pytest
 from addon_helpers import node_material
 
@@ -88,13 +89,15 @@ def test_rough_nodes_warn_and_render_smooth(fresh, shader, ctor):
     assert len(warnings) == 1 and "roughness" in warnings[0] and "'Rough'" in warnings[0]
 
 
-def test_linked_input_warns_and_uses_default(fresh):
+def test_linked_checker_uses_the_mean_of_its_colours(fresh):
     mat, node = node_material("Tex", "ShaderNodeBsdfDiffuse", Color=(0.3, 0.3, 0.9, 1))
     tex = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    tex.inputs["Color1"].default_value = (0.6, 0.2, 0.0, 1.0)
+    tex.inputs["Color2"].default_value = (0.2, 0.2, 1.0, 1.0)
     mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Color"])
     spec, warnings = convert(mat)
-    assert spec.kwargs["colour"] == pytest.approx((0.3, 0.3, 0.9), abs=1e-6)
-    assert len(warnings) == 1 and tex.name in warnings[0]
+    assert spec.kwargs["colour"] == pytest.approx((0.4, 0.2, 0.5), abs=1e-6)
+    assert len(warnings) == 1 and tex.name in warnings[0] and "'Color'" in warnings[0]
 
 
 def test_unlinked_surface_uses_viewport_colour(fresh):
@@ -140,3 +143,291 @@ def test_materials_without_nodes_use_viewport_colour(fresh):
     mat.diffuse_color = (0.1, 0.2, 0.3, 1.0)
     spec, warnings = convert(mat)
     assert spec.kwargs["colour"] == pytest.approx((0.1, 0.2, 0.3)) and warnings == []
+
+
+# ---- Linked inputs: the constant their node chain reduces to ----------------------------------
+
+TEXELS = np.array([[0.5, 0.2, 0.1, 1.0], [0.1, 0.3, 0.9, 1.0],
+                   [0.9, 0.8, 0.05, 1.0], [0.25, 0.6, 0.4, 1.0]])
+
+
+def srgb_to_linear(c):
+    c = np.asarray(c, np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def make_image(name, texels=TEXELS, colorspace="sRGB", float_buffer=False, pack=False,
+               alpha_mode="STRAIGHT"):
+    """A 2x2 image holding `texels`, and the values Blender stored (bytes are quantised)."""
+    img = bpy.data.images.new(name, 2, 2, alpha=True, float_buffer=float_buffer)
+    # A generated image regenerates its pixels when its colour space changes: set it first.
+    img.colorspace_settings.name = colorspace
+    img.alpha_mode = alpha_mode
+    img.pixels.foreach_set(np.asarray(texels, np.float32).ravel())
+    if pack:
+        img.pack()
+    stored = np.empty(16, np.float32)
+    img.pixels.foreach_get(stored)
+    return img, stored.reshape(4, 4).astype(np.float64)
+
+
+def texture(mat, img, to_node, to_socket, output="Color"):
+    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    mat.node_tree.links.new(tex.outputs[output], to_node.inputs[to_socket])
+    return tex
+
+
+@pytest.mark.parametrize("colorspace, float_buffer, pack", [
+    ("sRGB", False, False), ("sRGB", False, True), ("Non-Color", False, False),
+    ("Linear Rec.709", True, False)])
+def test_emission_from_a_texture_is_its_linear_mean_not_white(fresh, colorspace, float_buffer,
+                                                               pack):
+    mat, node = node_material("Glow", "ShaderNodeBsdfPrincipled",
+                              **{"Emission Strength": 3.0})
+    img, stored = make_image("Emit", colorspace=colorspace, float_buffer=float_buffer, pack=pack)
+    tex = texture(mat, img, node, "Emission Color")
+    spec, warnings = convert(mat)
+    # Byte sRGB texels read back encoded: decode each, then average. Float and data: as stored.
+    decoded = srgb_to_linear(stored[:, :3]) if colorspace == "sRGB" and not float_buffer \
+        else stored[:, :3]
+    expected = 3.0 * decoded.mean(axis=0)
+    assert spec.ctor == "principled"
+    assert spec.kwargs["emission"] == pytest.approx(tuple(expected), abs=1e-5)
+    assert max(spec.kwargs["emission"]) < 3.0 * 0.7  # never the socket's white
+    assert any(f"node '{node.name}' input 'Emission Color'" in w and tex.name in w
+               and "'Emit'" in w and "'Glow'" in w for w in warnings)
+
+
+def write_png16(path, grey):
+    """A 2x2 16-bit RGB PNG of one grey level (Blender loads 16-bit PNGs as float buffers)."""
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + \
+            struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    row = b"\x00" + struct.pack(">HHH", grey, grey, grey) * 2
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 2, 16, 2,
+                                                                          0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(row * 2)) + chunk(b"IEND", b""))
+
+
+@pytest.mark.parametrize("colorspace, expected", [("sRGB", srgb_to_linear(32768 / 65535)),
+                                                  ("Non-Color", 32768 / 65535)])
+def test_float_image_from_a_file_is_decoded_once(fresh, tmp_path, colorspace, expected):
+    """Blender decodes a float image into scene linear when it loads it: not again here."""
+    write_png16(tmp_path / "grey16.png", 32768)
+    img = bpy.data.images.load(str(tmp_path / "grey16.png"))
+    img.colorspace_settings.name = colorspace
+    assert img.is_float
+    mat, node = node_material("Grey", "ShaderNodeBsdfDiffuse")
+    texture(mat, img, node, "Color")
+    spec, _ = convert(mat)
+    assert spec.kwargs["colour"] == pytest.approx((float(expected),) * 3, abs=1e-4)
+
+
+def test_base_colour_from_a_texture_is_its_mean(fresh):
+    mat, node = node_material("Albedo", "ShaderNodeBsdfPrincipled")
+    img, stored = make_image("Albedo")
+    texture(mat, img, node, "Base Color")
+    spec, warnings = convert(mat)
+    assert spec.ctor == "principled" and "emission" not in spec.kwargs
+    expected = srgb_to_linear(stored[:, :3]).mean(axis=0)
+    assert spec.kwargs["base_colour"] == pytest.approx(tuple(expected), abs=1e-5)
+    assert len(warnings) == 1 and "mean of image 'Albedo'" in warnings[0]
+
+
+def test_texture_times_colour_factor_and_separated_channels(fresh):
+    """The glTF importer's chains: base colour texture x factor (Mix, Multiply), metallic and
+    roughness from a Non-Color texture's channels (Separate Color), one scaled by a Math node."""
+    mat, node = node_material("Gltf", "ShaderNodeBsdfPrincipled")
+    tree = mat.node_tree
+    albedo, stored = make_image("Albedo")
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    mix.inputs["Factor"].default_value = 1.0
+    mix.inputs[7].default_value = (0.5, 1.0, 0.25, 1.0)  # B (colour)
+    texture(mat, albedo, mix, 6)  # A (colour)
+    tree.links.new(mix.outputs[2], node.inputs["Base Color"])
+    orm, orm_stored = make_image("ORM", colorspace="Non-Color")
+    sep = tree.nodes.new("ShaderNodeSeparateColor")
+    texture(mat, orm, sep, "Color")
+    scale = tree.nodes.new("ShaderNodeMath")
+    scale.operation = "MULTIPLY"
+    scale.inputs[1].default_value = 0.5
+    tree.links.new(sep.outputs["Green"], node.inputs["Roughness"])
+    tree.links.new(sep.outputs["Blue"], scale.inputs[0])
+    tree.links.new(scale.outputs[0], node.inputs["Metallic"])
+    spec, warnings = convert(mat)
+    base = srgb_to_linear(stored[:, :3]).mean(axis=0) * (0.5, 1.0, 0.25)
+    assert spec.kwargs["base_colour"] == pytest.approx(tuple(base), abs=1e-5)
+    assert spec.kwargs["roughness"] == pytest.approx(orm_stored[:, 1].mean(), abs=1e-6)
+    metallic = 0.5 * orm_stored[:, 2].mean()
+    assert any(f"the constant {metallic:.3g}" in w and "'Metallic'" in w for w in warnings)
+
+
+def test_alpha_weights_the_colour_seen(fresh):
+    """Alpha output linked: the colour of what stays visible (alpha-weighted straight colour);
+    unlinked: Cycles' premultiplied colour (alpha mode Straight)."""
+    texels = np.array([[1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0],
+                       [1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]])
+    mat, node = node_material("Cutout", "ShaderNodeBsdfPrincipled")
+    img, _ = make_image("Cut", texels, colorspace="Non-Color")
+    tex = texture(mat, img, node, "Base Color")
+    spec, _ = convert(mat)
+    assert spec.kwargs["base_colour"] == pytest.approx((0.5, 0.0, 0.5), abs=1e-6)
+    mat.node_tree.links.new(tex.outputs["Alpha"], node.inputs["Alpha"])
+    spec, warnings = convert(mat)
+    assert spec.kwargs["base_colour"] == pytest.approx((1.0, 0.0, 0.0), abs=1e-6)
+    assert any("'Alpha'" in w and "opaque" in w for w in warnings)
+
+
+def test_unreducible_chains_keep_what_the_object_is(fresh):
+    """A Color Attribute cannot be reduced: Base Color keeps its own value, emission is off
+    (the socket's own white would turn the surface into a light)."""
+    mat, node = node_material("Painted", "ShaderNodeBsdfPrincipled",
+                              **{"Base Color": (0.2, 0.4, 0.6, 1.0), "Emission Strength": 1.0})
+    attr = mat.node_tree.nodes.new("ShaderNodeVertexColor")
+    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Base Color"])
+    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Emission Color"])
+    spec, warnings = convert(mat)
+    assert spec.ctor == "principled" and "emission" not in spec.kwargs
+    assert spec.kwargs["base_colour"] == pytest.approx((0.2, 0.4, 0.6), abs=1e-6)
+    assert sum("cannot reduce" in w and attr.name in w for w in warnings) == 2
+
+
+def test_missing_image_turns_no_emission_on(fresh):
+    mat, node = node_material("Lost", "ShaderNodeBsdfPrincipled", **{"Emission Strength": 5.0})
+    img = bpy.data.images.new("Lost", 4, 4)
+    img.source, img.filepath = "FILE", "//missing/lost.png"  # as a glTF with a missing texture
+    tex = texture(mat, img, node, "Emission Color")
+    spec, warnings = convert(mat)
+    assert "emission" not in spec.kwargs
+    assert any(tex.name in w and "no pixels" in w for w in warnings)
+
+
+def test_exact_chains_do_not_warn(fresh):
+    mat, node = node_material("Exact", "ShaderNodeBsdfDiffuse")
+    rgb = mat.node_tree.nodes.new("ShaderNodeRGB")
+    rgb.outputs[0].default_value = (0.1, 0.2, 0.3, 1.0)
+    mat.node_tree.links.new(rgb.outputs[0], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert spec.kwargs["colour"] == pytest.approx((0.1, 0.2, 0.3), abs=1e-6)
+    assert warnings == []
+
+
+# ---- Volumes and inputs Specula ignores ---------------------------------------------------------
+
+def volume_material(name, with_surface):
+    mat, node = node_material(name, "ShaderNodeBsdfGlass")
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    if not with_surface:
+        tree.nodes.remove(node)
+    vol = tree.nodes.new("ShaderNodeVolumeAbsorption")
+    tree.links.new(vol.outputs[0], out.inputs["Volume"])
+    return mat, vol
+
+
+def test_volume_only_material_is_an_invisible_boundary(fresh, core):
+    mat, vol = volume_material("Fog", with_surface=False)
+    spec, warnings = convert(mat)
+    assert (spec.ctor, spec.kwargs) == ("glass", {"colour": (1.0, 1.0, 1.0), "ior": 1.0})
+    assert isinstance(spec.to_core(core), core.Material)
+    assert len(warnings) == 1
+    assert "'Fog'" in warnings[0] and vol.name in warnings[0] and "Volume" in warnings[0]
+
+
+def test_surface_with_volume_keeps_the_surface_and_warns(fresh):
+    mat, vol = volume_material("ColouredGlass", with_surface=True)
+    spec, warnings = convert(mat)
+    assert spec.ctor == "glass"
+    assert len(warnings) == 1
+    assert "input 'Volume'" in warnings[0] and vol.name in warnings[0]
+
+
+@pytest.mark.slow
+def test_object_behind_a_volume_only_cube_is_visible(fresh, core):
+    """Seen through a Volume-only cube, a red emitter keeps its exact radiance (IOR 1 glass
+    refracts and reflects nothing); an opaque fallback would show the cube."""
+    from addon_helpers import camera_object, cube_object, depsgraph
+
+    from addon import exporter
+    fog = cube_object("Fog", size=1.0)
+    fog.data.materials.append(volume_material("Fog", with_surface=False)[0])
+    wall = cube_object("Wall", size=1.0)
+    wall.location, wall.scale = (0, 3, 0), (20, 0.1, 20)
+    red, _ = node_material("Red", "ShaderNodeEmission", Color=(1.0, 0.0, 0.0, 1.0))
+    wall.data.materials.append(red)
+    camera_object(location=(0, -5, 0), rotation=(1.5707963, 0, 0))
+    scene, _ = exporter.to_core(exporter.export(depsgraph()), core)
+    result = core.render(scene, core.RenderSettings(width=16, height=12, samples=4, seed=1))
+    centre = result.combined[4:8, 6:10, :3]
+    np.testing.assert_allclose(centre, np.broadcast_to((1.0, 0.0, 0.0), centre.shape),
+                               atol=1e-5)
+
+
+def add_normal_map(mat, node, socket="Normal"):
+    nmap = mat.node_tree.nodes.new("ShaderNodeNormalMap")
+    mat.node_tree.links.new(nmap.outputs[0], node.inputs[socket])
+    return nmap
+
+
+def link_value(mat, node, socket):
+    value = mat.node_tree.nodes.new("ShaderNodeValue")
+    mat.node_tree.links.new(value.outputs[0], node.inputs[socket])
+    return value
+
+
+@pytest.mark.parametrize("socket, value", [
+    ("Normal", "normal map"), ("Alpha", 0.5), ("Alpha", "link"), ("Coat Weight", 1.0),
+    ("Coat Weight", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
+    ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
+])
+def test_ignored_principled_inputs_warn(fresh, socket, value):
+    mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")
+    if value == "normal map":
+        add_normal_map(mat, node)
+    elif value == "link":
+        link_value(mat, node, socket)
+    else:
+        node.inputs[socket].default_value = value
+    spec, warnings = convert(mat)
+    assert spec.ctor == "principled"
+    hits = [w for w in warnings if f"input '{socket}'" in w]
+    assert len(hits) == 1, warnings
+    assert "material 'Ignored'" in hits[0] and f"node '{node.name}'" in hits[0]
+
+
+def test_coat_normal_warns_with_a_coat(fresh):
+    mat, node = node_material("Coated", "ShaderNodeBsdfPrincipled", **{"Coat Weight": 1.0})
+    add_normal_map(mat, node, "Coat Normal")
+    _, warnings = convert(mat)
+    assert any("input 'Coat Normal'" in w for w in warnings)
+
+
+def test_default_principled_has_no_ignored_input_warnings(fresh):
+    mat, _ = node_material("Plain", "ShaderNodeBsdfPrincipled")
+    assert convert(mat)[1] == []
+
+
+@pytest.mark.parametrize("shader", ["ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlossy",
+                                    "ShaderNodeBsdfGlass"])
+def test_normal_map_on_other_bsdfs_warns(fresh, shader):
+    mat, node = node_material("Bumpy", shader)
+    nmap = add_normal_map(mat, node)
+    _, warnings = convert(mat)
+    assert len(warnings) == 1
+    assert "'Bumpy'" in warnings[0] and "input 'Normal'" in warnings[0] \
+        and nmap.name in warnings[0]
+
+
+def test_linked_displacement_warns(fresh):
+    mat, _ = node_material("Displaced", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    disp = tree.nodes.new("ShaderNodeDisplacement")
+    tree.links.new(disp.outputs[0], out.inputs["Displacement"])
+    _, warnings = convert(mat)
+    assert len(warnings) == 1 and "'Displacement'" in warnings[0] and disp.name in warnings[0]

@@ -34,7 +34,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from tests import scenes  # noqa: E402
-from tests.benchmarks import imaging  # noqa: E402
+from addon import imaging  # noqa: E402
 from tests.cycles import renderers  # noqa: E402
 
 OUT = os.path.join(REPO, "out", "bench")

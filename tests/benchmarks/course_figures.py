@@ -40,7 +40,7 @@ if REPO not in sys.path:
 import bpy  # noqa: E402
 
 from blend_scenes import build_scenes  # noqa: E402
-from tests.benchmarks import imaging  # noqa: E402
+from addon import imaging  # noqa: E402
 from tests.cycles import compare, renderers  # noqa: E402
 
 OUT = os.path.join(REPO, "out", "figures")

@@ -5,7 +5,7 @@ import zlib
 
 import numpy as np
 
-from tests.benchmarks import imaging
+from addon import imaging
 
 
 def _read_png(path):

@@ -42,11 +42,11 @@ def compare_render(name, result, kind="agreement", seconds=0.0) -> compare.Compa
     return c
 
 
-def save_diagnostics(stem, result, runs, c):
-    """out/cycles/<stem>.png: Specula, Cycles (mean of the seeds) and the per-pixel z map
-    (red: Specula brighter), 4x enlarged; and the arrays as .npz."""
-    from tests.benchmarks import imaging
-    os.makedirs(DIAGNOSTICS, exist_ok=True)
+def save_diagnostics(stem, result, runs, c, directory=DIAGNOSTICS):
+    """<directory>/<stem>.png (default out/cycles/): Specula, Cycles (mean of the seeds) and
+    the per-pixel z map (red: Specula brighter), 4x enlarged; and the arrays as .npz."""
+    from addon import imaging
+    os.makedirs(directory, exist_ok=True)
     s = result.combined[..., :3].astype(np.float64)
     cm = runs.mean(axis=0)
     var = result.variance + runs.var(axis=0, ddof=1) / len(runs)
@@ -59,8 +59,8 @@ def save_diagnostics(stem, result, runs, c):
            imaging.upscale(imaging.flip(np.round(zimg * 255).astype(np.uint8)), k)]
     sheet = imaging.contact_sheet([row], [""], ["SPECULA", "CYCLES", "Z (RED: SPECULA HIGHER)"],
                                   title=f"{stem}: max z {c.max_z:.1f} / {c.z_threshold:.1f}")
-    imaging.write_png(os.path.join(DIAGNOSTICS, stem + ".png"), sheet)
-    np.savez_compressed(os.path.join(DIAGNOSTICS, stem + ".npz"), specula=s,
+    imaging.write_png(os.path.join(directory, stem + ".png"), sheet)
+    np.savez_compressed(os.path.join(directory, stem + ".npz"), specula=s,
                         variance=result.variance, cycles=runs)
 
 

@@ -1,5 +1,7 @@
 """Render a variant with Specula (in-process, through the add-on's exporter and the core)
-and with Cycles (through Blender, set up unbiased), as linear float images.
+and with Cycles (through Blender, set up unbiased), as linear float images. The rendering
+itself is the add-on's (`addon/renderers.py`, shared with `python -m addon compare`); this
+module applies a variant's settings.
 
 Both return (H, W, 3) float arrays with row 0 at the bottom. Specula also returns its
 per-pixel variance of the mean. Needs bpy with the add-on registered (`ensure_registered`).
@@ -8,12 +10,11 @@ per-pixel variance of the mean. Needs bpy with the add-on registered (`ensure_re
 from __future__ import annotations
 
 import os
-import tempfile
-import time
-from types import SimpleNamespace
 
 import bpy
-import numpy as np
+
+from addon import renderers as shared
+from addon.renderers import render_cycles_image
 
 from .variants import SCENES_DIR, Variant
 
@@ -68,16 +69,8 @@ def prepare(variant: Variant):
 
 def specula_scene(variant: Variant):
     """(core scene, core RenderSettings, warnings) of the variant, as the add-on exports it."""
-    from addon import exporter
-    specula = core()
-    scene = prepare(variant)
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    depsgraph.update()
-    exported = exporter.export(depsgraph)
-    core_scene, warnings = exporter.to_core(exported, specula)
-    w, h = variant.resolution
-    settings = specula.RenderSettings(**exporter.render_settings_kwargs(scene, w, h))
-    return core_scene, settings, exported.warnings + warnings
+    prepare(variant)
+    return shared.export_specula(bpy.context.scene)
 
 
 def render_specula(variant: Variant, inject=None):
@@ -86,23 +79,14 @@ def render_specula(variant: Variant, inject=None):
     core_scene, settings, _ = specula_scene(variant)
     if inject is not None:
         core_scene, settings = inject(core_scene, settings)
-    return core().render(core_scene, settings)
+    return shared.render_specula(core_scene, settings)
 
 
 def configure_cycles(scene, samples, seed, max_bounces, time_limit=0.0):
-    """Cycles unbiased (the CLI's settings) on the CPU with THREADS threads."""
-    from addon.cli import _configure_cycles
-    scene.render.engine = "CYCLES"
-    _configure_cycles(scene, SimpleNamespace(samples=samples, time_limit=time_limit, seed=seed,
-                                             max_bounces=max_bounces))
-    c = scene.cycles
-    c.film_exposure = 1.0
-    c.sampling_pattern = "TABULATED_SOBOL"  # independent pixels (no blue-noise dithering)
-    c.use_animated_seed = False
-    c.min_light_bounces = 0
-    scene.render.threads_mode = "FIXED"
-    scene.render.threads = THREADS
-    return c
+    """Cycles unbiased (the CLI's settings) on the CPU with THREADS threads, pixels
+    independent (the add-on's comparison settings)."""
+    return shared.configure_cycles_for_comparison(scene, samples, seed, max_bounces,
+                                                  time_limit=time_limit, threads=THREADS)
 
 
 def cycles_settings_record(scene) -> dict:
@@ -115,33 +99,6 @@ def cycles_settings_record(scene) -> dict:
             "sampling_pattern", "caustics_reflective", "caustics_refractive", "use_light_tree")
     return {k: (getattr(c, k) if not isinstance(getattr(c, k), float)
                 else round(getattr(c, k), 6)) for k in keys}
-
-
-def render_cycles_image(scene):
-    """Render the current scene with its current engine settings; (H, W, 4) float32 from a
-    32-bit EXR (linear, rows bottom to top), and the seconds the render took."""
-    image = scene.render.image_settings
-    image.file_format = "OPEN_EXR"
-    image.color_depth = "32"
-    image.color_mode = "RGBA"
-    fd, path = tempfile.mkstemp(suffix=".exr", prefix="specula_cycles_")
-    os.close(fd)
-    scene.render.filepath = path
-    scene.render.use_file_extension = False
-    try:
-        t0 = time.perf_counter()
-        bpy.ops.render.render(write_still=True)
-        seconds = time.perf_counter() - t0
-        img = bpy.data.images.load(path)
-        try:
-            w, h = img.size
-            buf = np.zeros(w * h * 4, np.float32)
-            img.pixels.foreach_get(buf)
-        finally:
-            bpy.data.images.remove(img)
-    finally:
-        os.unlink(path)
-    return buf.reshape(h, w, 4), seconds
 
 
 def render_cycles(variant: Variant, seed: int, samples: int | None = None):

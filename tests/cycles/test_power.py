@@ -7,6 +7,7 @@ of the same variant must agree (test_agreement.py checks it too) and the wrong o
 
 import dataclasses
 import math
+import threading
 import time
 from contextlib import contextmanager, nullcontext
 
@@ -94,6 +95,59 @@ def _one_sided_emission():
         core.kernel.AVAILABLE = available
 
 
+def _no_terminator_offset(scene, settings):
+    scene.terminator_offset = np.zeros_like(scene.terminator_offset)
+    return scene, settings
+
+
+@contextmanager
+def _glossy_compensation_white():
+    """Issue 12's old Glossy: energy compensation with Fss = 1, the colour applied after
+    (bsdf.layer_fms is what both the numpy stages and the kernels' tables read)."""
+    bsdf = renderers.core().bsdf
+    layer_fms = bsdf.layer_fms
+
+    def white(tables, principled, colour):
+        return layer_fms(tables, principled, np.ones(3) if not principled else colour)
+
+    bsdf.layer_fms = white
+    try:
+        yield
+    finally:
+        bsdf.layer_fms = layer_fms
+
+
+@contextmanager
+def _spot_cone_toward_centre():
+    """Issue 12's old spot light: next-event estimation took the cone's smoothstep toward
+    the light's centre instead of along the sampled ray (numpy stages; the render's threads
+    each keep their own centre directions)."""
+    core = renderers.core()
+    LightObjects = core.lights.LightObjects
+    sample_point, attenuation = LightObjects._sample_point, LightObjects.spot_attenuation
+    local = threading.local()
+
+    def toward_centre(self, j, p, *args, **kwargs):
+        to_c = self.centre[j] - p
+        local.w_c = to_c / np.maximum(np.linalg.norm(to_c, axis=1), 1e-300)[:, None]
+        try:
+            return sample_point(self, j, p, *args, **kwargs)
+        finally:
+            local.w_c = None
+
+    def cone(self, j, w_from_light):
+        w_c = getattr(local, "w_c", None)
+        return attenuation(self, j, w_from_light if w_c is None else -w_c)
+
+    LightObjects._sample_point, LightObjects.spot_attenuation = toward_centre, cone
+    available, core.kernel.AVAILABLE = core.kernel.AVAILABLE, False
+    try:
+        yield
+    finally:
+        LightObjects._sample_point, LightObjects.spot_attenuation = sample_point, attenuation
+        core.kernel.AVAILABLE = available
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -104,6 +158,9 @@ INJECTIONS = {
     "one_bounce_fewer": ("cbspheres_bounces_3", _one_bounce_fewer, None),
     "one_sided_emission": ("emitter_direct", None, _one_sided_emission),
     "light_power_plus_5_percent": ("light_area_square", _light_power_plus_5_percent, None),
+    "spot_cone_toward_centre": ("spot_user", None, _spot_cone_toward_centre),
+    "glossy_compensation_white": ("glossy_colours", None, _glossy_compensation_white),
+    "no_terminator_offset": ("terminator_point", _no_terminator_offset, None),
 }
 
 

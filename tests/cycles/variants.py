@@ -487,6 +487,146 @@ def world_environment():
 # The registry
 
 
+# ---------------------------------------------------------------------------------------
+# Issue 12's three mismatches, each swept over its parameters: spot lights of radius > 0
+# (the cone's smoothstep along each sampled ray), rough Glossy colours (the multiscatter
+# compensation with the colour as its Fresnel) and the shadow terminator geometry offset.
+
+
+def _spot_room(location=(0.0, 0.0, 1.45), rotation=(0.0, 0.0, 0.0), **props):
+    """Issue 12's user scene: the box without its ceiling emitter, diffuse walls and two
+    diffuse balls, lit only by one spot light (pointing straight down by default)."""
+    _box(emitter=False)
+    _sphere(bs.diffuse("Clay", (0.8, 0.6, 0.4)), (-0.45, 0.2, 0.3), 0.3, "Clay")
+    _sphere(bs.diffuse("Chalk", (0.7, 0.7, 0.7)), (0.45, -0.1, 0.3), 0.3, "Chalk")
+    light = bpy.data.lights.new("Spot", "SPOT")
+    for key, value in props.items():
+        setattr(light, key, value)
+    obj = bpy.data.objects.new("Spot", light)
+    obj.location, obj.rotation_euler = location, rotation
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def spot_user():
+    """Cone 50 degrees, blend 0.3, radius 0.05, soft falloff off, 150 W, straight down: the
+    scene that disagreed with z 92 (the blend ring on the floor)."""
+    _spot_room(energy=150.0, spot_size=math.radians(50.0), spot_blend=0.3,
+               shadow_soft_size=0.05, use_soft_falloff=False)
+
+
+def spot_small_cone_soft():
+    """A narrow cone with a hard edge from a large soft-falloff disk."""
+    _spot_room(energy=150.0, spot_size=math.radians(12.0), spot_blend=0.0,
+               shadow_soft_size=0.2, use_soft_falloff=True,
+               rotation=(math.radians(25.0), 0.0, 0.0))
+
+
+def spot_wide_blend_one():
+    """Cone 180 degrees with blend 1 and a big sphere."""
+    _spot_room(energy=150.0, spot_size=math.radians(180.0), spot_blend=1.0,
+               shadow_soft_size=0.3, use_soft_falloff=False, location=(0.0, 0.0, 1.2))
+
+
+def spot_radius_zero():
+    _spot_room(energy=150.0, spot_size=math.radians(80.0), spot_blend=0.6,
+               shadow_soft_size=0.0, rotation=(math.radians(-20.0), 0.0, 0.0))
+
+
+def spot_scaled():
+    """Non-uniform object scale squashes the cone into an ellipse (Cycles' scaled axes)."""
+    obj = _spot_room(energy=150.0, spot_size=math.radians(70.0), spot_blend=0.5,
+                     shadow_soft_size=0.1, use_soft_falloff=True)
+    obj.scale = (2.0, 0.6, 1.0)
+
+
+def spot_seen_glass_mirror():
+    """The spot lamp itself seen by the camera, through a glass ball and in a mirror ball;
+    it points at the camera, tilted, so its cone edge crosses the view."""
+    _box(emitter=False)
+    _sphere(bs.material("Glass", "ShaderNodeBsdfGlass", Color=(1.0, 1.0, 1.0, 1.0),
+                        Roughness=0.0, IOR=1.45), (-0.35, -0.5, 0.5), 0.22, "Lens")
+    _sphere(bs.material("Mirror", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0),
+                        Roughness=0.0), (0.45, 0.1, 0.3), 0.3, "Mirror")
+    light = bpy.data.lights.new("Spot", "SPOT")
+    light.energy, light.spot_size, light.spot_blend = 300.0, math.radians(60.0), 0.5
+    light.shadow_soft_size, light.use_soft_falloff = 0.15, False
+    obj = bpy.data.objects.new("Spot", light)
+    obj.location = (-0.2, 0.6, 0.8)
+    obj.rotation_euler = (math.radians(-100.0), 0.0, math.radians(-15.0))
+    obj.visible_camera = True
+    bpy.context.scene.collection.objects.link(obj)
+
+
+def _glossy_balls(balls):
+    """Rough Glossy spheres of the given (colour, roughness) on the box's floor under its
+    ceiling emitter."""
+    _box()
+    xs = np.linspace(-0.6, 0.6, len(balls))
+    for i, ((r, g, b), rough) in enumerate(balls):
+        mat = bs.material(f"Glossy{i}", "ShaderNodeBsdfGlossy", Color=(r, g, b, 1.0),
+                          Roughness=rough)
+        _sphere(mat, (float(xs[i]), 0.0, 0.27), 0.27, f"Ball{i}")
+
+
+def glossy_colours():
+    """Issue 12's sphere (0.74, 0.77, 0.62) at roughness 0.72, grey 0.5 at 0.8 and a
+    saturated red at 0.45."""
+    _glossy_balls((((0.74, 0.77, 0.62), 0.72), ((0.5, 0.5, 0.5), 0.8),
+                   ((0.9, 0.15, 0.1), 0.45)))
+
+
+def glossy_roughness():
+    """One dark blue colour at roughness 0.2, 0.5 and 1.0."""
+    _glossy_balls((((0.2, 0.3, 0.6), 0.2), ((0.2, 0.3, 0.6), 0.5), ((0.2, 0.3, 0.6), 1.0)))
+
+
+def _low_poly_sphere(name, centre, radius, mat, segments=10):
+    """A smooth-shaded UV sphere coarse enough that its terminator shows the facets."""
+    import bmesh
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=segments, v_segments=segments // 2,
+                              radius=radius)
+    for face in bm.faces:
+        face.smooth = True
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = centre
+    obj.data.materials.append(mat)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def _terminator_balls(offsets, light_kind, **props):
+    """Two coarse smooth spheres lit from the side, with the given shadow terminator
+    geometry offsets (None: Blender's default, 0.1, as the object has it)."""
+    _box(emitter=False)
+    mat = bs.diffuse("Matte", (0.8, 0.8, 0.8))
+    for i, offset in enumerate(offsets):
+        obj = _low_poly_sphere(f"Ball{i}", (-0.42 + 0.84 * i, -0.1, 0.36), 0.36, mat)
+        if offset is not None:
+            obj.shadow_terminator_geometry_offset = offset
+    light = bpy.data.lights.new("Side", light_kind)
+    for key, value in props.items():
+        setattr(light, key, value)
+    # From the upper left, at right angles to the view, so the terminator runs across each
+    # sphere's visible face.
+    obj = bpy.data.objects.new("Side", light)
+    obj.location = (-0.9, -0.1, 1.3)
+    obj.rotation_euler = (0.0, math.radians(-45.0), 0.0)
+    bpy.context.scene.collection.objects.link(obj)
+
+
+def terminator_point():
+    _terminator_balls((None, 1.0), "POINT", energy=40.0, shadow_soft_size=0.0)
+
+
+def terminator_area():
+    _terminator_balls((0.0, 0.5), "AREA", energy=40.0, shape="SQUARE", size=0.3)
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -532,6 +672,21 @@ for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):
     _add(Variant(_setup.__name__, _setup, max_bounces=1, samples=512, cycles_samples=2048))
+# A 12-degree cone lights the room mostly indirectly: rare, bright paths; more samples.
+_add(Variant("spot_small_cone_soft", spot_small_cone_soft, max_bounces=8, samples=1024,
+             cycles_samples=1024))
+for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
+               spot_scaled, spot_seen_glass_mirror, glossy_colours, glossy_roughness):
+    _add(Variant(_setup.__name__, _setup, max_bounces=8))
+# Direct light only: the terminator band is a few pixels of each sphere, and without the
+# room's indirect light its pixels are nearly noise-free (the power test needs that).
+_add(Variant("terminator_point", terminator_point, max_bounces=0, samples=256,
+             cycles_samples=256))
+# With the area light, direct light only disagrees (max |z| 9.4) in pixels unrelated to the
+# offset (Specula exactly 0 where Cycles has ~0.003 in both seeds; the wall beside the
+# light): unexplained, left open in issue 12's note; with indirect light it agrees.
+_add(Variant("terminator_area", terminator_area, max_bounces=8, samples=512,
+             cycles_samples=512))
 # The course's max ray depth experiment: Blender's max_bounces on CBspheres.
 for _n in (0, 1, 2, 3, 4, 5, 100):
     _add(Variant(f"cbspheres_bounces_{_n}", _bounces(_n), max_bounces=_n,

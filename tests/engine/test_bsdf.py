@@ -138,10 +138,14 @@ def test_lambert_weight_and_pdf(rng):
     colour = np.tile([0.5, 0.25, 1.0], (n, 1))
     wi, w, pdf = bsdf.sample_diffuse(wo, nz, nz, colour, rng.random((n, 2)))
     assert np.allclose(w, colour) and np.all(wi[:, 2] > 0)
-    f_cos, pdf_eval = bsdf.eval_diffuse(wi, nz, nz, colour)
+    f_cos, pdf_eval = bsdf.eval_diffuse(wi, nz, colour)
     assert np.allclose(pdf, pdf_eval)
     assert np.allclose(f_cos / pdf_eval[:, None], colour)
-    # Below the geometric surface nothing is reflected, even if the shading normal allows it.
+    # A light below the geometric surface but above the shading horizon is evaluated by the
+    # shading normal alone (Cycles' bsdf_diffuse_eval: the shadow ray decides), while
+    # sampling never returns such a direction (above).
     below = np.array([[0.0, 0.6, -0.8]])
-    f_cos, pdf_b = bsdf.eval_diffuse(below, np.array([[0.0, 1.0, 0.0]]), Z, colour[:1])
+    f_cos, pdf_b = bsdf.eval_diffuse(below, np.array([[0.0, 1.0, 0.0]]), colour[:1])
+    assert np.allclose(f_cos, colour[:1] * 0.6 / np.pi) and pdf_b[0] == pytest.approx(0.6 / np.pi)
+    f_cos, pdf_b = bsdf.eval_diffuse(below, Z, colour[:1])
     assert np.all(f_cos == 0) and pdf_b[0] == 0

@@ -65,7 +65,7 @@ def test_lambert_with_a_shading_normal_facing_away_from_the_geometric_one(rng):
         wi, w, pdf = bsdf.sample_diffuse(ng, ns, ng, np.full((n, 3), 0.8), rng.random((n, 2)))
         assert np.isfinite(wi).all() and np.isfinite(w).all() and np.isfinite(pdf).all()
         assert np.all(w[bsdf.dot(wi, ng) <= 0] == 0)
-        f, p = bsdf.eval_diffuse(wi, ns, ng, np.full((n, 3), 0.8))
+        f, p = bsdf.eval_diffuse(wi, ns, np.full((n, 3), 0.8))
         assert np.all(f >= 0) and np.all(p >= 0) and np.isfinite(f).all()
 
 

@@ -68,7 +68,7 @@ def test_lambert_mirror_metal_are_finite_and_bounded(wo, n, ng, u, colour):
     wi, w, pdf = bsdf.sample_diffuse(wo, n, ng, c, u)
     assert np.isfinite(wi).all() and np.isfinite(w).all() and np.isfinite(pdf).all()
     assert np.all((w >= 0) & (w <= colour + 1e-12)) and np.all(pdf >= 0)
-    f, _ = bsdf.eval_diffuse(wi, n, ng, c)
+    f, _ = bsdf.eval_diffuse(wi, n, c)
     assert np.isfinite(f).all() and np.all(f >= 0) and np.all(f <= 1 / np.pi + 1e-12)
     for sample in (bsdf.sample_mirror, bsdf.sample_metal):
         wi, w, _ = sample(wo, hemisphere_pair(wo, n), c)

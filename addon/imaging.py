@@ -3,6 +3,9 @@ and log-log line plots, in numpy alone (no bpy, no matplotlib).
 
 Images are (H, W, 3) arrays with row 0 at the TOP here; `flip` renders' bottom-up rows
 before use. PNGs are 8-bit RGB written with zlib.
+
+Part of the add-on because `python -m addon compare` draws its report with it (the packaged
+add-on has neither matplotlib nor the tests); the benchmarks and test reports use it too.
 """
 
 from __future__ import annotations
