@@ -93,3 +93,14 @@ bench-cycles: $(STAMP)
 # The course project's experiments side by side: out/figures/*.png and differences.md.
 figures: $(STAMP)
 	$(PY) -m tests.benchmarks.course_figures
+
+# Randomised comparison with Cycles (tests/cycles/fuzz.py): N random scenes from seed SEED0,
+# each disagreement confirmed at 4x samples and shrunk; out/fuzz/summary.md, seed_<n>.blend,
+# .json and .png. AVOID_KNOWN=1 leaves out the features of the known differences.
+.PHONY: fuzz
+N ?= 20
+SEED0 ?= 0
+fuzz: $(STAMP)
+	mkdir -p out/fuzz
+	$(PY) -m tests.cycles.fuzz --seeds $(SEED0)-$(shell echo $$(($(SEED0) + $(N) - 1))) \
+		$(if $(AVOID_KNOWN),--avoid-known) 2>&1 | tee out/fuzz/log.txt
