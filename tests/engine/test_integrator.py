@@ -155,8 +155,8 @@ def scaled_cbspheres(scale, offset=(0.0, 0.0, 0.0)):
     from tests import scenes
 
     b = scenes.cornell_box()
-    for i, (name, v, tri, normals, smooth, mi) in enumerate(b._meshes):
-        b._meshes[i] = (name, v * scale + np.asarray(offset), tri, normals, smooth, mi)
+    for i, (name, v, tri, *rest) in enumerate(b._meshes):
+        b._meshes[i] = (name, v * scale + np.asarray(offset), tri, *rest)
     cam = scenes.cornell_camera(clip_start=0.1 * scale, clip_end=100.0 * scale)
     m = np.array(cam.world_from_camera)
     m[:3, 3] = m[:3, 3] * scale + np.asarray(offset)
