@@ -660,7 +660,10 @@ class _Reader:
 
     def ior(self, node):
         ior = self.number(node, "IOR", 1.5)
-        if ior <= 0:
+        sock = node.inputs.get("IOR")
+        if sock is not None and not sock.is_linked and sock.default_value != sock.default_value:
+            ior = float("nan")  # Blender's socket accepts NaN; number() would hide it
+        if not ior > 0:  # also NaN
             self.warn(f"node '{node.name}' IOR {ior:.3g} is not positive; using 1.5")
             ior = 1.5
         return ior
