@@ -390,10 +390,6 @@ def _background_node(world):
     return node if node.bl_idname == "ShaderNodeBackground" else None
 
 
-def _srgb_to_linear(c):
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
 def _euler_xyz(rx, ry, rz):
     cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
     x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
@@ -434,7 +430,7 @@ def world_environment(world, warn):
     if image.channels < 3:
         rgb = np.repeat(px.reshape(h, w, image.channels)[..., :1], 3, axis=2)
     if not image.is_float and image.colorspace_settings.name == "sRGB":
-        rgb = _srgb_to_linear(rgb)
+        rgb = materials.srgb_to_linear(rgb)
     if not np.all(np.isfinite(rgb)):
         warn(f"{where}: image '{image.name}' has NaN/inf pixels; they are rendered black")
         rgb = np.nan_to_num(rgb, nan=0.0, posinf=0.0, neginf=0.0)

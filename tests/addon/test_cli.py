@@ -153,7 +153,7 @@ def test_enables_as_an_installed_addon(tmp_path):
 # Real files: a renamed Render Result, warnings, the JSON line
 
 
-def _saved(tmp_path, name, edit):
+def saved_scene(tmp_path, name, edit):
     """cbspheres.blend changed by `edit(scene)` (in this process), saved as tmp_path/name."""
     bpy.ops.wm.open_mainfile(filepath=CBSPHERES)
     edit(bpy.context.scene)
@@ -172,7 +172,7 @@ def test_renamed_render_result_is_found_by_type(tmp_path, engine):
         image = next(i for i in bpy.data.images if i.type == "RENDER_RESULT")
         image.name = "My Render"  # saved with the file, and reused by the next render
         image.use_fake_user = True
-    scene = _saved(tmp_path, "renamed.blend", rename_render_result)
+    scene = saved_scene(tmp_path, "renamed.blend", rename_render_result)
     out = tmp_path / "r.exr"
     proc = run("render", scene, "--engine", engine, "--samples", 1, "--resolution", "24x18",
                "--output", out)
@@ -223,7 +223,7 @@ def test_warnings_are_one_line_each_and_grouped(tmp_path):
             mesh.from_pydata([(0, 0, 0.5), (0.1, 0, 0.5), (0.2, 0, 0.5), (0, 0.1, 0.5)], [],
                              [(0, 1, 3), (0, 1, 2)])
             scene.collection.objects.link(bpy.data.objects.new(f"Flat{i}", mesh))
-    scene = _saved(tmp_path, "degenerate.blend", degenerate_objects)
+    scene = saved_scene(tmp_path, "degenerate.blend", degenerate_objects)
     proc = run("render", scene, "--samples", 1, "--resolution", "16x12", "--output",
                tmp_path / "x.exr")
     assert proc.returncode == 0, proc.stderr

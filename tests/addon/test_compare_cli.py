@@ -10,24 +10,13 @@ import sys
 import bpy
 import numpy as np
 import pytest
-from conftest import SCENES_DIR
-from test_cli import last_json, run
+from test_cli import CBSPHERES, last_json, run, saved_scene
 
 import addon
 from addon import agreement, cli, compare, renderers
 
-CBSPHERES = f"{SCENES_DIR}/cbspheres.blend"
 # Tiny and quick (a few seconds per compare), yet enough samples for a variance per pixel.
 SMALL = ("--samples", 32, "--resolution", "48x36")
-
-
-def saved_scene(tmp_path, name, edit):
-    """cbspheres.blend changed by `edit(scene)`, saved as tmp_path/name."""
-    bpy.ops.wm.open_mainfile(filepath=CBSPHERES)
-    edit(bpy.context.scene)
-    path = tmp_path / name
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    return path
 
 
 def panoramic(scene):

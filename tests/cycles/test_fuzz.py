@@ -2,12 +2,12 @@
 shrinker reduces a disagreement to its cause, a fixed set of random scenes agrees with
 Cycles, and the same comparison catches a deliberately wrong renderer on a random scene."""
 
-import dataclasses
 import json
 
 import pytest
 
 from . import fuzz, harness
+from .test_power import _light_power_plus_5_percent, _one_bounce_fewer
 
 # Seeds CI renders (a few seconds each at fuzz.SAMPLES on 2 cores): scenes that agreed in
 # the first `make fuzz` run, chosen greedily to cover every material kind, light type and
@@ -166,16 +166,6 @@ def test_random_scene_agrees_with_cycles(seed):
     if not c.agree:
         harness.save_diagnostics(f"fuzz_seed_{seed}", result, runs, c)
     assert c.agree, f"seed {seed} {fuzz.features(params)}: {c.describe()}"
-
-
-def _light_power_plus_5_percent(scene, settings):
-    scene.lights = [dataclasses.replace(light, power=tuple(1.05 * c for c in light.power))
-                    for light in scene.lights]
-    return scene, settings
-
-
-def _one_bounce_fewer(scene, settings):
-    return scene, dataclasses.replace(settings, max_bounces=settings.max_bounces - 1)
 
 
 # error -> (seed whose random scene shows it, injection). Seed 92: a point light is its only
