@@ -587,6 +587,10 @@ class _Reader:
     def read(self):
         mat = self.material
         tree = mat.node_tree
+        # Specular lobes always tilt smooth normals to keep reflections above the surface
+        # (bsdf.valid_specular_normal), Cycles' default for a material.
+        if not getattr(getattr(mat, "cycles", None), "use_bump_map_correction", True):
+            self.warn("Settings > Bump Map Correction off is not supported; rendered on")
         # Before 5.0 a material could keep a node tree while use_nodes is off.
         uses_nodes = tree is not None and (bpy.app.version >= (5, 0) or mat.use_nodes)
         if not uses_nodes:

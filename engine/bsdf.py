@@ -16,9 +16,12 @@ but a camera inside glass sees a brighter world in the course's convention.)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from . import sampling
+from .jit import njit
 
 DELTA_PDF = np.inf
 
@@ -122,6 +125,53 @@ def eval_diffuse(wi, n, colour):
     sampling (`sample_diffuse`) still never goes below the geometric surface."""
     cos = np.maximum(dot(wi, n), 0.0)
     return colour * (cos / np.pi)[:, None], cos / np.pi
+
+
+# ----------------------------------------------------------------- specular normals
+@njit(cache=True, nogil=True, error_model="numpy")
+def valid_specular_normal(ngx, ngy, ngz, ix, iy, iz, nx, ny, nz):
+    """The normal a specular lobe uses: the shading normal n, tilted toward the geometric
+    normal ng just enough that the mirror reflection of the view direction i (all unit, on
+    the incoming side) leaves the surface at least min(0.9 i.ng, 0.01) above it (Cycles'
+    ensure_valid_specular_reflection, its material's default Bump Map Correction). A smooth
+    mesh's interpolated normal would otherwise reflect grazing views into the surface."""
+    if nx == ngx and ny == ngy and nz == ngz:
+        return nx, ny, nz
+    ni = nx * ix + ny * iy + nz * iz
+    rz = 2.0 * ni * (nx * ngx + ny * ngy + nz * ngz) - (ix * ngx + iy * ngy + iz * ngz)
+    i_z = ix * ngx + iy * ngy + iz * ngz
+    threshold = min(0.9 * i_z, 0.01)
+    if rz >= threshold:
+        return nx, ny, nz
+    # n's component orthogonal to ng (the X axis of a frame with Z = ng and n in X-Z).
+    nz_ = nx * ngx + ny * ngy + nz * ngz
+    xx, xy, xz = nx - nz_ * ngx, ny - nz_ * ngy, nz - nz_ * ngz
+    length = math.sqrt(xx * xx + xy * xy + xz * xz)
+    if length > 0.0:
+        xx, xy, xz = xx / length, xy / length, xz / length
+    else:
+        xx, xy, xz = nx, ny, nz
+    i_x = ix * xx + iy * xy + iz * xz
+    # The one valid root of 4 a N'z^4 - 2 b N'z^2 + c = 0 for the tilted normal N'.
+    a = i_x * i_x + i_z * i_z
+    b = 2.0 * (a + i_z * threshold)
+    c = (threshold + i_z) ** 2
+    root = math.sqrt(max(b * b - 4.0 * a * c, 0.0))
+    n_z2 = 0.25 * (b + root) / a if i_x < 0.0 else 0.25 * (b - root) / a
+    n_x = math.sqrt(max(1.0 - n_z2, 0.0))
+    n_z = math.sqrt(max(n_z2, 0.0))
+    return n_x * xx + n_z * ngx, n_x * xy + n_z * ngy, n_x * xz + n_z * ngz
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def valid_specular_normals(ng, wo, n):
+    """`valid_specular_normal` for (m, 3) arrays (the numpy stages)."""
+    out = np.empty_like(n)
+    for k in range(len(n)):
+        out[k, 0], out[k, 1], out[k, 2] = valid_specular_normal(
+            ng[k, 0], ng[k, 1], ng[k, 2], wo[k, 0], wo[k, 1], wo[k, 2], n[k, 0], n[k, 1],
+            n[k, 2])
+    return out
 
 
 # ----------------------------------------------------------------- specular
@@ -322,7 +372,7 @@ def sample_ggx_reflection(wo, n, alpha, u):
 
 
 def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo,
-                 sampled=False):
+                 sampled=False, n_spec=None):
     """Principled (diffuse base + GGX dielectric specular) or rough Glossy (specular only,
     base = 0): f * cos_i (n, 3) and the lobe-mixture pdf (n,), plus the probability of
     choosing the specular lobe (n,).
@@ -334,10 +384,12 @@ def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albe
     Cycles' sampling routines); otherwise it is a light direction, where the specular lobe
     still needs wi above the geometric surface but the diffuse base only above the shading
     horizon (Cycles' microfacet and diffuse eval; see eval_diffuse).
+    n_spec : the specular lobe's normal (`valid_specular_normals`; default n), n the
+    diffuse base's.
     """
     diffuse_w = base * (1.0 - albedo)[:, None]
     p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
-    spec, pdf_s = eval_ggx(wo, wi, n, alpha, eta, fresnel)
+    spec, pdf_s = eval_ggx(wo, wi, n if n_spec is None else n_spec, alpha, eta, fresnel)
     geometric_ok = (dot(wi, ng) > 0.0)
     cos_i = np.maximum(dot(wi, n), 0.0)
     if sampled:
@@ -354,19 +406,20 @@ def _specular_probability(diffuse_w, spec_tint, albedo):
     return np.where(s + d > 0, s / np.maximum(s + d, 1e-300), 1.0)
 
 
-def sample_layered(wo, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo, u_lobe, u):
+def sample_layered(wo, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo, u_lobe, u,
+                   n_spec=None):
     """Sample the layered lobe: pick specular or diffuse, then evaluate both (one-sample
     MIS over the lobes). Returns (wi, weight, pdf)."""
     diffuse_w = base * (1.0 - albedo)[:, None]
     p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
     choose_spec = u_lobe < p_spec
-    wi_spec = sample_ggx_reflection(wo, n, alpha, u)
+    wi_spec = sample_ggx_reflection(wo, n if n_spec is None else n_spec, alpha, u)
     local = sampling.sample_cosine_hemisphere(u)
     s, t = sampling.build_frame(n)
     wi_diff = local[:, :1] * s + local[:, 1:2] * t + local[:, 2:3] * n
     wi = np.where(choose_spec[:, None], wi_spec, wi_diff)
     f_cos, pdf, _ = eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp,
-                                 albedo, sampled=True)
+                                 albedo, sampled=True, n_spec=n_spec)
     ok = pdf > 0
     weight = np.where(ok[:, None], f_cos / np.where(ok, pdf, 1.0)[:, None], 0.0)
     return wi, weight, np.where(ok, pdf, 0.0)

@@ -417,7 +417,8 @@ class Integrator:
         return out
 
     def _layer(self, k: int, wo, n):
-        """Per-vertex parameters of rough material k's layered lobe at view directions wo."""
+        """Per-vertex parameters of rough material k's layered lobe at view directions wo,
+        its specular normals n."""
         tables = self.microfacet[k]
         mu = np.clip(bsdf.dot(n, wo), 0.0, 1.0)
         m = len(wo)
@@ -440,8 +441,10 @@ class Integrator:
         for k in self.microfacet:
             sel = np.nonzero(mat == k)[0]
             if len(sel):
-                lobe = self._layer(k, wo[sel], ns[sel])
+                n_spec = bsdf.valid_specular_normals(ng[sel], wo[sel], ns[sel])
+                lobe = self._layer(k, wo[sel], n_spec)
                 f_cos[sel], pdf[sel], _ = bsdf.eval_layered(wo[sel], wi[sel], ns[sel], ng[sel],
+                                                            n_spec=n_spec,
                                                             **lobe)
         return f_cos, pdf
 
@@ -481,9 +484,11 @@ class Integrator:
                     if len(part) == 0:
                         continue
                     sel = rough[part]
-                    lobe = self._layer(k, hits.wo[sel], hits.ns[sel])
+                    n_spec = _specular_normal(hits, sel)
+                    lobe = self._layer(k, hits.wo[sel], n_spec)
                     wi[sel], weight[sel], pdf[sel] = bsdf.sample_layered(
                         hits.wo[sel], hits.ns[sel], hits.ng[sel], u_lobe=u_lobe[part],
+                        n_spec=n_spec,
                         u=u2[part], **lobe)
         if self.plan.glass:
             sel = np.nonzero(kind == GLASS)[0]
@@ -502,11 +507,9 @@ class Integrator:
 
 
 def _specular_normal(hits: Hits, sel: np.ndarray) -> np.ndarray:
-    """Shading normal for delta lobes; where it faces away from wo (a shading normal
-    bent past the view direction), use the geometric normal so the lobe stays valid."""
-    ns, ng, wo = hits.ns[sel], hits.ng[sel], hits.wo[sel]
-    bad = bsdf.dot(ns, wo) <= 0.0
-    return np.where(bad[:, None], ng, ns)
+    """The normal of specular lobes (delta and GGX): the shading normal tilted so the
+    mirror direction stays above the surface (bsdf.valid_specular_normal)."""
+    return bsdf.valid_specular_normals(hits.ng[sel], hits.wo[sel], hits.ns[sel])
 
 
 def offset_ray_origin(p: np.ndarray, ng: np.ndarray, wi: np.ndarray, scale: np.ndarray):

@@ -35,6 +35,7 @@ from . import sampling
 from .jit import NUMBA, cgutils, intrinsic, ir, njit, types
 from .sampling import _SOBOL1_REV, ONE_MINUS_EPSILON, Dim
 from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED
+from .bsdf import valid_specular_normal
 from .terminator import offset_amount, smooth_surface_offset
 
 AVAILABLE = NUMBA  # the run-time switch (see jit.py)
@@ -279,14 +280,15 @@ def _ggx_lambda(cos_n, a2):
 
 
 @njit(**_JIT)
-def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
-                  tint0, tint1, tint2, alpha, eta, fresnel_on, comp0, comp1, comp2, p_spec,
+def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, nz, dw0, dw1,
+                  dw2, tint0, tint1, tint2, alpha, eta, fresnel_on, comp0, comp1, comp2, p_spec,
                   sampled):
     """bsdf.eval_layered: f * cos_i per channel and the lobe-mixture pdf, for shading
-    normal s, geometric normal n (both on wo's side), the diffuse weight dw and the
-    energy compensation per channel; `sampled` as in bsdf.eval_layered."""
-    cos_o = sx * wox + sy * woy + sz * woz
-    cos_i = sx * wix + sy * wiy + sz * wiz
+    normal s (the diffuse base's), specular normal m, geometric normal n (all on wo's
+    side), the diffuse weight dw and the energy compensation per channel; `sampled` as in
+    bsdf.eval_layered."""
+    cos_o = mx * wox + my * woy + mz * woz
+    cos_i = mx * wix + my * wiy + mz * wiz
     hx, hy, hz = wox + wix, woy + wiy, woz + wiz
     hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
     hx, hy, hz = hx / hl, hy / hl, hz / hl
@@ -294,7 +296,7 @@ def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1
     spec = 0.0
     pdf_s = 0.0
     if cos_o > 0 and cos_i > 0:
-        ch = sx * hx + sy * hy + sz * hz
+        ch = mx * hx + my * hy + mz * hz
         c2 = min(ch * ch, 1.0)
         dd = 1.0 - c2 + a2 * c2
         d = a2 / (np.pi * (dd * dd))
@@ -306,7 +308,7 @@ def _eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, nx, ny, nz, dw0, dw1
         common = d / (4.0 * cos_o)
         spec = f * common / (1.0 + lo + li)
         pdf_s = common / (1.0 + lo)
-    cos_d = max(cos_i, 0.0)
+    cos_d = max(sx * wix + sy * wiy + sz * wiz, 0.0)
     if not wix * nx + wiy * ny + wiz * nz > 0.0:
         spec = 0.0
         pdf_s = 0.0
@@ -423,10 +425,14 @@ def _sample_object(j, px, py, pz, ua, ub, L):
         if r <= 0:  # intensity P / (4 pi), a delta light
             g = 4.0 * np.pi * max(d, 1e-300) ** 2
             v0, v1, v2 = p0 / g, p1 / g, p2 / g
-        elif not soft and d > r:  # a sphere: uniform in its visible cone
-            cos_max = math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
+        elif not soft:  # a sphere: uniform in its visible cone, or everywhere from inside
+            inside = d <= r
+            cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
+            if d <= 0.0:
+                cx, cy, cz = 0.0, 0.0, 1.0
             wx, wy, wz, cos, pdf = _sample_cone(cx, cy, cz, cos_max, ua, ub)
-            dist = d * cos - math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
+            root = math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
+            dist = d * cos + root if inside else d * cos - root
             f = L[j, _FACTOR]
             v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
         elif soft and d > 0:  # a disk of radius r facing the point
@@ -502,9 +508,8 @@ def _object_pdf(j, ox, oy, oz, dx, dy, dz, t, L):
         if L[j, _SOFT] != 0:
             cos_d = tx / dn * dx + ty / dn * dy + tz / dn * dz
             return t * t / (np.pi * max(r * r * cos_d, 1e-300))
-        if d > r:
-            cos_max = math.sqrt(max(0.0, 1.0 - (r / dn) ** 2))
-            return 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
+        cos_max = math.sqrt(max(0.0, 1.0 - (r / dn) ** 2)) if d > r else -1.0
+        return 1.0 / (2.0 * np.pi * max(1.0 - cos_max, 1e-300))
     return 0.0
 
 
@@ -543,8 +548,10 @@ def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
             ok = denom < 0 and hx * hx + hy * hy + hz * hz <= r * r and t > 0
         else:
             b = ocx * dx + ocy * dy + ocz * dz
-            disc = b * b - ((ocx * ocx + ocy * ocy + ocz * ocz) - r * r)
-            t = -b - math.sqrt(max(disc, 0.0))
+            oc2 = ocx * ocx + ocy * ocy + ocz * ocz
+            disc = b * b - (oc2 - r * r)
+            # The near root from outside, the far one from inside.
+            t = -b - (1.0 if oc2 > r * r else -1.0) * math.sqrt(max(disc, 0.0))
             ok = disc >= 0 and t > 0
         if ok and t < tmax:
             th = t
@@ -793,9 +800,14 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
         comp0 = comp1 = comp2 = albedo = alpha = eta_l = p_spec = 0.0
         dw0 = dw1 = dw2 = tint0 = tint1 = tint2 = 0.0
         fresnel_on = False
+        # Specular lobes (delta and GGX) use the shading normal tilted so the mirror
+        # direction stays above the surface (bsdf.valid_specular_normal); diffuse ones s.
+        msx, msy, msz = sx, sy, sz
+        if k != DIFFUSE:
+            msx, msy, msz = valid_specular_normal(nx, ny, nz, wox, woy, woz, sx, sy, sz)
         if rough:
             # The layered lobe's parameters at this view direction (Integrator._layer).
-            mu = min(max(sx * wox + sy * woy + sz * woz, 0.0), 1.0)
+            mu = min(max(msx * wox + msy * woy + msz * woz, 0.0), 1.0)
             missing = _interp(mu, mu_grid, missing_table[mat], mu_guide)
             comp0 = 1.0 + layer_fms[mat, 0] * missing
             comp1 = 1.0 + layer_fms[mat, 1] * missing
@@ -864,7 +876,7 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             g0 = g1 = g2 = pdf_b = 0.0
             if rough:
                 g0, g1, g2, pdf_b = _eval_layered(
-                    wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                    wox, woy, woz, wx, wy, wz, sx, sy, sz, msx, msy, msz, nx, ny, nz, dw0, dw1, dw2,
                     tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp0, comp1, comp2,
                     p_spec, False)
             else:  # Lambert: the shading normal alone, as bsdf.eval_diffuse
@@ -921,25 +933,26 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             # MIS over the lobes), as bsdf.sample_layered.
             u_lobe = sample_1d(pseed_row, rev_sample, _bounce_dim(depth, _LOBE))
             ua, ub = sample_2d(pseed_row, rev_sample, _bounce_dim(depth, _BSDF))
-            s, tt = _build_frame(sx, sy, sz)
             if u_lobe < p_spec:
+                s, tt = _build_frame(msx, msy, msz)
                 v0_ = wox * s[0] + woy * s[1] + woz * s[2]
                 v1_ = wox * tt[0] + woy * tt[1] + woz * tt[2]
-                v2_ = wox * sx + woy * sy + woz * sz
+                v2_ = wox * msx + woy * msy + woz * msz
                 hx, hy, hz = _ggx_half_vector(v0_, v1_, v2_, alpha, ua, ub)
-                mx = hx * s[0] + hy * tt[0] + hz * sx
-                my = hx * s[1] + hy * tt[1] + hz * sy
-                mz = hx * s[2] + hy * tt[2] + hz * sz
+                mx = hx * s[0] + hy * tt[0] + hz * msx
+                my = hx * s[1] + hy * tt[1] + hz * msy
+                mz = hx * s[2] + hy * tt[2] + hz * msz
                 c = 2.0 * (mx * wox + my * woy + mz * woz)
                 wx, wy, wz = c * mx - wox, c * my - woy, c * mz - woz
             else:
+                s, tt = _build_frame(sx, sy, sz)
                 lx, ly = _concentric_disk(ua, ub)
                 lz = math.sqrt(max(0.0, 1.0 - (lx * lx + ly * ly)))
                 wx = lx * s[0] + ly * tt[0] + lz * sx
                 wy = lx * s[1] + ly * tt[1] + lz * sy
                 wz = lx * s[2] + ly * tt[2] + lz * sz
             g0, g1, g2, pdf = _eval_layered(
-                wox, woy, woz, wx, wy, wz, sx, sy, sz, nx, ny, nz, dw0, dw1, dw2,
+                wox, woy, woz, wx, wy, wz, sx, sy, sz, msx, msy, msz, nx, ny, nz, dw0, dw1, dw2,
                 tint0, tint1, tint2, alpha, eta_l, fresnel_on, comp0, comp1, comp2,
                     p_spec, True)
             ok = pdf > 0
@@ -957,9 +970,7 @@ def shade(depth, rev_sample, flags, exact_fresnel, geometry, materials, lights, 
             f0, f1, f2 = colour[mat, 0], colour[mat, 1], colour[mat, 2]
             pdf = lz / np.pi
         else:
-            # Delta lobes use the shading normal unless it faces away from wo.
-            if sx * wox + sy * woy + sz * woz <= 0.0:
-                sx, sy, sz = nx, ny, nz
+            sx, sy, sz = msx, msy, msz
             cos_o = sx * wox + sy * woy + sz * woz
             wx, wy, wz = 2.0 * cos_o * sx - wox, 2.0 * cos_o * sy - woy, 2.0 * cos_o * sz - woz
             ok = True

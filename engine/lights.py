@@ -221,8 +221,11 @@ class LightObjects:
 
         # r = 0: intensity P / (4 pi), a delta light.
         delta = r <= 0
-        # r > 0, soft falloff off: a sphere, sampled uniformly in its visible cone.
-        sphere = (r > 0) & ~self.soft[j] & (d > r)
+        # r > 0, soft falloff off: a sphere, sampled uniformly in its visible cone; from
+        # inside it (Cycles lights such points too) in every direction, the cone of
+        # cosine -1, each ray reaching its far side.
+        sphere = (r > 0) & ~self.soft[j]
+        inside = d <= r
         # r > 0, soft falloff on: a disk of radius r facing the shading point.
         disk = (r > 0) & self.soft[j] & (d > 0)
         le = power * self.radiance_factor[j][:, None]
@@ -230,16 +233,18 @@ class LightObjects:
             out[delta] = power[delta] / (4.0 * np.pi * np.maximum(d[delta], 1e-300) ** 2)[:, None]
         if sphere.any():
             s_ = np.nonzero(sphere)[0]
-            cos_max = np.sqrt(np.maximum(0.0, 1.0 - (r[s_] / d[s_]) ** 2))
-            s, t = self._frame(w_c[s_])
+            cos_max = np.where(inside[s_], -1.0, np.sqrt(np.maximum(
+                0.0, 1.0 - (r[s_] / np.where(inside[s_], 1.0, d[s_])) ** 2)))
+            axis = np.where((d[s_] > 0)[:, None], w_c[s_], np.array([0.0, 0.0, 1.0]))
+            s, t = self._frame(axis)
             cos = 1.0 - u[s_, 0] * (1.0 - cos_max)
             sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
             phi = 2.0 * np.pi * u[s_, 1]
             w = (sin * np.cos(phi))[:, None] * s + (sin * np.sin(phi))[:, None] * t \
-                + cos[:, None] * w_c[s_]
-            # Distance to the sphere along w (law of cosines, near root).
-            t_hit = d[s_] * cos - np.sqrt(np.maximum(r[s_] ** 2 - d[s_] ** 2 * (1 - cos * cos),
-                                                      0.0))
+                + cos[:, None] * axis
+            # Distance to the sphere along w (law of cosines: near root, far from inside).
+            t_hit = d[s_] * cos - np.where(inside[s_], -1.0, 1.0) * np.sqrt(
+                np.maximum(r[s_] ** 2 - d[s_] ** 2 * (1 - cos * cos), 0.0))
             pdf_sa = 1.0 / (2.0 * np.pi * np.maximum(1.0 - cos_max, 1e-300))
             w_out[s_], d_out[s_], pdf_out[s_] = w, t_hit, pdf_sa
             out[s_] = le[s_] / pdf_sa[:, None]
@@ -276,8 +281,9 @@ class LightObjects:
         d = np.linalg.norm(to_c, axis=1)
         r = self.radius[j]
         out = np.zeros(len(j))
-        sphere = ((typ == POINT) | (typ == SPOT)) & (r > 0) & ~self.soft[j] & (d > r)
-        cos_max = np.sqrt(np.maximum(0.0, 1.0 - (r / np.where(d > 0, d, 1)) ** 2))
+        sphere = ((typ == POINT) | (typ == SPOT)) & (r > 0) & ~self.soft[j]
+        cos_max = np.where(d > r, np.sqrt(np.maximum(
+            0.0, 1.0 - (r / np.where(d > r, d, 1.0)) ** 2)), -1.0)
         out = np.where(sphere, 1.0 / (2.0 * np.pi * np.maximum(1.0 - cos_max, 1e-300)), out)
         disk = ((typ == POINT) | (typ == SPOT)) & (r > 0) & self.soft[j]
         cos_d = _dot(to_c / np.where(d > 0, d, 1)[:, None], direction)
@@ -322,8 +328,10 @@ class LightObjects:
             ok = (denom < 0) & (np.einsum("ij,ij->i", hit_p, hit_p) <= r * r) & (th > 0)
         else:
             b = _dot(oc, d)
-            disc = b * b - (_dot(oc, oc) - r * r)
-            th = -b - np.sqrt(np.maximum(disc, 0.0))
+            oc2 = _dot(oc, oc)
+            disc = b * b - (oc2 - r * r)
+            # The near root from outside, the far one from inside (the light is seen there).
+            th = -b - np.where(oc2 > r * r, 1.0, -1.0) * np.sqrt(np.maximum(disc, 0.0))
             ok = (disc >= 0) & (th > 0)
         ok &= th < tmax
         t[ok] = th[ok]

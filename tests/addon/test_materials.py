@@ -431,3 +431,10 @@ def test_linked_displacement_warns(fresh):
     tree.links.new(disp.outputs[0], out.inputs["Displacement"])
     _, warnings = convert(mat)
     assert len(warnings) == 1 and "'Displacement'" in warnings[0] and disp.name in warnings[0]
+
+
+def test_bump_map_correction_off_is_warned():
+    mat = bpy.data.materials.new("No correction")
+    mat.cycles.use_bump_map_correction = False
+    _, warnings = materials.convert(mat)
+    assert any("No correction" in w and "Bump Map Correction" in w for w in warnings)

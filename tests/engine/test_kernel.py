@@ -178,6 +178,9 @@ LIGHTS = {
                    radius=0.05, spot_size=0.9, spot_blend=0.3)],
     "spot_hard": [Light("spot", "SPOT", (20, 18, 15), _at(0.2, 0.0, 1.4), spot_size=0.7,
                         spot_blend=0.0)],
+    # A sphere light through the ceiling: points inside it are lit from every direction.
+    "point_sphere_through_ceiling": [Light("ball", "POINT", (4, 4, 4), _at(-0.3, 0.0, 1.4),
+                                           radius=0.25, soft_falloff=False)],
     "sun": [Light("sun", "SUN", (2, 2, 1.8), _at(0, 0, 5, rx=0.5, ry=0.3))],
     "sun_disc": [Light("sun", "SUN", (2, 2, 1.8), _at(0, 0, 5, rx=0.4, ry=0.2), angle=0.3,
                        visible_camera=True)],
