@@ -453,7 +453,7 @@ def _sample_object(j, px, py, pz, ua, ub, L):
         else:
             valid = False
         if valid:  # the cone along the sampled ray, as LightObjects._sample_point
-            att = _spot(j, -wx, -wy, -wz, L)
+            att = 1.0 if (not soft and r > 0 and d <= r) else _spot(j, -wx, -wy, -wz, L)
             v0, v1, v2 = v0 * att, v1 * att, v2 * att
         else:
             v0 = v1 = v2 = 0.0
@@ -553,11 +553,18 @@ def _intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
             # The near root from outside, the far one from inside.
             t = -b - (1.0 if oc2 > r * r else -1.0) * math.sqrt(max(disc, 0.0))
             ok = disc >= 0 and t > 0
+        if L[j, _TYPE] == _SPOT:
+            # One-sided: a spot is hit only by rays heading toward its centre's side;
+            # from inside its sphere there is no cone (Cycles' spot.h).
+            ok = ok and dx * ocx + dy * ocy + dz * ocz < 0.0
+            if ok and t < tmax:
+                th = t
+            att = 1.0
+            if L[j, _SOFT] != 0 or ocx * ocx + ocy * ocy + ocz * ocz > r * r:
+                att = _spot(j, -dx, -dy, -dz, L)
+            return th, p0 * f * att, p1 * f * att, p2 * f * att
         if ok and t < tmax:
             th = t
-        if L[j, _TYPE] == _SPOT:
-            att = _spot(j, -dx, -dy, -dz, L)
-            return th, p0 * f * att, p1 * f * att, p2 * f * att
     return th, p0 * f, p1 * f, p2 * f
 
 

@@ -266,6 +266,8 @@ class LightObjects:
         # that hit: toward the centre instead, a light of radius > 0 had a sharper cone edge
         # than Cycles and than its own hits.
         att = self.spot_attenuation(j, -w_out)
+        # Inside a spot's sphere there is no cone (Cycles' spot_light_sample).
+        att = np.where(sphere & inside, 1.0, att)
         valid = delta | sphere | disk
         wi[rows] = w_out
         dist[rows] = d_out
@@ -333,11 +335,18 @@ class LightObjects:
             # The near root from outside, the far one from inside (the light is seen there).
             th = -b - np.where(oc2 > r * r, 1.0, -1.0) * np.sqrt(np.maximum(disc, 0.0))
             ok = (disc >= 0) & (th > 0)
+        if typ == SPOT:
+            # One-sided: a spot is hit only by rays heading toward its centre's side.
+            ok &= _dot(d, oc) < 0.0
         ok &= th < tmax
         t[ok] = th[ok]
         le = np.tile(power * self.radiance_factor[j], (n, 1))
         if typ == SPOT:
-            le = le * self.spot_attenuation(np.full(n, j), -d)[:, None]
+            att = self.spot_attenuation(np.full(n, j), -d)
+            # From inside its sphere there is no cone (Cycles' spot.h).
+            if not self.soft[j]:
+                att = np.where(_dot(oc, oc) > r * r, att, 1.0)
+            le = le * att[:, None]
         return t, le
 
 

@@ -558,6 +558,14 @@ def spot_seen_glass_mirror():
     bpy.context.scene.collection.objects.link(obj)
 
 
+def spot_through_ceiling():
+    """A spot light whose sphere pokes through the ceiling (fuzz seed 19, shrunk): ceiling
+    points inside the sphere are lit with no cone, and hits are one-sided (Cycles' spot.h)."""
+    obj = _spot_room(energy=198.0, spot_size=1.2672, spot_blend=0.626, shadow_soft_size=0.165,
+                     use_soft_falloff=False, location=(-0.2, 0.3, 1.355))
+    obj.scale = (1.265, 1.076, 0.956)
+
+
 def _glossy_balls(balls):
     """Rough Glossy spheres of the given (colour, roughness) on the box's floor under its
     ceiling emitter."""
@@ -676,7 +684,8 @@ for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_
 _add(Variant("spot_small_cone_soft", spot_small_cone_soft, max_bounces=8, samples=1024,
              cycles_samples=1024))
 for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
-               spot_scaled, spot_seen_glass_mirror, glossy_colours, glossy_roughness):
+               spot_scaled, spot_seen_glass_mirror, spot_through_ceiling, glossy_colours,
+               glossy_roughness):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power test needs that).
