@@ -161,6 +161,7 @@ INJECTIONS = {
     "spot_cone_toward_centre": ("spot_user", None, _spot_cone_toward_centre),
     "glossy_compensation_white": ("glossy_colours", None, _glossy_compensation_white),
     "no_terminator_offset": ("terminator_point", _no_terminator_offset, None),
+    "no_terminator_offset_area_light": ("terminator_area", _no_terminator_offset, None),
 }
 
 
