@@ -24,27 +24,24 @@ _TABLE_SIZE = 1024
 
 
 class PixelFilter:
-    """A separable pixel filter sampled through its inverse CDF (Cycles' filter table).
+    """A separable pixel filter sampled through Cycles' inverse-CDF table.
 
     kind : "BLACKMAN_HARRIS" (support +-width, Cycles doubles the width internally),
     "BOX" (support +-width/2) or "GAUSSIAN" (sigma width/4, truncated at +-1.5 width).
-    `sample(u)` maps u (n, 2) in [0,1) to raster offsets from the pixel centre, (n, 2).
+    `sample(u)` maps u (n, 2) in [0,1) to raster offsets from the pixel centre, (n, 2),
+    through the same 1024-entry table as Cycles (`cycles_filter_table`), quirks included:
+    the sampled density is the filter's to within a table step, except that 1/1023 of the
+    samples lands between +radius and -0.5 px. `density` is the filter itself.
     """
 
     def __init__(self, kind: str = "BLACKMAN_HARRIS", width: float = 1.5):
         self.kind, self.width = kind, float(width)
         self.radius = {"BLACKMAN_HARRIS": self.width, "BOX": 0.5 * self.width,
                        "GAUSSIAN": 1.5 * self.width}[kind]
-        # Tabulate the CDF finely and invert it by linear interpolation. Cycles uses a
-        # 1024-entry inverse-CDF table, whose first and last intervals flatten the tails;
-        # inverting a fine CDF keeps the density right there too.
-        x = np.linspace(-self.radius, self.radius, 16 * _TABLE_SIZE + 1)
-        pdf = self.density(x)
-        cdf = np.concatenate([[0.0], np.cumsum(0.5 * (pdf[1:] + pdf[:-1]) * np.diff(x))])
-        cdf /= cdf[-1]
-        cdf = 0.5 * (cdf + (1.0 - cdf[::-1]))  # exactly symmetric about the centre
-        keep = np.concatenate([[True], np.diff(cdf) > 0])  # strictly increasing for interp
-        self._cdf, self._x = cdf[keep], x[keep]
+        # Cycles' own inverse-CDF table (film.cpp filter_table, util_cdf_inverted), read
+        # by linear interpolation as its lookup_table_read: knots u = k / 1023.
+        self._cdf = np.arange(_TABLE_SIZE) / (_TABLE_SIZE - 1.0)
+        self._x = cycles_filter_table(self) - 0.5
 
     def density(self, d: np.ndarray) -> np.ndarray:
         """Unnormalised 1D filter density at offset d from the pixel centre."""
@@ -60,6 +57,45 @@ class PixelFilter:
 
     def sample(self, u: np.ndarray) -> np.ndarray:
         return np.interp(u, self._cdf, self._x)
+
+
+def cycles_filter_table(f: PixelFilter) -> np.ndarray:
+    """Cycles' 1024-entry filter table for f: raster offsets + 0.5 at u = k / 1023.
+
+    As film.cpp builds it: the filter evaluated on its positive half (Cycles' width is
+    doubled for Blackman-Harris, tripled for Gaussian), a left Riemann sum for the CDF,
+    inverted symmetrically about the centre with upper_bound and the next interval's
+    slope, and the last entry never written (0), so u in the top 1/1023 maps between
+    +radius and -0.5 px. Replicated because it decides how much of a bright neighbour a
+    silhouette pixel picks up."""
+    size = _TABLE_SIZE
+    width = f.width * {"BLACKMAN_HARRIS": 2.0, "GAUSSIAN": 3.0, "BOX": 1.0}[f.kind]
+    half = 0.5 * width
+    x = half * np.arange(size - 1) / (size - 2.0)
+    if f.kind == "BOX":
+        y = np.ones_like(x)
+    elif f.kind == "GAUSSIAN":
+        v = x * (6.0 / width)
+        y = np.exp(-2.0 * v * v)
+    else:
+        v = 2.0 * np.pi * (x / width + 0.5)
+        y = 0.35875 - 0.48829 * np.cos(v) + 0.14128 * np.cos(2 * v) - 0.01168 * np.cos(3 * v)
+    cdf = np.concatenate([[0.0], np.cumsum(np.abs(y))])
+    cdf = cdf / cdf[-1]
+    cdf[-1] = 1.0
+    table = np.zeros(size)
+    half_size = (size - 1) // 2
+    for i in range(half_size + 1):
+        u = i / half_size
+        index = int(np.searchsorted(cdf, u, side="right"))
+        if index < len(cdf) - 1:
+            t = (u - cdf[index]) / (cdf[index + 1] - cdf[index])
+        else:
+            t, index = 0.0, len(cdf) - 1
+        y_i = ((index + t) / (size - 1)) * width
+        table[half_size + i] = 0.5 * (1.0 + y_i)
+        table[half_size - i] = 0.5 * (1.0 - y_i)
+    return table
 
 
 class Film:

@@ -239,7 +239,9 @@ class Integrator:
         t0 = time.perf_counter()
         px = (pixels % self.width).astype(np.float64)
         py = (pixels // self.width).astype(np.float64)
-        offset = self.pixel_filter.sample(stream.get_2d(Dim.FILTER))
+        # Sample 0 looks through the middle of the filter table, as Cycles' first sample.
+        u = stream.get_2d(Dim.FILTER) if stream.sample != 0 else np.full((len(pixels), 2), 0.5)
+        offset = self.pixel_filter.sample(u)
         raster = np.column_stack([px + 0.5, py + 0.5]) + offset
         u_lens = stream.get_2d(Dim.LENS) if self.plan.dof else None
         o, d, tmax = self.camera.generate_rays(raster, u_lens)

@@ -1109,7 +1109,7 @@ def generate_camera_rays(pixels, sample, seed, width, filter_cdf, filter_x, filt
     for i in range(len(pixels)):
         ps = pixel_seed(pixels[i], seed)
         pseed[i] = ps
-        fx, fy = sample_2d(ps, rev_sample, 0)
+        fx, fy = sample_2d(ps, rev_sample, 0) if sample != 0 else (0.5, 0.5)
         rx = (pixels[i] % width) + 0.5 + _interp(fx, filter_cdf, filter_x, filter_guide)
         ry = (pixels[i] // width) + 0.5 + _interp(fy, filter_cdf, filter_x, filter_guide)
         x = (2.0 * rx / w_img - 1.0) * half_x + shift_x * 2 * fit_half

@@ -88,19 +88,46 @@ def test_triangle_area(rng):
     assert_chi2(obs, N * 2 * frac / RES**2)
 
 
+def _table_mass(f, edges):
+    """The probability f's table puts below each of `edges`: each of its 1023 intervals
+    of u carries 1/1023, spread uniformly between its two knots' offsets."""
+    lo, hi = np.minimum(f._x[:-1], f._x[1:]), np.maximum(f._x[:-1], f._x[1:])
+    frac = np.clip((edges[:, None] - lo) / np.maximum(hi - lo, 1e-300), 0.0, 1.0)
+    return frac.mean(axis=1)
+
+
 @pytest.mark.parametrize("kind,width", [("BLACKMAN_HARRIS", 1.5), ("BOX", 1.0),
                                         ("GAUSSIAN", 1.5)])
-def test_pixel_filter(rng, kind, width):
+def test_pixel_filter_samples_its_table(rng, kind, width):
+    """Offsets follow the table (chi-square, 2D, separable)."""
     f = PixelFilter(kind, width)
     d = f.sample(rng.random((N, 2)))
     r = f.radius
     assert np.abs(d).max() <= r + 1e-9
     obs = histogram_2d(d, (-r, -r), (r, r), RES)
-    from engine.bsdf import trapezoid
-    norm = trapezoid(f.density(np.linspace(-r, r, 20001)), np.linspace(-r, r, 20001))
-    exp = expected_2d(lambda q: f.density(q[:, 0]) * f.density(q[:, 1]) / norm**2,
-                      (-r, -r), (r, r), RES, N)
-    assert_chi2(obs, exp)
+    m = np.diff(_table_mass(f, np.linspace(-r, r, RES + 1)))
+    assert_chi2(obs, N * np.outer(m, m))
+
+
+@pytest.mark.parametrize("kind,width", [("BLACKMAN_HARRIS", 1.5), ("BOX", 1.0),
+                                        ("GAUSSIAN", 1.5), ("BLACKMAN_HARRIS", 3.0)])
+def test_pixel_filter_table_is_cycles_inverse_cdf_of_the_filter(kind, width):
+    """The table inverts the filter's CDF (within a table step) everywhere but Cycles'
+    unwritten last entry, whose interval (1/1023 of the samples) runs from +radius back to
+    -0.5 px; so a wrong filter shape or width fails."""
+    f = PixelFilter(kind, width)
+    r = f.radius
+    x = np.linspace(-r, r, 2001)
+    dens = f.density(x)
+    exact = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(x))])
+    exact /= exact[-1]
+    table = _table_mass(f, x)
+    # Without the last interval's mass the rest is the filter's CDF scaled by 1022/1023.
+    last = np.clip((x - (-0.5)) / (r + 0.5), 0.0, 1.0) / 1023.0
+    assert np.abs(table - last - exact * 1022 / 1023).max() < 3.0 / 1023
+    assert f._x[-1] == pytest.approx(-0.5) and f._x[-2] == pytest.approx(r)
+    wrong = PixelFilter(kind, width * 1.1)
+    assert np.abs(_table_mass(wrong, x) - last - exact * 1022 / 1023).max() > 3.0 / 1023
 
 
 def test_blackman_harris_support_is_twice_the_width_internally():
