@@ -123,7 +123,8 @@ def eval_diffuse(wi, n, colour):
     geometric surface but above the shading horizon (a smooth mesh's terminator) is left
     to the shadow ray, which the shadow terminator offset (terminator.py) may let through;
     sampling (`sample_diffuse`) still never goes below the geometric surface."""
-    cos = np.maximum(dot(wi, n), 0.0)
+    cos = dot(wi, n)
+    cos = np.where(cos > 0.0, cos, 0.0)  # as the kernel's `cos > 0` (a NaN normal gives 0)
     return colour * (cos / np.pi)[:, None], cos / np.pi
 
 

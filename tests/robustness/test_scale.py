@@ -24,9 +24,12 @@ def test_same_image_at_extreme_scales(scale, offset):
     z, critical = max_block_z(ref, other)
     assert all_finite(other)
     assert z < critical, (z, critical)
-    # Depth scales with the scene (pixel means over different filter samples: the median).
-    hit = (ref.depth < 1e9) & (other.depth < 1e9)
-    assert np.median(np.abs(other.depth[hit] / (ref.depth[hit] * scale) - 1)) < 1e-3
+    # Depth scales with the scene: the same samples (seed) at both scales, so only the
+    # geometry's float32 rounding differs (with other seeds, pixel means over different
+    # filter samples differ by ~1e-3 at 16 samples).
+    same = render(scaled_cbspheres(scale, (offset,) * 3), st)
+    hit = (ref.depth < 1e9) & (same.depth < 1e9)
+    assert np.median(np.abs(same.depth[hit] / (ref.depth[hit] * scale) - 1)) < 1e-4
 
 
 def slab_scene(thickness, theta, ior):

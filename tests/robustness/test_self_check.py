@@ -22,17 +22,27 @@ def cbspheres():
 
 def poison_surface_interaction(monkeypatch, field, value):
     """Make the surface interaction of camera rays (which fills the Depth and Normal
-    passes) produce `value` for one pixel, once per sample."""
+    passes) produce `value` for one pixel, once per sample: the first call of each
+    trace_pixels only (later bounces stay clean, so no other pixel is hit by chance)."""
     original = integrator.Integrator.surface_interaction
+    original_trace = integrator.Integrator.trace_pixels
+    state = {"camera_hits": False}
+
+    def trace(self, pixels, sample):
+        state["camera_hits"] = True
+        return original_trace(self, pixels, sample)
 
     def poisoned(self, o, d, prim, t, bu, bv):
         hits = original(self, o, d, prim, t, bu, bv)
-        if field == "depth":
-            hits.p[:1] = value  # z-depth of the first hit is computed from p
-        else:
-            hits.ns[:1] = value
+        if state["camera_hits"]:
+            state["camera_hits"] = False
+            if field == "depth":
+                hits.p[:1] = value  # z-depth of the first hit is computed from p
+            else:
+                hits.ns[:1] = value
         return hits
 
+    monkeypatch.setattr(integrator.Integrator, "trace_pixels", trace)
     monkeypatch.setattr(integrator.Integrator, "surface_interaction", poisoned)
 
 
