@@ -1,135 +1,79 @@
-"""BSDFs with Cycles' semantics at roughness 0: Lambert, mirror, metal, smooth glass.
+"""BSDFs with Cycles' semantics: Lambert, mirror, metal, smooth glass, and the layered GGX
+lobe of the Principled BSDF and the rough Glossy BSDF.
 
-All functions work on batches: directions are (n, 3) float64 unit vectors in world
-space, `wo` points away from the surface (towards where the ray came from) and `n` is
-the shading normal already flipped to the side of `wo`. Sampling routines return
-(wi, weight, pdf): weight is f * |cos| / pdf per colour channel, pdf is the solid-angle
-density for the non-delta lobe (Lambert) and `DELTA_PDF` for delta lobes, which MIS
+Every function works on one shading point (scalars in, scalars out) and is compiled into
+the per-bounce kernel (integrator.py). Directions are unit world-space vectors: `wo` points
+away from the surface (toward where the ray came from), normals are flipped to wo's side.
+Sampling returns the direction, the weight f * |cos| / pdf per channel and the pdf: a
+solid-angle density for non-delta lobes, `DELTA_PDF` (inf) for delta lobes, which MIS
 treats as "BSDF sampling only". A zero weight marks a failed sample, as in Mitsuba.
 
-Radiance across a refractive interface: like Cycles, we apply no eta^2 scaling. A
-smooth dielectric's sampled weight is Color whichever lobe is chosen; radiance is
-not rescaled by the change of solid angle. (The course project divided refracted
-radiance by eta^2; for a closed object seen and lit from outside both factors cancel,
-but a camera inside glass sees a brighter world in the course's convention.)
+Radiance across a refractive interface: like Cycles, no eta^2 scaling. A smooth
+dielectric's sampled weight is its tint whichever lobe is chosen. (The course project
+divided refracted radiance by eta^2; for a closed object seen and lit from outside both
+factors cancel, but a camera inside glass sees a brighter world in the course's
+convention.)
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from . import sampling
-from .jit import njit
+from .jit import INLINE, JIT, njit
+from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
+from .scene import GLOSSY, PRINCIPLED
 
 DELTA_PDF = np.inf
 
 
-def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.einsum("ij,ij->i", a, b)
+# ----------------------------------------------------------------- Fresnel
+@njit(**JIT)
+def fresnel_dielectric(cos_i, eta, exact):
+    """Unpolarised Fresnel reflectance of a smooth dielectric and the transmitted cosine.
 
-
-def reflect(wo: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """Mirror wo about n: wi = 2 (n . wo) n - wo."""
-    return 2.0 * dot(n, wo)[:, None] * n - wo
-
-
-def _transmitted_cosine(cos_i: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """cos_theta_t from Snell's law and the total-internal-reflection mask.
-
-    Written as sqrt(eta^2 - 1 + cos_i^2) / eta rather than sqrt(1 - sin_t^2), which keeps
+    cos_i : cosine between the incident direction and the normal on the incident side
+        (its sign does not matter); eta : relative IOR n_transmitted / n_incident (> 0);
+    exact : the exact formula, else Schlick's approximation R0 + (1 - R0)(1 - cos)^5 with
+        the cosine taken in the optically thinner medium (cos_t when leaving glass), the
+        course project's model, which stays within its known bound from both sides.
+    Returns (F, cos_t), F = 1 under total internal reflection (cos_t = 0). cos_t is
+    sqrt(eta^2 - 1 + cos_i^2) / eta rather than sqrt(1 - sin_t^2), which keeps
     cos_t == cos_i exactly at eta = 1 (an IOR-1 object must be invisible).
     """
+    cos_i = min(max(abs(cos_i), 0.0), 1.0)
     disc = eta * eta - 1.0 + cos_i * cos_i
-    tir = disc <= 0.0
-    return np.sqrt(np.maximum(disc, 0.0)) / eta, tir
+    if disc <= 0.0:
+        return 1.0, 0.0
+    cos_t = math.sqrt(disc) / eta
+    if exact:
+        d_par = eta * cos_i + cos_t
+        d_perp = cos_i + eta * cos_t
+        if not (d_par > 0 and d_perp > 0):  # grazing incidence at eta = 1
+            return 1.0, cos_t
+        r_par = (eta * cos_i - cos_t) / d_par
+        r_perp = (cos_i - eta * cos_t) / d_perp
+        f = 0.5 * (r_par * r_par + r_perp * r_perp)
+    else:
+        r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+        c = cos_i if eta >= 1.0 else cos_t
+        f = r0 + (1.0 - r0) * (1.0 - c) ** 5
+    return min(max(f, 0.0), 1.0), cos_t
 
 
-def fresnel_dielectric(cos_theta_i: np.ndarray, eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact unpolarised Fresnel reflectance for a smooth dielectric.
-
-    cos_theta_i : (n,) cosine between the incident direction and the normal on the
-        incident side (negative values are mirrored: the formula is even in it).
-    eta : (n,) relative IOR n_transmitted / n_incident (> 0).
-    Returns (F, cos_theta_t): F = 1 under total internal reflection (cos_theta_t = 0).
-    """
-    cos_i = np.clip(np.abs(cos_theta_i), 0.0, 1.0)
-    cos_t, tir = _transmitted_cosine(cos_i, eta)
-    # Handle grazing incidence with eta = 1, where both denominators vanish: F = 1.
-    d_par = eta * cos_i + cos_t
-    d_perp = cos_i + eta * cos_t
-    ok = (d_par > 0) & (d_perp > 0)
-    r_par = (eta * cos_i - cos_t) / np.where(ok, d_par, 1.0)
-    r_perp = (cos_i - eta * cos_t) / np.where(ok, d_perp, 1.0)
-    f = np.where(tir | ~ok, 1.0, 0.5 * (r_par * r_par + r_perp * r_perp))
-    return np.clip(f, 0.0, 1.0), np.where(tir, 0.0, cos_t)
-
-
-def fresnel_schlick_dielectric(cos_theta_i: np.ndarray, eta: np.ndarray
-                               ) -> tuple[np.ndarray, np.ndarray]:
-    """Schlick's approximation R0 + (1 - R0)(1 - cos)^5, R0 = ((eta - 1)/(eta + 1))^2.
-
-    The course project's model, with the usual correction that the cosine is taken in
-    the optically thinner medium (cos_theta_t when leaving glass), so the approximation
-    stays within its known bound of the exact value from both sides. Total internal
-    reflection gives 1.
-    """
-    cos_i = np.clip(np.abs(cos_theta_i), 0.0, 1.0)
-    cos_t, tir = _transmitted_cosine(cos_i, eta)
-    r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
-    c = np.where(eta >= 1.0, cos_i, cos_t)
-    f = r0 + (1.0 - r0) * (1.0 - c) ** 5
-    return np.where(tir, 1.0, np.clip(f, 0.0, 1.0)), np.where(tir, 0.0, cos_t)
-
-
-def fresnel_schlick_conductor(cos_theta: np.ndarray, f0: np.ndarray) -> np.ndarray:
+@njit(**JIT)
+def fresnel_schlick_conductor(cos_theta, f0):
     """Principled metallic at roughness 0 with white specular tint (F82-tint, b = 0):
-    F = F0 + (1 - F0)(1 - cos)^5 per channel; cos_theta (n,), f0 (n, 3)."""
-    c = np.clip(np.abs(cos_theta), 0.0, 1.0)
-    f0 = np.clip(f0, 0.0, 1.0)
-    return np.clip(f0 + (1.0 - f0) * ((1.0 - c) ** 5)[:, None], 0.0, 1.0)
-
-
-def refract(wo: np.ndarray, n: np.ndarray, eta: np.ndarray, cos_t: np.ndarray) -> np.ndarray:
-    """Snell refraction of wo through a surface with normal n (on wo's side).
-
-    eta = n_t / n_i; cos_t the transmitted cosine from the Fresnel routine.
-    Returns the transmitted direction (pointing away from the surface on the far side).
-    """
-    cos_i = dot(n, wo)
-    return -wo / eta[:, None] + (cos_i / eta - cos_t)[:, None] * n
-
-
-# ----------------------------------------------------------------- Lambert
-def sample_diffuse(wo, n, ng, colour, u):
-    """Cosine-weighted sampling of Lambert (f = colour / pi): weight = colour.
-
-    Directions below the geometric surface (ng on wo's side) fail, as in Cycles.
-    """
-    local = sampling.sample_cosine_hemisphere(u)
-    s, t = sampling.build_frame(n)
-    wi = local[:, :1] * s + local[:, 1:2] * t + local[:, 2:3] * n
-    cos = local[:, 2]
-    ok = (dot(wi, ng) > 0.0) & (cos > 0.0)
-    weight = np.where(ok[:, None], colour, 0.0)
-    return wi, weight, np.where(ok, sampling.cosine_hemisphere_pdf(cos), 0.0)
-
-
-def eval_diffuse(wi, n, colour):
-    """Lambert f * cos for light directions wi (n, 3) and its sampling pdf.
-
-    Only the shading normal counts, as in Cycles' bsdf_diffuse_eval: a light below the
-    geometric surface but above the shading horizon (a smooth mesh's terminator) is left
-    to the shadow ray, which the shadow terminator offset (terminator.py) may let through;
-    sampling (`sample_diffuse`) still never goes below the geometric surface."""
-    cos = dot(wi, n)
-    cos = np.where(cos > 0.0, cos, 0.0)  # as the kernel's `cos > 0` (a NaN normal gives 0)
-    return colour * (cos / np.pi)[:, None], cos / np.pi
+    F = F0 + (1 - F0)(1 - cos)^5 for one channel."""
+    c = (1.0 - min(max(abs(cos_theta), 0.0), 1.0)) ** 5
+    g = min(max(f0, 0.0), 1.0)
+    return min(max(g + (1.0 - g) * c, 0.0), 1.0)
 
 
 # ----------------------------------------------------------------- specular normals
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(**JIT)
 def valid_specular_normal(ngx, ngy, ngz, ix, iy, iz, nx, ny, nz):
     """The normal a specular lobe uses: the shading normal n, tilted toward the geometric
     normal ng just enough that the mirror reflection of the view direction i (all unit, on
@@ -164,52 +108,66 @@ def valid_specular_normal(ngx, ngy, ngz, ix, iy, iz, nx, ny, nz):
     return n_x * xx + n_z * ngx, n_x * xy + n_z * ngy, n_x * xz + n_z * ngz
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def valid_specular_normals(ng, wo, n):
-    """`valid_specular_normal` for (m, 3) arrays (the numpy stages)."""
-    out = np.empty_like(n)
-    for k in range(len(n)):
-        out[k, 0], out[k, 1], out[k, 2] = valid_specular_normal(
-            ng[k, 0], ng[k, 1], ng[k, 2], wo[k, 0], wo[k, 1], wo[k, 2], n[k, 0], n[k, 1],
-            n[k, 2])
-    return out
+# ----------------------------------------------------------------- Lambert
+@njit(**JIT)
+def eval_lambert(wx, wy, wz, sx, sy, sz):
+    """Lambert cos / pi toward a light direction w, which is also its sampling pdf (times
+    the colour: f * cos). Only the shading normal s counts, as in Cycles' bsdf_diffuse_eval:
+    a light below the geometric surface but above the shading horizon (a smooth mesh's
+    terminator) is left to the shadow ray, which the shadow terminator offset
+    (terminator.py) may let through; sampling never goes below the geometric surface."""
+    cos = wx * sx + wy * sy + wz * sz
+    return cos / np.pi if cos > 0 else 0.0  # `cos > 0`: a NaN normal gives 0
+
+
+@njit(**JIT)
+def sample_lambert(sx, sy, sz, nx, ny, nz, ua, ub):
+    """Cosine-weighted direction about the shading normal s: (w, pdf, ok); directions below
+    the geometric surface n fail, as in Cycles. The weight is the colour."""
+    lx, ly, lz = cosine_hemisphere(ua, ub)
+    s, t = build_frame(sx, sy, sz)
+    wx = lx * s[0] + ly * t[0] + lz * sx
+    wy = lx * s[1] + ly * t[1] + lz * sy
+    wz = lx * s[2] + ly * t[2] + lz * sz
+    return wx, wy, wz, lz / np.pi, wx * nx + wy * ny + wz * nz > 0.0 and lz > 0.0
 
 
 # ----------------------------------------------------------------- specular
-def sample_mirror(wo, n, colour):
-    """Glossy BSDF at roughness 0: perfect reflection, weight = colour (no Fresnel)."""
-    return reflect(wo, n), colour.copy(), np.full(len(wo), DELTA_PDF)
+@njit(**JIT)
+def reflect(wox, woy, woz, nx, ny, nz):
+    """Mirror wo about n: 2 (n . wo) n - wo, and n . wo."""
+    cos_o = nx * wox + ny * woy + nz * woz
+    return 2.0 * cos_o * nx - wox, 2.0 * cos_o * ny - woy, 2.0 * cos_o * nz - woz, cos_o
 
 
-def sample_metal(wo, n, base_colour):
-    """Principled metallic at roughness 0: perfect reflection weighted by F82/Schlick."""
-    wi = reflect(wo, n)
-    return wi, fresnel_schlick_conductor(dot(n, wo), base_colour), np.full(len(wo), DELTA_PDF)
-
-
-def sample_dielectric(wo, n, eta, reflection_tint, transmission_tint, u, fresnel="exact"):
+@njit(**JIT)
+def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact):
     """Smooth dielectric (Cycles' Glass BSDF and Principled transmission at roughness 0).
 
-    eta : (n,) relative IOR across the surface as seen from wo (IOR on front faces,
-        1/IOR on back faces). Reflection R = F x reflection_tint, transmission
-        T = (1 - F) x transmission_tint; reflection is chosen with probability
-        avg(R) / avg(R + T) and the weight is R / p or T / (1 - p), as in Cycles.
-    Returns (wi, weight, pdf, transmitted) with transmitted (n,) bool.
+    eta : relative IOR across the surface as seen from wo (IOR on front faces, 1/IOR on
+    back faces); r_tint, t_tint : (3,) tints. Reflection R = F x r_tint, transmission
+    T = (1 - F) x t_tint; reflection is chosen with probability avg(R) / avg(R + T) and the
+    weight is R / p or T / (1 - p), as in Cycles. Returns (w, weight (3 values), ok).
     """
-    fresnel_fn = fresnel_dielectric if fresnel == "exact" else fresnel_schlick_dielectric
-    f, cos_t = fresnel_fn(dot(n, wo), eta)
-    r = f[:, None] * reflection_tint
-    t = (1.0 - f)[:, None] * transmission_tint
-    r_avg, t_avg = r.mean(axis=1), t.mean(axis=1)
+    wx, wy, wz, cos_o = reflect(wox, woy, woz, nx, ny, nz)
+    fr, cos_t = fresnel_dielectric(cos_o, eta, exact)
+    r0, r1, r2 = fr * r_tint[0], fr * r_tint[1], fr * r_tint[2]
+    q0, q1, q2 = (1.0 - fr) * t_tint[0], (1.0 - fr) * t_tint[1], (1.0 - fr) * t_tint[2]
+    r_avg = (r0 + r1 + r2) / 3.0
+    t_avg = (q0 + q1 + q2) / 3.0
     total = r_avg + t_avg
-    p_reflect = np.where(total > 0, r_avg / np.where(total > 0, total, 1.0), 1.0)
-    choose_r = u < p_reflect
-    wi = np.where(choose_r[:, None], reflect(wo, n), refract(wo, n, eta, cos_t))
-    weight = np.where(choose_r[:, None], r / np.maximum(p_reflect, 1e-300)[:, None],
-                      t / np.maximum(1.0 - p_reflect, 1e-300)[:, None])
-    weight = np.where((total > 0)[:, None], weight, 0.0)
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    return wi, weight, np.full(len(wo), DELTA_PDF), ~choose_r
+    ok = total > 0
+    p_reflect = r_avg / total if ok else 1.0
+    if u < p_reflect:
+        inv = 1.0 / max(p_reflect, 1e-300)
+        f0, f1, f2 = r0 * inv, r1 * inv, r2 * inv
+    else:
+        inv = 1.0 / max(1.0 - p_reflect, 1e-300)
+        f0, f1, f2 = q0 * inv, q1 * inv, q2 * inv
+        c = cos_o / eta - cos_t  # Snell: -wo / eta + (cos_o / eta - cos_t) n
+        wx, wy, wz = -wox / eta + c * nx, -woy / eta + c * ny, -woz / eta + c * nz
+    length = math.sqrt(wx * wx + wy * wy + wz * wz)
+    return wx / length, wy / length, wz / length, f0, f1, f2, ok
 
 
 # ----------------------------------------------------------------- rough (GGX) lobes
@@ -227,57 +185,101 @@ def sample_dielectric(wo, n, eta, reflection_tint, transmission_tint, u, fresnel
 # 1 - albedo_spec(mu_o) (Cycles' closure_layering_weight).
 
 ALBEDO_TABLE_SIZE = 64
+MIN_ALPHA = 1e-4
 # numpy 2 renamed trapz (Blender 4.2+ may ship numpy 2).
 trapezoid = getattr(np, "trapezoid", None) or np.trapz
-MIN_ALPHA = 1e-4
 
 
-def ggx_d(cos_h: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    c2 = np.minimum(cos_h * cos_h, 1.0)
-    return a2 / (np.pi * (1.0 - c2 + a2 * c2) ** 2)
+@njit(**JIT)
+def ggx_d(cos_h, a2):
+    """The GGX normal distribution D at cos(theta_h), alpha^2 = a2."""
+    c2 = min(cos_h * cos_h, 1.0)
+    dd = 1.0 - c2 + a2 * c2
+    return a2 / (np.pi * (dd * dd))
 
 
-def ggx_lambda(cos_n: np.ndarray, a2: np.ndarray) -> np.ndarray:
-    c2 = np.maximum(cos_n * cos_n, 1e-300)
-    return 0.5 * (np.sqrt(1.0 + a2 * np.maximum(1.0 / c2 - 1.0, 0.0)) - 1.0)
+@njit(**JIT)
+def ggx_lambda(cos_n, a2):
+    """Smith's Lambda of GGX for a direction at cos(theta) to the normal."""
+    c2 = max(cos_n * cos_n, 1e-300)
+    return 0.5 * (math.sqrt(1.0 + a2 * max(1.0 / c2 - 1.0, 0.0)) - 1.0)
 
 
-def sample_ggx_vndf(v_local: np.ndarray, alpha: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Visible-normal sample (Heitz 2018) for view directions v_local (n, 3), z up."""
-    vh = np.column_stack([alpha * v_local[:, 0], alpha * v_local[:, 1], v_local[:, 2]])
-    vh /= np.linalg.norm(vh, axis=1, keepdims=True)
-    lensq = vh[:, 0] ** 2 + vh[:, 1] ** 2
-    inv = 1.0 / np.sqrt(np.where(lensq > 0, lensq, 1.0))
-    t1 = np.where((lensq > 0)[:, None], np.column_stack([-vh[:, 1] * inv, vh[:, 0] * inv,
-                                                         np.zeros(len(vh))]),
-                  np.array([1.0, 0.0, 0.0]))
-    t2 = np.cross(vh, t1)
-    r = np.sqrt(u[:, 0])
-    phi = 2.0 * np.pi * u[:, 1]
-    p1 = r * np.cos(phi)
-    p2 = r * np.sin(phi)
-    s = 0.5 * (1.0 + vh[:, 2])
-    p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * p2
-    p3 = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
-    nh = p1[:, None] * t1 + p2[:, None] * t2 + p3[:, None] * vh
-    h = np.column_stack([alpha * nh[:, 0], alpha * nh[:, 1], np.maximum(nh[:, 2], 1e-12)])
-    return h / np.linalg.norm(h, axis=1, keepdims=True)
+@njit(**JIT)
+def eval_ggx(cos_o, cos_i, cos_h, cos_hv, a2, eta, fresnel_on):
+    """Single-scatter GGX reflection f * cos_i and its visible-normal sampling pdf, from
+    the cosines of wo and wi to the normal, of the half vector to the normal and to wo."""
+    if not (cos_o > 0 and cos_i > 0):
+        return 0.0, 0.0
+    d = ggx_d(cos_h, a2)
+    f = fresnel_dielectric(cos_hv, eta, True)[0] if fresnel_on else 1.0
+    common = d / (4.0 * cos_o)
+    return f * common / (1.0 + ggx_lambda(cos_o, a2) + ggx_lambda(cos_i, a2)), \
+        common / (1.0 + ggx_lambda(cos_o, a2))
 
 
-def _fresnel_for(kind_fresnel: str, cos_hv: np.ndarray, eta: float) -> np.ndarray:
-    if kind_fresnel == "none":
-        return np.ones_like(cos_hv)
-    return fresnel_dielectric(cos_hv, np.full_like(cos_hv, eta))[0]
+@njit(**JIT)
+def ggx_visible_normal(v0, v1, v2, alpha, ua, ub):
+    """A visible normal of GGX (Heitz 2018) for the local view direction v, z up."""
+    a, b, c = alpha * v0, alpha * v1, v2
+    norm = math.sqrt(a * a + b * b + c * c)
+    a, b, c = a / norm, b / norm, c / norm
+    lensq = a * a + b * b
+    if lensq > 0:
+        inv = 1.0 / math.sqrt(lensq)
+        t1x, t1y, t1z = -b * inv, a * inv, 0.0
+    else:
+        t1x, t1y, t1z = 1.0, 0.0, 0.0
+    t2x, t2y, t2z = b * t1z - c * t1y, c * t1x - a * t1z, a * t1y - b * t1x
+    r = math.sqrt(ua)
+    phi = 2.0 * np.pi * ub
+    p1 = r * math.cos(phi)
+    p2 = r * math.sin(phi)
+    sv = 0.5 * (1.0 + c)
+    p2 = (1.0 - sv) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + sv * p2
+    p3 = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
+    hx = alpha * (p1 * t1x + p2 * t2x + p3 * a)
+    hy = alpha * (p1 * t1y + p2 * t2y + p3 * b)
+    hz = max(p1 * t1z + p2 * t2z + p3 * c, 1e-12)
+    norm = math.sqrt(hx * hx + hy * hy + hz * hz)
+    return hx / norm, hy / norm, hz / norm
+
+
+@njit(**JIT)
+def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
+    """White-furnace integrands of the GGX lobe at view cosine mu for the stratified
+    samples u (k, 2): f cos / pdf with F = 1, and with the lobe's Fresnel."""
+    a2 = alpha * alpha
+    w = np.zeros(len(u))
+    wf = np.zeros(len(u))
+    v0 = math.sqrt(max(0.0, 1 - mu * mu))
+    lo = ggx_lambda(mu, a2)
+    for k in range(len(u)):
+        hx, hy, hz = ggx_visible_normal(v0, 0.0, mu, alpha, u[k, 0], u[k, 1])
+        cos_hv = max(hx * v0 + hz * mu, 0.0)
+        cos_i = 2.0 * cos_hv * hz - mu
+        if cos_i > 0:
+            w[k] = (1.0 / (1.0 + lo + ggx_lambda(cos_i, a2))) / (1.0 / (1.0 + lo))
+            wf[k] = w[k] * (fresnel_dielectric(cos_hv, eta, True)[0] if fresnel_on else 1.0)
+    return w, wf
+
+
+@njit(**JIT)
+def _fresnel_curve(m, eta):
+    out = np.empty(len(m))
+    for k in range(len(m)):
+        out[k] = fresnel_dielectric(m[k], eta, True)[0]
+    return out
 
 
 class MicrofacetTables:
     """Per-material tables over mu_o = cos(theta_o) for one GGX lobe (alpha, Fresnel).
 
-    compensation(mu) : Kulla-Conty factor 1 + Fms (1 - E) / E.
-    albedo(mu) : directional albedo of the compensated lobe with its Fresnel (what the
+    missing_table : (1 - E) / E, the energy the single-scatter lobe misses;
+    compensation_table : the Kulla-Conty factor 1 + Fms (1 - E) / E for the lobe's own Fss;
+    albedo_table : directional albedo of the compensated lobe with its Fresnel (what the
         Principled base loses to the specular layer).
-    Integrals use a fixed stratified set of visible-normal samples, so the tables are
-    deterministic.
+    Integrals use a fixed stratified set of visible-normal samples: deterministic tables.
     """
 
     def __init__(self, alpha: float, fresnel: str = "dielectric", eta: float = 1.5):
@@ -287,29 +289,19 @@ class MicrofacetTables:
         k = int(np.sqrt(n_s))
         g = (np.arange(k) + 0.5) / k
         u = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
-        a2 = self.alpha**2
+        fresnel_on = fresnel != "none"
         e_white = np.zeros(n_mu)
         e_fresnel = np.zeros(n_mu)
         for i, mu in enumerate(self.mu):
-            v = np.tile([np.sqrt(max(0.0, 1 - mu * mu)), 0.0, mu], (len(u), 1))
-            h = sample_ggx_vndf(v, np.full(len(u), self.alpha), u)
-            cos_hv = np.maximum(h @ v[0], 0.0)
-            wi = 2.0 * cos_hv[:, None] * h - v
-            cos_i = wi[:, 2]
-            ok = cos_i > 0
-            g1v = 1.0 / (1.0 + ggx_lambda(np.full(len(u), mu), a2))
-            g2 = 1.0 / (1.0 + ggx_lambda(np.full(len(u), mu), a2) + ggx_lambda(cos_i, a2))
-            w = np.where(ok, g2 / g1v, 0.0)  # f cos / pdf for VNDF sampling, F = 1
-            e_white[i] = w.mean()
-            e_fresnel[i] = (w * _fresnel_for(fresnel, cos_hv, eta)).mean()
+            w, wf = _lobe_integrands(self.alpha, fresnel_on, float(eta), float(mu), u)
+            e_white[i], e_fresnel[i] = w.mean(), wf.mean()
         e_white = np.clip(e_white, 1e-6, 1.0)
         self.e_avg = float(2.0 * trapezoid(e_white * self.mu, self.mu))
-        if fresnel == "none":
-            fss = 1.0
-        else:
+        if fresnel_on:
             m = np.linspace(0.0, 1.0, 2049)
-            fss = 2.0 * trapezoid(fresnel_dielectric(m, np.full_like(m, eta))[0] * m, m)
-        # The energy the single-scatter lobe misses, (1 - E) / E, per mu_o.
+            fss = 2.0 * trapezoid(_fresnel_curve(m, float(eta)) * m, m)
+        else:
+            fss = 1.0
         self.missing_table = (1.0 - e_white) / e_white
         self.fms = float(self.multiscatter_fresnel(fss))
         self.compensation_table = 1.0 + self.fms * self.missing_table
@@ -321,17 +313,6 @@ class MicrofacetTables:
         fss = np.asarray(fss, np.float64)
         return fss * self.e_avg / (1.0 - fss * (1.0 - self.e_avg))
 
-    def compensation(self, mu, fms=None):
-        """1 + Fms (1 - E(mu)) / E(mu): (n,) for the table's own Fresnel, or (n, 3) for
-        per-channel fms (3,) (the Glossy colour's, `multiscatter_fresnel(colour)`)."""
-        if fms is None:
-            return np.interp(mu, self.mu, self.compensation_table)
-        missing = np.interp(mu, self.mu, self.missing_table)
-        return 1.0 + np.asarray(fms)[None, :] * missing[:, None]
-
-    def albedo(self, mu):
-        return np.interp(mu, self.mu, self.albedo_table)
-
 
 def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
     """(3,) Fms of a rough material's specular lobe: the Principled layer's dielectric
@@ -342,85 +323,114 @@ def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
     return tables.multiscatter_fresnel(np.maximum(np.asarray(colour, np.float64), 0.0))
 
 
-def eval_ggx(wo, wi, n, alpha, eta, fresnel):
-    """Single-scatter GGX reflection f * cos_i (n,) and its VNDF sampling pdf (n,)."""
-    cos_o = dot(n, wo)
-    cos_i = dot(n, wi)
-    h = wo + wi
-    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
-    a2 = alpha * alpha
-    d = ggx_d(dot(n, h), a2)
-    lo, li = ggx_lambda(cos_o, a2), ggx_lambda(cos_i, a2)
-    ok = (cos_o > 0) & (cos_i > 0)
-    safe_o = np.where(ok, cos_o, 1.0)
-    if fresnel == "none":
-        f = np.ones(len(wo))
+# The layered lobes' tables for the kernel, one row per material (zeros for other kinds):
+# base (k, 3) diffuse colour (Principled) or 0 (Glossy); tint (k, 3) specular weight (1 or
+# the Glossy colour); alpha (k,); fresnel (k,) bool: dielectric Fresnel (Principled) or none;
+# mu (m,) the grid of view cosines with its guided_interp guide; fms (k, 3) per channel;
+# missing and albedo (k, m) over mu.
+LayerTables = namedtuple("LayerTables", "base tint alpha fresnel mu mu_guide fms missing albedo")
+
+# One rough vertex's lobe: the diffuse weight dw and specular tint (3 each), alpha, eta,
+# fresnel_on, the compensation per channel at mu_o (3) and the chance of the specular lobe.
+Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
+                            "comp0 comp1 comp2 p_spec")
+
+
+def layer_tables(materials, used) -> LayerTables:
+    """The LayerTables of the rough materials (Principled, rough Glossy) among `used`."""
+    k = len(materials.kind)
+    base, tint = np.zeros((k, 3)), np.zeros((k, 3))
+    alpha, fresnel, fms = np.zeros(k), np.zeros(k, np.bool_), np.zeros((k, 3))
+    mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
+    missing, albedo = np.zeros((k, len(mu))), np.zeros((k, len(mu)))
+    roughness = materials.roughness if materials.roughness is not None else np.zeros(k)
+    for j in used:
+        if materials.kind[j] not in (PRINCIPLED, GLOSSY):
+            continue
+        principled = materials.kind[j] == PRINCIPLED
+        tables = MicrofacetTables(max(float(roughness[j]) ** 2, MIN_ALPHA),
+                                  "dielectric" if principled else "none",
+                                  float(materials.ior[j]))
+        base[j] = materials.colour[j] if principled else 0.0
+        tint[j] = 1.0 if principled else materials.colour[j]
+        alpha[j], fresnel[j] = tables.alpha, principled
+        fms[j] = layer_fms(tables, principled, materials.colour[j])
+        mu = tables.mu
+        missing[j], albedo[j] = tables.missing_table, tables.albedo_table
+    return LayerTables(base, tint, alpha, fresnel, mu, interp_guide(mu, 256), fms, missing,
+                       albedo)
+
+
+@njit(**INLINE)
+def layer_at(mat, mu, eta, lt):
+    """The layered lobe of rough material `mat` at view cosine mu (to its specular normal)
+    from its LayerTables lt."""
+    missing = guided_interp(mu, lt.mu, lt.missing[mat], lt.mu_guide)
+    albedo = guided_interp(mu, lt.mu, lt.albedo[mat], lt.mu_guide)
+    dw0 = lt.base[mat, 0] * (1.0 - albedo)
+    dw1 = lt.base[mat, 1] * (1.0 - albedo)
+    dw2 = lt.base[mat, 2] * (1.0 - albedo)
+    tint0, tint1, tint2 = lt.tint[mat, 0], lt.tint[mat, 1], lt.tint[mat, 2]
+    sp = (tint0 + tint1 + tint2) / 3.0 * albedo
+    sd = (dw0 + dw1 + dw2) / 3.0
+    p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
+    return Layer(dw0, dw1, dw2, tint0, tint1, tint2, lt.alpha[mat], eta, lt.fresnel[mat],
+                 1.0 + lt.fms[mat, 0] * missing, 1.0 + lt.fms[mat, 1] * missing,
+                 1.0 + lt.fms[mat, 2] * missing, p_spec)
+
+
+@njit(**JIT)
+def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe,
+                 sampled):
+    """The layered lobe's f * cos_i per channel and its lobe-mixture pdf for shading normal
+    s (the diffuse base's), specular normal m and geometric normal n (all on wo's side).
+
+    sampled : wi was sampled from the lobe (nothing below the geometric surface, as Cycles'
+    sampling routines); otherwise it is a light direction, where the specular lobe still
+    needs wi above the geometric surface but the diffuse base only above the shading
+    horizon (Cycles' microfacet and diffuse eval; see eval_lambert)."""
+    hx, hy, hz = wox + wix, woy + wiy, woz + wiz
+    hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
+    hx, hy, hz = hx / hl, hy / hl, hz / hl
+    spec, pdf_s = eval_ggx(mx * wox + my * woy + mz * woz, mx * wix + my * wiy + mz * wiz,
+                           mx * hx + my * hy + mz * hz, hx * wox + hy * woy + hz * woz,
+                           lobe.alpha * lobe.alpha, lobe.eta, lobe.fresnel_on)
+    cos_d = max(sx * wix + sy * wiy + sz * wiz, 0.0)
+    if not wix * nx + wiy * ny + wiz * nz > 0.0:
+        spec = 0.0
+        pdf_s = 0.0
+        if sampled:
+            cos_d = 0.0
+    c = cos_d / np.pi
+    return (lobe.dw0 * c + lobe.tint0 * (spec * lobe.comp0),
+            lobe.dw1 * c + lobe.tint1 * (spec * lobe.comp1),
+            lobe.dw2 * c + lobe.tint2 * (spec * lobe.comp2),
+            lobe.p_spec * pdf_s + (1.0 - lobe.p_spec) * cos_d / np.pi)
+
+
+@njit(**JIT)
+def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lobe, ua, ub):
+    """Sample the layered lobe: pick the specular or the diffuse layer, then evaluate the
+    mixture (one-sample MIS over the lobes). Returns (w, weight (3 values), pdf, ok)."""
+    if u_lobe < lobe.p_spec:
+        s, t = build_frame(mx, my, mz)
+        hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
+                                        wox * t[0] + woy * t[1] + woz * t[2],
+                                        wox * mx + woy * my + woz * mz, lobe.alpha, ua, ub)
+        hwx = hx * s[0] + hy * t[0] + hz * mx
+        hwy = hx * s[1] + hy * t[1] + hz * my
+        hwz = hx * s[2] + hy * t[2] + hz * mz
+        wx, wy, wz, _ = reflect(wox, woy, woz, hwx, hwy, hwz)
     else:
-        f = fresnel_dielectric(dot(h, wo), eta)[0]
-    common = d / (4.0 * safe_o)
-    value = np.where(ok, f * common / (1.0 + lo + li), 0.0)
-    pdf = np.where(ok, common / (1.0 + lo), 0.0)
-    return value, pdf
+        s, t = build_frame(sx, sy, sz)
+        lx, ly, lz = cosine_hemisphere(ua, ub)
+        wx = lx * s[0] + ly * t[0] + lz * sx
+        wy = lx * s[1] + ly * t[1] + lz * sy
+        wz = lx * s[2] + ly * t[2] + lz * sz
+    g0, g1, g2, pdf = eval_layered(wox, woy, woz, wx, wy, wz, sx, sy, sz, mx, my, mz, nx, ny,
+                                   nz, lobe, True)
+    if pdf > 0:
+        return wx, wy, wz, g0 / pdf, g1 / pdf, g2 / pdf, pdf, True
+    return wx, wy, wz, 0.0, 0.0, 0.0, pdf, False
 
 
-def sample_ggx_reflection(wo, n, alpha, u):
-    """Directions wi (n, 3) from the visible normals of GGX about n."""
-    s, t = sampling.build_frame(n)
-    v = np.column_stack([dot(wo, s), dot(wo, t), dot(wo, n)])
-    h_local = sample_ggx_vndf(v, alpha, u)
-    h = h_local[:, :1] * s + h_local[:, 1:2] * t + h_local[:, 2:3] * n
-    return reflect(wo, h)
-
-
-def eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo,
-                 sampled=False, n_spec=None):
-    """Principled (diffuse base + GGX dielectric specular) or rough Glossy (specular only,
-    base = 0): f * cos_i (n, 3) and the lobe-mixture pdf (n,), plus the probability of
-    choosing the specular lobe (n,).
-
-    base : (n, 3) diffuse colour (zero for Glossy); spec_tint : (n, 3) specular weight;
-    comp : (n, 3) the energy compensation per channel at mu_o; albedo : (n,) the
-    specular albedo at mu_o.
-    sampled : wi was sampled from the lobe (nothing below the geometric surface, as
-    Cycles' sampling routines); otherwise it is a light direction, where the specular lobe
-    still needs wi above the geometric surface but the diffuse base only above the shading
-    horizon (Cycles' microfacet and diffuse eval; see eval_diffuse).
-    n_spec : the specular lobe's normal (`valid_specular_normals`; default n), n the
-    diffuse base's.
-    """
-    diffuse_w = base * (1.0 - albedo)[:, None]
-    p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
-    spec, pdf_s = eval_ggx(wo, wi, n if n_spec is None else n_spec, alpha, eta, fresnel)
-    geometric_ok = (dot(wi, ng) > 0.0)
-    cos_i = np.maximum(dot(wi, n), 0.0)
-    if sampled:
-        cos_i = np.where(geometric_ok, cos_i, 0.0)
-    spec = np.where(geometric_ok, spec, 0.0)
-    f_cos = diffuse_w * (cos_i / np.pi)[:, None] + spec_tint * (spec[:, None] * comp)
-    pdf = p_spec * np.where(geometric_ok, pdf_s, 0.0) + (1.0 - p_spec) * cos_i / np.pi
-    return f_cos, pdf, p_spec
-
-
-def _specular_probability(diffuse_w, spec_tint, albedo):
-    s = spec_tint.mean(axis=1) * albedo
-    d = diffuse_w.mean(axis=1)
-    return np.where(s + d > 0, s / np.maximum(s + d, 1e-300), 1.0)
-
-
-def sample_layered(wo, n, ng, base, alpha, eta, spec_tint, fresnel, comp, albedo, u_lobe, u,
-                   n_spec=None):
-    """Sample the layered lobe: pick specular or diffuse, then evaluate both (one-sample
-    MIS over the lobes). Returns (wi, weight, pdf)."""
-    diffuse_w = base * (1.0 - albedo)[:, None]
-    p_spec = _specular_probability(diffuse_w, spec_tint, albedo)
-    choose_spec = u_lobe < p_spec
-    wi_spec = sample_ggx_reflection(wo, n if n_spec is None else n_spec, alpha, u)
-    local = sampling.sample_cosine_hemisphere(u)
-    s, t = sampling.build_frame(n)
-    wi_diff = local[:, :1] * s + local[:, 1:2] * t + local[:, 2:3] * n
-    wi = np.where(choose_spec[:, None], wi_spec, wi_diff)
-    f_cos, pdf, _ = eval_layered(wo, wi, n, ng, base, alpha, eta, spec_tint, fresnel, comp,
-                                 albedo, sampled=True, n_spec=n_spec)
-    ok = pdf > 0
-    weight = np.where(ok[:, None], f_cos / np.where(ok, pdf, 1.0)[:, None], 0.0)
-    return wi, weight, np.where(ok, pdf, 0.0)

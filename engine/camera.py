@@ -8,13 +8,20 @@ shift moves it by shift x the fit axis' full extent. Clipping is planar along th
 axis. With depth of field a lens point is drawn on a disk or a regular polygon of
 radius `aperture_radius` (x divided by the anamorphic ratio) and the ray aims at the
 point where the pinhole ray meets the focus plane z = focus_distance.
+
+`CameraModel` derives the camera's constants once (`CameraData`); the functions below make
+one ray and are compiled into the kernel, which picks the pinhole or the thin lens by plan.
 """
 
 from __future__ import annotations
 
+import math
+from collections import namedtuple
+
 import numpy as np
 
-from . import sampling
+from .jit import INLINE, njit
+from .sampling import concentric_disk, regular_polygon
 from .scene import Camera
 
 
@@ -36,82 +43,99 @@ def viewplane_half_extents(cam: Camera, width: int, height: int) -> tuple[float,
     return fit_half * xratio / yratio, fit_half, fit_half
 
 
+# The camera as the kernel reads it: image size, viewplane half extents (fit_half: the
+# unit of shift), shift, clipping, orthographic or not, lens (aperture radius, blades (0: a
+# disk), rotation, anamorphic ratio, focus distance), world_from_camera (3, 3) and position.
+CameraData = namedtuple("CameraData", "width height half_x half_y fit_half shift_x shift_y "
+                                      "clip_start clip_end ortho aperture blades rotation ratio "
+                                      "focus world_from_camera position forward")
+
+
 class CameraModel:
-    """Generates camera rays for pixels. origin is the scene's recentring offset."""
+    """The camera's constants for a render of width x height pixels; origin is the scene's
+    recentring offset."""
 
     def __init__(self, cam: Camera, width: int, height: int, origin: np.ndarray):
         self.cam, self.width, self.height = cam, width, height
         m = np.asarray(cam.world_from_camera, np.float64)
         rot = m[:3, :3] / np.maximum(np.linalg.norm(m[:3, :3], axis=0), 1e-300)  # clear scale
         # Flip z: Cycles' camera looks down +z, Blender's down -Z.
-        self.world_from_camera = rot * np.array([1.0, 1.0, -1.0])
+        self.world_from_camera = np.ascontiguousarray(rot * np.array([1.0, 1.0, -1.0]))
         self.position = m[:3, 3] - np.asarray(origin, np.float64)
-        self.forward = self.world_from_camera[:, 2]
+        self.forward = np.ascontiguousarray(self.world_from_camera[:, 2])
         self.half_x, self.half_y, self.fit_half = viewplane_half_extents(cam, width, height)
         self.aperture = cam.aperture_radius
         self.blades = int(cam.blades) if cam.blades >= 3 else 0
         self.focus = max(float(cam.focus_distance), 1e-5)
 
-    @property
-    def has_lens(self) -> bool:
-        return self.aperture > 0.0
-
-    def raster_to_camera(self, raster: np.ndarray) -> np.ndarray:
-        """Raster (n, 2) in pixels, row 0 at the bottom -> viewplane (n, 2) at z = 1."""
+    def data(self) -> CameraData:
         cam = self.cam
-        x = (2.0 * raster[:, 0] / self.width - 1.0) * self.half_x + cam.shift_x * 2 * self.fit_half
-        y = (2.0 * raster[:, 1] / self.height - 1.0) * self.half_y + cam.shift_y * 2 * self.fit_half
-        return np.column_stack([x, y])
+        return CameraData(float(self.width), float(self.height), self.half_x, self.half_y,
+                          self.fit_half, float(cam.shift_x), float(cam.shift_y),
+                          float(cam.clip_start), float(cam.clip_end), cam.type == "ORTHO",
+                          float(self.aperture), float(self.blades), float(cam.rotation),
+                          float(cam.ratio), float(self.focus), self.world_from_camera,
+                          self.position, self.forward)
 
-    def sample_lens(self, u: np.ndarray) -> np.ndarray:
-        """Lens point (n, 2) in scene units: disk or polygon, x divided by the ratio."""
-        if self.blades:
-            p = sampling.sample_regular_polygon(u, self.blades, float(self.cam.rotation))
-        else:
-            p = sampling.sample_uniform_disk_concentric(u)
-        p = p * self.aperture
-        p[:, 0] /= self.cam.ratio
-        return p
 
-    def generate_rays(self, raster: np.ndarray, u_lens: np.ndarray | None):
-        """Rays for raster positions (n, 2).
+@njit(**INLINE)
+def raster_to_plane(rx, ry, cam):
+    """Raster position in pixels (row 0 at the bottom) -> viewplane point at z = 1
+    (perspective) or in scene units (orthographic)."""
+    x = (2.0 * rx / cam.width - 1.0) * cam.half_x + cam.shift_x * 2 * cam.fit_half
+    y = (2.0 * ry / cam.height - 1.0) * cam.half_y + cam.shift_y * 2 * cam.fit_half
+    return x, y
 
-        Returns origins (n, 3), unit directions (n, 3) in the recentred world frame and
-        tmax (n,) (the far clip). u_lens (n, 2) is used only when the lens is active.
-        """
-        cam = self.cam
-        plane = self.raster_to_camera(raster)
-        n = len(raster)
-        if cam.type == "ORTHO":
-            p = np.column_stack([plane, np.zeros(n)])
-            d = np.tile([0.0, 0.0, 1.0], (n, 1))
-            if self.has_lens and u_lens is not None:
-                lens = self.sample_lens(u_lens)
-                p[:, :2] += lens
-                d = np.column_stack([-lens, np.full(n, self.focus)])
-                d /= np.linalg.norm(d, axis=1, keepdims=True)
-            p += cam.clip_start * d
-            tmax = np.full(n, cam.clip_end - cam.clip_start)
-        else:
-            pin = np.column_stack([plane, np.ones(n)])
-            pin /= np.linalg.norm(pin, axis=1, keepdims=True)
-            z_inv = 1.0 / pin[:, 2]
-            if self.has_lens and u_lens is not None:
-                lens = self.sample_lens(u_lens)
-                p_focus = pin * (self.focus / pin[:, 2])[:, None]
-                p = np.column_stack([lens, np.zeros(n)])
-                d = p_focus - p
-                d /= np.linalg.norm(d, axis=1, keepdims=True)
-            else:
-                p = np.zeros((n, 3))
-                d = pin
-            # Planar near/far clip: z_inv comes from the pinhole ray even with DOF (Cycles).
-            p += (cam.clip_start * z_inv)[:, None] * d
-            tmax = (cam.clip_end - cam.clip_start) * z_inv
-        origins = sampling.apply3(p, self.world_from_camera) + self.position
-        directions = sampling.apply3(d, self.world_from_camera)
-        return origins, directions, tmax
 
-    def z_depth(self, points: np.ndarray) -> np.ndarray:
-        """Distance of world points (n, 3) from the camera along the view axis."""
-        return sampling.dot3(points - self.position, self.forward)
+@njit(**INLINE)
+def lens_disk(ua, ub, cam):
+    """A point on a round aperture, in scene units (x divided by the anamorphic ratio)."""
+    lx, ly = concentric_disk(ua, ub)
+    return lx * cam.aperture / cam.ratio, ly * cam.aperture
+
+
+@njit(**INLINE)
+def lens_polygon(ua, ub, cam):
+    """A point on a polygonal aperture (the camera's blades and rotation), in scene units."""
+    lx, ly = regular_polygon(ua, ub, cam.blades, cam.rotation)
+    return lx * cam.aperture / cam.ratio, ly * cam.aperture
+
+
+@njit(**INLINE)
+def pinhole_ray(x, y, cam):
+    """Camera-space origin, unit direction and far clip distance of the ray through
+    viewplane point (x, y); clipping is planar along the view axis."""
+    if cam.ortho:
+        return x, y, cam.clip_start, 0.0, 0.0, 1.0, cam.clip_end - cam.clip_start
+    norm = math.sqrt(x * x + y * y + 1.0)
+    dx, dy, dz = x / norm, y / norm, 1.0 / norm
+    z_inv = 1.0 / dz
+    c = cam.clip_start * z_inv
+    return c * dx, c * dy, c * dz, dx, dy, dz, (cam.clip_end - cam.clip_start) * z_inv
+
+
+@njit(**INLINE)
+def thin_lens_ray(x, y, lx, ly, cam):
+    """As pinhole_ray from lens point (lx, ly), aimed where the pinhole ray meets the focus
+    plane; the clip distances stay the pinhole ray's (Cycles)."""
+    if cam.ortho:
+        norm = math.sqrt(lx * lx + ly * ly + cam.focus * cam.focus)
+        dx, dy, dz = -lx / norm, -ly / norm, cam.focus / norm
+        s = cam.clip_start
+        return x + lx + s * dx, y + ly + s * dy, s * dz, dx, dy, dz, cam.clip_end - s
+    norm = math.sqrt(x * x + y * y + 1.0)
+    dx, dy, dz = x / norm, y / norm, 1.0 / norm
+    z_inv = 1.0 / dz
+    k = cam.focus / dz
+    fx, fy, fz = dx * k - lx, dy * k - ly, dz * k
+    norm = math.sqrt(fx * fx + fy * fy + fz * fz)
+    dx, dy, dz = fx / norm, fy / norm, fz / norm
+    c = cam.clip_start * z_inv
+    return lx + c * dx, ly + c * dy, c * dz, dx, dy, dz, (cam.clip_end - cam.clip_start) * z_inv
+
+
+@njit(**INLINE)
+def z_depth(px, py, pz, cam):
+    """Distance of a world point from the camera along the view axis (the depth pass)."""
+    return ((px - cam.position[0]) * cam.forward[0] + (py - cam.position[1]) * cam.forward[1]
+            + (pz - cam.position[2]) * cam.forward[2])

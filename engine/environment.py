@@ -8,15 +8,26 @@ interpolation (the Environment Texture node's default "Linear"), wrapping in u.
 Sampling picks a pixel in proportion to its luminance times cos(elevation) (the solid
 angle it covers), then a uniform point inside it; the solid-angle density is
 p_pixel x W x H / (2 pi^2 cos(elevation)).
+
+`EnvironmentMap` builds the map's data once; the functions below work on one direction and
+are compiled into the kernel.
 """
 
 from __future__ import annotations
 
+import math
+from collections import namedtuple
+
 import numpy as np
 
-from . import sampling
+from .jit import INLINE, JIT, njit
+from .sampling import Distribution1D, sample_cdf
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+
+# The map as the kernel reads it: image (H, W, 3) float32, texture_from_world and
+# world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution.
+Environment = namedtuple("Environment", "image texture_from_world world_from_texture pmf cdf")
 
 
 class EnvironmentMap:
@@ -28,67 +39,88 @@ class EnvironmentMap:
         self.image = np.ascontiguousarray(image, np.float32)
         self.height, self.width = self.image.shape[:2]
         m = np.eye(3) if texture_from_world is None else np.asarray(texture_from_world, float)
-        self.texture_from_world = m
-        self.world_from_texture = np.linalg.inv(m)
+        self.texture_from_world = np.ascontiguousarray(m, np.float64)
+        self.world_from_texture = np.ascontiguousarray(np.linalg.inv(m), np.float64)
         elevation = (np.arange(self.height) + 0.5) / self.height * np.pi - 0.5 * np.pi
         weight = (self.image.astype(np.float64) @ LUMINANCE) * np.cos(elevation)[:, None]
         weight = np.maximum(weight, 0.0)
         # A black map would leave nothing to sample: fall back to uniform over the sphere.
         if weight.sum() <= 0:
             weight = np.ones_like(weight) * np.cos(elevation)[:, None]
-        self.distribution = sampling.Distribution1D(weight.ravel())
+        self.distribution = Distribution1D(weight.ravel())
         self.mean_radiance = float(np.mean(self.image.astype(np.float64) @ LUMINANCE
                                            * np.cos(elevation)[:, None]) * np.pi / 2)
 
-    def to_uv(self, d_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        d = sampling.apply3(d_world, self.texture_from_world)
-        u = 0.5 - np.arctan2(d[:, 1], d[:, 0]) / (2.0 * np.pi)
-        v = 0.5 + np.arctan2(d[:, 2], np.hypot(d[:, 0], d[:, 1])) / np.pi
-        return np.mod(u, 1.0), np.clip(v, 0.0, 1.0)
+    def data(self) -> Environment:
+        return Environment(self.image, self.texture_from_world, self.world_from_texture,
+                           self.distribution.pmf, self.distribution.cdf)
 
-    def from_uv(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
-        azimuth = (0.5 - u) * 2.0 * np.pi
-        elevation = (v - 0.5) * np.pi
-        ce = np.cos(elevation)
-        d = np.column_stack([ce * np.cos(azimuth), ce * np.sin(azimuth), np.sin(elevation)])
-        return sampling.apply3(d, self.world_from_texture)
 
-    def lookup(self, d_world: np.ndarray) -> np.ndarray:
-        """Bilinear radiance (n, 3) for world directions (n, 3)."""
-        u, v = self.to_uv(d_world)
-        x = u * self.width - 0.5
-        y = np.clip(v * self.height - 0.5, 0.0, self.height - 1.0)
-        x0 = np.floor(x).astype(np.int64)
-        y0 = np.minimum(np.floor(y).astype(np.int64), self.height - 1)
-        fx, fy = (x - x0)[:, None], (y - y0)[:, None]
-        x0 %= self.width
-        x1 = (x0 + 1) % self.width
-        y1 = np.minimum(y0 + 1, self.height - 1)
-        img = self.image
-        top = img[y0, x0] * (1 - fx) + img[y0, x1] * fx
-        bottom = img[y1, x0] * (1 - fx) + img[y1, x1] * fx
-        return (top * (1 - fy) + bottom * fy).astype(np.float64)
+@njit(**JIT)
+def to_uv(dx, dy, dz, m):
+    """Texture coordinates (u, v) of a world direction; m = texture_from_world."""
+    x = dx * m[0, 0] + dy * m[0, 1] + dz * m[0, 2]
+    y = dx * m[1, 0] + dy * m[1, 1] + dz * m[1, 2]
+    z = dx * m[2, 0] + dy * m[2, 1] + dz * m[2, 2]
+    u = 0.5 - math.atan2(y, x) / (2.0 * np.pi)
+    v = 0.5 + math.atan2(z, math.hypot(x, y)) / np.pi
+    return u % 1.0, min(max(v, 0.0), 1.0)
 
-    def pdf(self, d_world: np.ndarray) -> np.ndarray:
-        """Solid-angle density of `sample` at world directions (n, 3)."""
-        u, v = self.to_uv(d_world)
-        col = np.minimum((u * self.width).astype(np.int64), self.width - 1)
-        row = np.minimum((v * self.height).astype(np.int64), self.height - 1)
-        p = self.distribution.pmf[row * self.width + col]
-        cos_el = np.cos((v - 0.5) * np.pi)
-        return p * self.width * self.height / (2.0 * np.pi**2 * np.maximum(cos_el, 1e-12))
 
-    def sample(self, u2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Directions (n, 3) and their solid-angle pdf (n,) from u2 (n, 2): the pixel by
-        the first coordinate (its remainder reused for x), the row position by the second."""
-        k = self.distribution.sample(u2[:, 0])
-        cdf_lo = np.where(k > 0, self.distribution.cdf[np.maximum(k - 1, 0)], 0.0)
-        pk = self.distribution.pmf[k]
-        fx = np.clip((u2[:, 0] - cdf_lo) / np.where(pk > 0, pk, 1.0), 0.0, 1.0 - 1e-12)
-        row, col = np.divmod(k, self.width)
-        u = (col + fx) / self.width
-        v = (row + u2[:, 1]) / self.height
-        d = self.from_uv(u, v)
-        cos_el = np.cos((v - 0.5) * np.pi)
-        pdf = pk * self.width * self.height / (2.0 * np.pi**2 * np.maximum(cos_el, 1e-12))
-        return d, pdf
+@njit(**INLINE)
+def lookup(u, v, image):
+    """Bilinear radiance at (u, v), wrapping in u."""
+    h, w = image.shape[0], image.shape[1]
+    x = u * w - 0.5
+    y = min(max(v * h - 0.5, 0.0), h - 1.0)
+    x0 = int(math.floor(x))
+    y0 = min(int(math.floor(y)), h - 1)
+    fx, fy = x - x0, y - y0
+    x0 %= w
+    x1 = (x0 + 1) % w
+    y1 = min(y0 + 1, h - 1)
+    a, b = 1 - fx, 1 - fy
+    r0 = ((np.float64(image[y0, x0, 0]) * a + np.float64(image[y0, x1, 0]) * fx) * b
+          + (np.float64(image[y1, x0, 0]) * a + np.float64(image[y1, x1, 0]) * fx) * fy)
+    r1 = ((np.float64(image[y0, x0, 1]) * a + np.float64(image[y0, x1, 1]) * fx) * b
+          + (np.float64(image[y1, x0, 1]) * a + np.float64(image[y1, x1, 1]) * fx) * fy)
+    r2 = ((np.float64(image[y0, x0, 2]) * a + np.float64(image[y0, x1, 2]) * fx) * b
+          + (np.float64(image[y1, x0, 2]) * a + np.float64(image[y1, x1, 2]) * fx) * fy)
+    return r0, r1, r2
+
+
+@njit(**JIT)
+def pixel_pdf(u, v, pk, w, h):
+    """The solid-angle density at (u, v) of a pixel of probability pk."""
+    cos_el = math.cos((v - 0.5) * np.pi)
+    return pk * w * h / (2.0 * np.pi**2 * max(cos_el, 1e-12))
+
+
+@njit(**INLINE)
+def pdf(u, v, env):
+    """The solid-angle density of `sample` at texture coordinates (u, v)."""
+    h, w = env.image.shape[0], env.image.shape[1]
+    col = min(int(u * w), w - 1)
+    row = min(int(v * h), h - 1)
+    return pixel_pdf(u, v, env.pmf[row * w + col], w, h)
+
+
+@njit(**INLINE)
+def sample(ua, ub, env):
+    """A pixel by luminance x solid angle (ua; its remainder reused for x), a point in it
+    (ub for the row position): the world direction and its solid-angle pdf."""
+    h, w = env.image.shape[0], env.image.shape[1]
+    k = sample_cdf(env.cdf, ua)
+    cdf_lo = env.cdf[k - 1] if k > 0 else 0.0
+    pk = env.pmf[k]
+    fx = min(max((ua - cdf_lo) / (pk if pk > 0 else 1.0), 0.0), 1.0 - 1e-12)
+    row, col = k // w, k % w
+    u = (col + fx) / w
+    v = (row + ub) / h
+    azimuth = (0.5 - u) * 2.0 * np.pi
+    elevation = (v - 0.5) * np.pi
+    ce = math.cos(elevation)
+    x, y, z = ce * math.cos(azimuth), ce * math.sin(azimuth), math.sin(elevation)
+    m = env.world_from_texture
+    return (x * m[0, 0] + y * m[0, 1] + z * m[0, 2], x * m[1, 0] + y * m[1, 1] + z * m[1, 2],
+            x * m[2, 0] + y * m[2, 1] + z * m[2, 2], pixel_pdf(u, v, pk, w, h))

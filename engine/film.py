@@ -10,11 +10,13 @@ and the image's estimated relative error follow.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
+from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernel
-from .sampling import dot3
+from .jit import INLINE, JIT, njit
+from .sampling import guided_interp, interp_guide
 
 # Rec.709 luminance weights, for the error estimate.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -28,8 +30,8 @@ class PixelFilter:
 
     kind : "BLACKMAN_HARRIS" (support +-width, Cycles doubles the width internally),
     "BOX" (support +-width/2) or "GAUSSIAN" (sigma width/4, truncated at +-1.5 width).
-    `sample(u)` maps u (n, 2) in [0,1) to raster offsets from the pixel centre, (n, 2),
-    through the same 1024-entry table as Cycles (`cycles_filter_table`), quirks included:
+    `offset(u, table)` maps u in [0,1) to a raster offset from the pixel centre, through
+    the same 1024-entry table as Cycles (`cycles_filter_table`), quirks included:
     the sampled density is the filter's to within a table step, except that 1/1023 of the
     samples lands between +radius and -0.5 px. `density` is the filter itself.
     """
@@ -55,8 +57,19 @@ class PixelFilter:
         bh = 0.35875 - 0.48829 * np.cos(phi) + 0.14128 * np.cos(2 * phi) - 0.01168 * np.cos(3 * phi)
         return np.where(inside, np.maximum(bh, 0.0), 0.0)
 
-    def sample(self, u: np.ndarray) -> np.ndarray:
-        return np.interp(u, self._cdf, self._x)
+    def table(self) -> "FilterTable":
+        return FilterTable(self._cdf, self._x, interp_guide(self._cdf))
+
+
+# The filter's inverse CDF as the kernel reads it: knots u (k,), offsets x (k,), and the
+# guide of sampling.guided_interp.
+FilterTable = namedtuple("FilterTable", "u x guide")
+
+
+@njit(**INLINE)
+def filter_offset(u, table):
+    """A raster offset from the pixel centre, drawn from the filter's density by u."""
+    return guided_interp(u, table.u, table.x, table.guide)
 
 
 def cycles_filter_table(f: PixelFilter) -> np.ndarray:
@@ -98,6 +111,32 @@ def cycles_filter_table(f: PixelFilter) -> np.ndarray:
     return table
 
 
+@dataclass
+class Pass:
+    """What a caller sees after each pass of a render (and what `render` returns).
+
+    combined : (H, W, 4) float32 linear RGBA, row 0 at the bottom (Blender's order)
+    depth : (H, W) float32 mean camera z-depth of the first hit (BACKGROUND_DEPTH where
+        nothing is hit)
+    normal : (H, W, 3) float32 mean world-space shading normal of the first hit
+    error : (H, W) float32 estimated standard error of each pixel's luminance
+    variance : (H, W, 3) float32 estimated variance of each pixel's mean, per channel
+    samples : samples per pixel so far; seconds : wall time since the render began
+    relative_error : estimated relative RMS error of the image (see Film)
+    progress : fraction of the sample budget done
+    """
+
+    combined: np.ndarray
+    depth: np.ndarray
+    normal: np.ndarray
+    error: np.ndarray
+    variance: np.ndarray
+    samples: int
+    seconds: float
+    relative_error: float
+    progress: float
+
+
 class Film:
     """Per-pixel running mean and variance of radiance, plus Depth and Normal passes.
 
@@ -125,73 +164,30 @@ class Film:
         in `rejected`."""
         if rejected:
             self.rejected.extend(rejected)
-        if kernel.AVAILABLE:
-            _welford(pixels, radiance, depth, normal, self.count, self.mean, self.m2,
-                     self.m2_luminance, self.depth, self.normal, LUMINANCE)
-            return
-        ok = (np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
-              & np.all(np.isfinite(normal), axis=1))
-        if not ok.all():
-            pixels, radiance, depth, normal = pixels[ok], radiance[ok], depth[ok], normal[ok]
-        n = self.count[pixels] + 1
-        self.count[pixels] = n
-        mean = self.mean[pixels]
-        delta = radiance - mean
-        mean += delta / n[:, None]
-        self.mean[pixels] = mean
-        after = radiance - mean
-        self.m2[pixels] += (delta * after).astype(np.float32)
-        self.m2_luminance[pixels] += dot3(delta, LUMINANCE) * dot3(after, LUMINANCE)
-        w = (1.0 / n).astype(np.float32)
-        self.depth[pixels] += w * (depth.astype(np.float32) - self.depth[pixels])
-        self.normal[pixels] += w[:, None] * (normal.astype(np.float32) - self.normal[pixels])
+        _welford(pixels, radiance, depth, normal, self.count, self.mean, self.m2,
+                 self.m2_luminance, self.depth, self.normal, LUMINANCE)
 
     def check_finite(self, sample: int) -> None:
         """Raise if any pass holds NaN or inf, naming the first bad pixel."""
         for name, arr in (("combined", self.mean), ("depth", self.depth),
                           ("normal", self.normal), ("error", self.m2),
                           ("error", self.m2_luminance)):
-            rows = arr.reshape(len(self.count), -1)
-            if kernel.AVAILABLE:  # one pass, no temporaries: this runs after every pass
-                i = _first_nonfinite_row(rows)
-            else:
-                bad = ~np.isfinite(rows).all(axis=1)
-                i = int(np.argmax(bad)) if bad.any() else -1
+            # One compiled pass, no temporaries: this runs after every pass.
+            i = _first_nonfinite_row(arr.reshape(len(self.count), -1))
             if i >= 0:
                 raise FloatingPointError(
                     f"non-finite value in the {name} pass at pixel (x={i % self.width}, "
                     f"y={i // self.width}) after sample {sample}")
 
-    def variance(self) -> np.ndarray:
-        """(n, 3) estimated variance of each pixel's mean, per channel (0 below 2 samples)."""
-        n = self.count.astype(np.float32)[:, None]
-        return np.where(n > 1, self.m2 / np.maximum(n * (n - 1), 1.0), np.float32(0.0))
-
-    def pixel_error(self) -> np.ndarray:
-        """(n,) estimated standard error of each pixel's mean luminance."""
-        n = self.count.astype(np.float64)
-        var = np.where(n > 1, self.m2_luminance / np.maximum(n * (n - 1), 1.0), 0.0)
-        return np.sqrt(np.maximum(var, 0.0))
-
     def relative_error(self) -> float:
         """Estimated relative RMS error of the image: RMS standard error / mean luminance."""
-        return self._relative_error(self.pixel_error())
-
-    def _relative_error(self, err: np.ndarray) -> float:
-        if self.count.max(initial=0) < 2:
-            return float("inf")
-        return _relative(float(np.mean(err * err)), float(np.mean(self.mean @ LUMINANCE)))
+        return self.statistics()[2]
 
     def statistics(self) -> tuple[np.ndarray, np.ndarray, float]:
-        """`pixel_error` and `variance` as float32 and `relative_error`, together: after
-        every pass of a progressive render, so compiled as one pass over the film where
-        numba is there (a 1920x1080 film: ~120 ms a pass in numpy). The per-pixel values
-        are the same either way; the image-wide error may differ in its last digits (the
-        sums run in another order)."""
-        if not kernel.AVAILABLE:
-            err = self.pixel_error()
-            return (err.astype(np.float32), self.variance().astype(np.float32),
-                    self._relative_error(err))
+        """Each pixel's estimated standard error of its mean luminance (n,) and variance of
+        its mean per channel (n, 3), as float32, and the image's estimated relative RMS
+        error: after every pass of a progressive render, so one compiled pass over the
+        film (a 1920x1080 film: ~120 ms a pass in numpy)."""
         n = len(self.count)
         error, variance = np.empty(n, np.float32), np.empty((n, 3), np.float32)
         sum_e2, sum_y, most = _statistics(self.count, self.mean, self.m2, self.m2_luminance,
@@ -201,8 +197,6 @@ class Film:
 
     def snapshot(self, samples: int, seconds: float, progress: float, stats=None):
         """The film as a Pass; `stats` from `statistics()` if the caller has them."""
-        from .renderer import Pass
-
         error, variance, rel = stats if stats is not None else self.statistics()
         h, w = self.height, self.width
         rgba = np.ones((h, w, 4), np.float32)
@@ -220,12 +214,11 @@ def _relative(mean_error2: float, mean_luminance: float) -> float:
     return float(np.sqrt(mean_error2) / mean_luminance)
 
 
-@kernel.njit(cache=True, nogil=True)
+@njit(**JIT)
 def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, depth_acc,
              normal_acc, lum):
-    """Film.add compiled: the same arithmetic (float32 where the film stores float32), so
-    both paths accumulate bit-identical films; releases the GIL, so worker threads fold
-    their own chunks."""
+    """Film.add: Welford's update per sample (float32 where the film stores float32);
+    releases the GIL, so worker threads fold their own chunks."""
     f32 = np.float32
     for i in range(len(pixels)):
         r0, r1, r2, z = radiance[i, 0], radiance[i, 1], radiance[i, 2], depth[i]
@@ -252,10 +245,10 @@ def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, dep
             normal_acc[p, c] += w * (f32(normal[i, c]) - normal_acc[p, c])
 
 
-@kernel.njit(cache=True, nogil=True)
+@njit(**JIT)
 def _statistics(count, mean, m2, m2_luminance, lum, error, variance):
-    """Film.pixel_error and Film.variance into error (n,) and variance (n, 3) float32, in
-    the same arithmetic; returns the sums of squared errors and of mean luminances and the
+    """Each pixel's standard error of its mean luminance into error (n,) and variance of its
+    mean into variance (n, 3) float32 (0 below 2 samples); returns the sums of squared errors and of mean luminances and the
     largest sample count, for the relative error."""
     f32 = np.float32
     sum_e2 = 0.0
@@ -283,7 +276,7 @@ def _statistics(count, mean, m2, m2_luminance, lum, error, variance):
     return sum_e2, sum_y, most
 
 
-@kernel.njit(cache=True, nogil=True)
+@njit(**JIT)
 def _first_nonfinite_row(rows):
     """Index of the first row of (n, k) `rows` holding NaN or inf, or -1."""
     for i in range(rows.shape[0]):

@@ -1,37 +1,44 @@
-"""The wavefront path integrator.
+"""The path integrator: named bounce stages, compiled into one kernel made for each plan.
 
-One call of `trace_pixels` traces one sample for a batch of pixels. Rays live in
-structure-of-arrays batches; the only Python loop is over bounce depth, and each bounce
-is a sequence of named stages over the live rays:
+A wavefront of rays alternates between embree (closest hits, shadow rays) and `shade`, the
+compiled bounce, which runs these stages per ray:
 
-    generate camera rays -> intersect -> handle escaped rays -> handle emission
-    -> Russian roulette -> sample light + trace shadow rays -> sample BSDF -> spawn rays
+    handle_light_hits -> handle_escaped | surface_interaction -> handle_emission
+    -> russian_roulette -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
 
-Live rays are compacted by index after every stage that ends paths. Blender's bounce
-counting: a camera ray hitting an emitter is depth 0; with max_bounces = N, light
-sampling and scattering happen at vertices 0..N and vertex N+1 only adds emission and
-background (Cycles' "terminate after transparent" at limit + 1). Emitters hit by BSDF
+Each stage is a function of its own that holds no formulas: those live once in the module
+of their concept (sampling, bsdf, lights, environment, camera, terminator) and numba inlines
+them. The stages read the scene's plan as the module constants below; `Kernel` compiles a
+copy of the stages with one plan's values (specialise.py), so code for features a scene
+lacks is not in its kernel at all. The generic kernel (every constant on) renders any scene
+and is what a render starts with while its own kernel compiles in the background.
+
+Blender's bounce counting: a camera ray hitting an emitter is depth 0; with max_bounces =
+N, light sampling and scattering happen at vertices 0..N and vertex N+1 only adds emission
+and background (Cycles' "terminate after transparent" at limit + 1). Emitters hit by BSDF
 sampling after a non-delta bounce are weighted against next-event estimation with the
-power heuristic; after delta bounces (mirror, metal, glass) and from the camera they
-count fully. Russian roulette follows Cycles: none for the first two vertices, then
-survival probability min(sqrt(max channel of throughput), 1).
+power heuristic; after delta bounces (mirror, metal, glass) and from the camera they count
+fully. Russian roulette follows Cycles: none for the first two vertices, then survival
+probability min(sqrt(max channel of throughput), 1).
 """
 
 from __future__ import annotations
 
-import threading
-import time
-from dataclasses import dataclass
+import math
+from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, kernel, sampling, terminator
-from .film import BACKGROUND_DEPTH
-from .sampling import Dim
-from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, PRINCIPLED, RenderSettings, Scene
-
-# Kinds with a non-delta lobe: they get next-event estimation and MIS.
-SMOOTH_KINDS = (DIFFUSE, PRINCIPLED, GLOSSY)
+from . import bsdf, camera, environment, lights, terminator
+from .bsdf import DELTA_PDF
+from .film import filter_offset
+from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
+from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SUN_BSDF,
+                     _SUN_CAMERA, _SUN_RADIANCE)
+from .sampling import (BSDF, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE, ROULETTE,
+                       bounce_dim, pixel_seed, power_heuristic, reverse_bits, sample_1d,
+                       sample_2d)
+from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED
 
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
 # a few float32 ulps (embree intersects in float32), so the offset scales with the scene.
@@ -39,504 +46,501 @@ RAY_EPSILON = 2.0**-18
 # Russian roulette starts after this many scatter events (Cycles: min_light_bounces + 1).
 ROULETTE_MIN_BOUNCE = 2
 
+# ------------------------------------------------------------------ the plan's constants
+# What a kernel compiles in (Plan.kernel_key): the generic kernel's values, all on.
+PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_ROUGH",
+                  "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
+                  "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
+                  "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
+                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
+HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = True
+HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
+HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
+HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
+EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
+PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
-@dataclass
-class Hits:
-    """Surface interactions for the live rays. All arrays have the live count n.
+# The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
+STAGE_NAMES = ("", "generate camera rays", "handle light hits", "handle escaped rays",
+               "surface interaction (depth/normal pass)", "handle emission", "sample light",
+               "sample BSDF")
 
-    p : (n, 3) hit points (float64, from barycentrics); ng, ns : (n, 3) geometric and
-    shading normals flipped to the incoming side; wo : (n, 3) towards the ray origin;
-    front : (n,) whether the ray hit the front face; prim, mat : (n,) ids; t : distances;
-    scale : (n,) local coordinate magnitude for ray offsets; bu, bv : (n,) barycentrics of
-    corners 1 and 2.
-    """
+# ------------------------------------------------------------------ named structures
+# The scene as the kernel reads it. Parts a plan does not use are None (not passed).
+#   vertices (t, 3, 3), tri_normal (t, 3), tri_scale (t,), material_index (t,);
+#   normals (t, 3, 3) and smooth (t,) with shading normals; object_index (t,) and
+#   terminator_offset (objects,) with the terminator offset.
+Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index normals "
+                                  "smooth object_index terminator_offset")
+# kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), and
+# the rough materials' bsdf.LayerTables (None without rough materials).
+MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
+                                            "transmission_tint emission layers")
+SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter")
+# One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
+# current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
+# last BSDF sample (inf: delta or camera), the passes, and the queued shadow rays.
+Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
+                            "radiance depth normal nonfinite")
+ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
+# One surface vertex: hit point, geometric normal n and shading normal s (both on the
+# incoming side), the specular lobes' normal m, wo, front face, triangle, barycentrics,
+# material, distance and the offset scale.
+Vertex = namedtuple("Vertex", "px py pz nx ny nz sx sy sz mx my mz wox woy woz front f u v "
+                              "mat t scale")
 
-    p: np.ndarray
-    ng: np.ndarray
-    ns: np.ndarray
-    wo: np.ndarray
-    front: np.ndarray
-    prim: np.ndarray
-    mat: np.ndarray
-    t: np.ndarray
-    scale: np.ndarray
-    bu: np.ndarray
-    bv: np.ndarray
+
+@intrinsic
+def _cycles(typingctx):
+    """The CPU's cycle counter (llvm.readcyclecounter), for the per-stage profile."""
+    def codegen(context, builder, signature, args):
+        fnty = ir.FunctionType(ir.IntType(64), [])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.readcyclecounter")
+        return builder.call(fn, [])
+    return types.uint64(), codegen
 
 
-class NonFiniteSample(FloatingPointError):
-    pass
+# ------------------------------------------------------------------ stages
+def _debug_mark(paths, row, stage, a, b, c):
+    """DEBUG kernels: remember the first stage that left a non-finite value in a path."""
+    if paths.nonfinite[row] == 0 and not (math.isfinite(a) and math.isfinite(b)
+                                          and math.isfinite(c)):
+        paths.nonfinite[row] = stage
 
 
-class Integrator:
-    """Traces paths for batches of pixels; thread-safe (no shared mutable state except
-    the stage counters, which are guarded by a lock)."""
+def _add(paths, row, t0, t1, t2, l0, l1, l2, w):
+    """Radiance l reaching the camera through throughput t with MIS weight w."""
+    paths.radiance[row, 0] += t0 * l0 * w
+    paths.radiance[row, 1] += t1 * l1 * w
+    paths.radiance[row, 2] += t2 * l2 * w
 
-    def __init__(self, scene: Scene, settings: RenderSettings, plan, accel, emitters, camera,
-                 pixel_filter, debug: bool = False):
-        self.scene, self.settings, self.plan = scene, settings, plan
-        self.accel, self.emitters, self.camera = accel, emitters, camera
-        self.pixel_filter = pixel_filter
-        self.debug = debug
-        v = scene.vertices
-        n = sampling.cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-        self.tri_normal = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        self.tri_scale = np.abs(v).max(axis=(1, 2)) if len(v) else np.zeros(0)
-        m = scene.materials
-        self.kind = m.kind
-        self.colour = m.colour
-        self.ior = m.ior
-        self.reflection_tint = m.reflection_tint
-        self.transmission_tint = m.transmission_tint
-        self.emission = m.emission
-        self.roughness = m.roughness if m.roughness is not None else np.zeros(len(m.kind))
-        # Albedo and energy-compensation tables of every rough (GGX) material in use.
-        self.microfacet = {}
-        for k in np.unique(scene.material_index):
-            if self.kind[k] in (PRINCIPLED, GLOSSY):
-                alpha = max(float(self.roughness[k]) ** 2, bsdf.MIN_ALPHA)
-                fresnel = "dielectric" if self.kind[k] == PRINCIPLED else "none"
-                self.microfacet[int(k)] = bsdf.MicrofacetTables(alpha, fresnel, float(self.ior[k]))
-        self.world = np.asarray(scene.world.colour, np.float64)
-        self.width = settings.width
-        self.stage_calls: dict[str, int] = {}
-        self.stage_seconds: dict[str, float] = {}
-        self._lock = threading.Lock()
-        self.compiled = None
-        if plan.kernel == "compiled" and not debug:
-            from .kernel import CompiledTracer
-            self.compiled = CompiledTracer(self)
 
-    # ------------------------------------------------------------ bookkeeping
-    def _count(self, stage: str, seconds: float) -> None:
-        with self._lock:
-            self.stage_calls[stage] = self.stage_calls.get(stage, 0) + 1
-            self.stage_seconds[stage] = self.stage_seconds.get(stage, 0.0) + seconds
-
-    def _check(self, stage: str, live: np.ndarray, pixels: np.ndarray, *arrays) -> None:
-        """Debug mode: name the stage and pixel of the first NaN/inf."""
-        if not self.debug:
-            return
-        for a in arrays:
-            bad = ~np.isfinite(a.reshape(len(a), -1)).all(axis=1)
-            if bad.any():
-                px = int(pixels[live[np.argmax(bad)]])
-                raise NonFiniteSample(f"stage '{stage}' produced a non-finite value at pixel "
-                                      f"(x={px % self.width}, y={px // self.width})")
-
-    # ------------------------------------------------------------ the bounce loop
-    def trace_pixels(self, pixels: np.ndarray, sample: int):
-        """Trace one sample for each pixel in `pixels` (n,) int64.
-
-        Returns (pixels, radiance (n, 3), depth (n,), normal (n, 3), rejected) where
-        rejected lists messages for samples that came out non-finite.
-        """
-        if self.compiled is not None:
-            radiance, depth_pass, normal_pass = self.compiled.trace_pixels(pixels, sample)
-            return pixels, radiance, depth_pass, normal_pass, self._rejected(
-                pixels, sample, radiance, depth_pass, normal_pass)
-        n = len(pixels)
-        stream = sampling.SampleStream(pixels, sample, self.settings.seed)
-        radiance = np.zeros((n, 3))
-        depth_pass = np.full(n, BACKGROUND_DEPTH)
-        normal_pass = np.zeros((n, 3))
-
-        o, d, tmax = self.generate_camera_rays(pixels, stream)
-        live = np.arange(n)
-        throughput = np.ones((n, 3))
-        prev_pdf = np.full(n, bsdf.DELTA_PDF)  # camera rays count emission fully
-
-        for depth in range(self.settings.max_bounces + 2):
-            if len(live) == 0:
-                break
-            prim, t, bu, bv = self.intersect(o, d, tmax)
-
-            # Handle light objects the rays pass through (lights are transparent).
-            if self.plan.light_hits or self.plan.sun_discs:
-                self.handle_light_hits(radiance, live, throughput, o, d,
-                                       np.where(prim < 0, tmax, t), prim < 0, prev_pdf,
-                                       camera=depth == 0)
-
-            # Handle escaped rays.
-            miss = prim < 0
-            if miss.any():
-                self.handle_escaped(radiance, live[miss], throughput[miss], o[miss], d[miss],
-                                    prev_pdf[miss])
-            hit = ~miss
-            live, throughput, prev_pdf = live[hit], throughput[hit], prev_pdf[hit]
-            if len(live) == 0:
-                break
-            hits = self.surface_interaction(o[hit], d[hit], prim[hit], t[hit], bu[hit], bv[hit])
-            if depth == 0:
-                depth_pass[live] = self.camera.z_depth(hits.p)
-                normal_pass[live] = hits.ns  # Cycles' N: the shading normal facing the viewer
-                self._check("surface interaction (depth/normal pass)", live, pixels,
-                            depth_pass[live], normal_pass[live])
-
-            if self.plan.num_emitters:
-                self.handle_emission(radiance, live, throughput, hits, prev_pdf)
-                self._check("handle emission", live, pixels, radiance[live])
-
-            # Terminate at Blender's bounce limit: vertex N+1 only adds emission.
-            if depth > self.settings.max_bounces:
-                break
-
-            # Russian roulette (after emission, before light sampling, as in Cycles).
-            keep = self.russian_roulette(throughput, stream, live, depth)
-            if keep is not None:
-                live, throughput, hits = live[keep], throughput[keep], _take(hits, keep)
-
-            # Paths end on surfaces without a BSDF (a pure Emission shader).
-            has_bsdf = self.kind[hits.mat] != 0
-            if not has_bsdf.all():
-                live, throughput, hits = live[has_bsdf], throughput[has_bsdf], _take(hits, has_bsdf)
-            if len(live) == 0:
-                break
-
-            if self.plan.light_sampling:
-                self.sample_light(radiance, live, throughput, hits, stream, depth)
-                self._check("sample light", live, pixels, radiance[live])
-
-            wi, weight, pdf = self.sample_bsdf(hits, stream, live, depth)
-            self._check("sample BSDF", live, pixels, weight, wi)
-            throughput = throughput * weight
-            alive = max3(throughput) > 0
-            live, throughput, prev_pdf = live[alive], throughput[alive], pdf[alive]
-            o, d = self.spawn_rays(_take(hits, alive), wi[alive])
-            tmax = np.full(len(live), np.inf)
-
-        return pixels, radiance, depth_pass, normal_pass, self._rejected(
-            pixels, sample, radiance, depth_pass, normal_pass)
-
-    def _rejected(self, pixels, sample, radiance, depth_pass, normal_pass) -> list[str]:
-        """A sample is bad if any pass it feeds (combined, depth, normal) is not finite."""
-        if self.compiled is not None and kernel.all_finite(radiance, depth_pass, normal_pass):
-            return []  # one compiled pass instead of five numpy ones over the chunk
-        bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth_pass)
-                & np.all(np.isfinite(normal_pass), axis=1))
-        return self._explain_nonfinite(pixels[bad], sample) if bad.any() else []
-
-    def _explain_nonfinite(self, bad_pixels: np.ndarray, sample: int) -> list[str]:
-        """Replay the bad samples in debug mode (sampling is deterministic) to name the
-        stage that produced NaN/inf."""
-        if self.debug:
-            return [f"non-finite sample at pixel {int(p)}" for p in bad_pixels]
-        tracer = Integrator.__new__(Integrator)
-        tracer.__dict__.update(self.__dict__)
-        tracer.debug, tracer.compiled = True, None  # the numpy stages name the culprit
-        msgs = []
-        for p in bad_pixels[:5]:
-            try:
-                tracer.trace_pixels(np.array([p]), sample)
-                msgs.append(f"non-finite sample at pixel (x={p % self.width}, "
-                            f"y={p // self.width}), stage unknown")
-            except NonFiniteSample as e:
-                msgs.append(str(e))
-        return msgs
-
-    # ------------------------------------------------------------ stages
-    def generate_camera_rays(self, pixels: np.ndarray, stream: sampling.SampleStream):
-        t0 = time.perf_counter()
-        px = (pixels % self.width).astype(np.float64)
-        py = (pixels // self.width).astype(np.float64)
-        # Sample 0 looks through the middle of the filter table, as Cycles' first sample.
-        u = stream.get_2d(Dim.FILTER) if stream.sample != 0 else np.full((len(pixels), 2), 0.5)
-        offset = self.pixel_filter.sample(u)
-        raster = np.column_stack([px + 0.5, py + 0.5]) + offset
-        u_lens = stream.get_2d(Dim.LENS) if self.plan.dof else None
-        o, d, tmax = self.camera.generate_rays(raster, u_lens)
-        self._count("generate camera rays", time.perf_counter() - t0)
-        return o, d, tmax
-
-    def intersect(self, o, d, tmax):
-        t0 = time.perf_counter()
-        out = self.accel.intersect(o, d, tmax)
-        self._count("intersect", time.perf_counter() - t0)
-        return out
-
-    def handle_escaped(self, radiance, idx, throughput, o, d, prev_pdf):
-        """Escaped rays take the world: a constant colour (found by BSDF sampling only, as
-        in Cycles) or the environment map, MIS-weighted against its light sampling."""
-        if self.plan.environment:
-            env = self.emitters.environment
-            le = env.lookup(d)
-            w = np.ones(len(idx))
-            soft = np.isfinite(prev_pdf)
-            if soft.any() and self.plan.light_sampling:
-                w[soft] = power_heuristic(prev_pdf[soft], self.emitters.pmf_environment(o[soft])
-                                          * env.pdf(d[soft]))
-            radiance[idx] += throughput * le * w[:, None]
-        elif self.plan.world_light:
-            radiance[idx] += throughput * self.world
-
-    def surface_interaction(self, o, d, prim, t, bu, bv) -> Hits:
-        t0 = time.perf_counter()
-        v = self.scene.vertices[prim]
-        w0 = 1.0 - bu - bv
-        p = w0[:, None] * v[:, 0] + bu[:, None] * v[:, 1] + bv[:, None] * v[:, 2]
-        ng = self.tri_normal[prim]
-        front = bsdf.dot(d, ng) < 0.0
-        sign = np.where(front, 1.0, -1.0)[:, None]
-        ng = ng * sign
-        ns = ng
-        if self.plan.shading_normals:
-            ns = self.interpolate_normals(prim, w0, bu, bv, ng, sign)
-        wo = -d
-        scale = np.maximum(self.tri_scale[prim], max3(np.abs(p)))
-        self._count("surface interaction", time.perf_counter() - t0)
-        return Hits(p, ng, ns, wo, front, prim, self.scene.material_index[prim], t, scale,
-                    bu, bv)
-
-    def interpolate_normals(self, prim, w0, bu, bv, ng, sign):
-        """Smooth shading normal, flipped with the geometric one; falls back to ng where
-        the interpolated normal faces away from the incoming ray (no light leaks)."""
-        nrm = self.scene.normals[prim]
-        ns = w0[:, None] * nrm[:, 0] + bu[:, None] * nrm[:, 1] + bv[:, None] * nrm[:, 2]
-        ns = ns * sign
-        length = np.linalg.norm(ns, axis=1, keepdims=True)
-        smooth = self.scene.smooth[prim] & (length[:, 0] > 1e-12)
-        ns = np.where(smooth[:, None], ns / np.maximum(length, 1e-300), ng)
-        # The incoming direction is -wo = d; ns must lie on wo's side for reflection.
-        return ns
-
-    def handle_emission(self, radiance, live, throughput, hits: Hits, prev_pdf):
-        """Add emitted radiance (two-sided), MIS-weighted after non-delta bounces."""
-        le = self.emission[hits.mat]
-        emissive = max3(le) > 0
-        if not emissive.any():
-            return
-        w = np.ones(len(live))
-        soft = emissive & np.isfinite(prev_pdf)
-        if soft.any() and self.plan.light_sampling:
-            cos_l = np.abs(bsdf.dot(hits.ng[soft], hits.wo[soft]))
-            origin = hits.p[soft] + hits.wo[soft] * hits.t[soft, None]
-            pdf_l = (self.emitters.pdf_triangle_area(origin, hits.prim[soft]) * hits.t[soft] ** 2
-                     / np.maximum(cos_l, 1e-300))
-            pb = prev_pdf[soft]
-            w[soft] = power_heuristic(pb, pdf_l)
-        radiance[live[emissive]] += (throughput[emissive] * le[emissive]
-                                     * w[emissive, None])
-
-    def russian_roulette(self, throughput, stream, live, depth):
-        if depth < ROULETTE_MIN_BOUNCE:
-            return None
-        q = np.minimum(np.sqrt(max3(throughput)), 1.0)
-        u = stream.get_1d(Dim.bounce(depth, Dim.ROULETTE), rows=live)
-        keep = u < q
-        # Survivors are divided by q; since q >= sqrt(throughput), the result is at most
-        # sqrt(throughput), so a small q never blows a path up.
-        throughput[keep] /= q[keep, None]
-        return keep
-
-    def handle_light_hits(self, radiance, live, throughput, o, d, t_surface, escaped,
-                          prev_pdf, camera):
-        """Add the radiance of light objects crossed before the surface hit (and of sun
-        discs for escaped rays), MIS-weighted after non-delta bounces. Camera rays see
-        only lights visible to the camera; other rays only lights with MIS on (Cycles)."""
-        t0 = time.perf_counter()
-        objects = self.emitters.objects
-        soft = np.isfinite(prev_pdf)
-        mis = soft.any() and self.plan.light_sampling
-        seen = (objects.visible_camera if camera else objects.use_mis) & \
-            (objects.power.max(axis=1) > 0)
-        for j in np.nonzero(objects.intersectable & seen)[0]:
-            t, le = objects.intersect(j, o, d, t_surface)
-            hit = np.isfinite(t)
-            if not hit.any():
-                continue
-            w = np.ones(len(live))
-            if mis:
-                sel = hit & soft
-                pdf_l = self.emitters.pmf_light(o[sel], j) * objects.pdf(
-                    np.full(int(sel.sum()), j), o[sel], d[sel], t[sel])
-                w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
-            radiance[live[hit]] += throughput[hit] * le[hit] * w[hit, None]
-        if self.plan.sun_discs and escaped.any():
-            for j in np.nonzero((objects.type == 2) & (objects.cos_half_angle < 1.0) & seen)[0]:
-                inside = escaped & (sampling.dot3(d, -objects.direction[j])
-                                    >= objects.cos_half_angle[j])
-                if not inside.any():
-                    continue
-                w = np.ones(len(live))
-                if mis:
-                    sel = inside & soft
-                    pdf_l = self.emitters.pmf_light(o[sel], j) / (
-                        2.0 * np.pi * (1.0 - objects.cos_half_angle[j]))
-                    w[sel] = power_heuristic(prev_pdf[sel], pdf_l)
-                le = objects.power[j] * objects.sun_radiance[j]
-                radiance[live[inside]] += throughput[inside] * le * w[inside, None]
-        self._count("handle light hits", time.perf_counter() - t0)
-
-    def sample_light(self, radiance, live, throughput, hits: Hits, stream, depth):
-        """Next-event estimation at diffuse vertices: one emitter (triangle or light
-        object) chosen by power, MIS-weighted against BSDF sampling."""
-        t0 = time.perf_counter()
-        diffuse = np.nonzero(np.isin(self.kind[hits.mat], SMOOTH_KINDS))[0]
-        if len(diffuse) == 0:
-            return
-        rows = live[diffuse]
-        u_sel = stream.get_1d(Dim.bounce(depth, Dim.LIGHT_SELECT), rows=rows)
-        u_pt = stream.get_2d(Dim.bounce(depth, Dim.LIGHT_POINT), rows=rows)
-        p, ng, ns = hits.p[diffuse], hits.ng[diffuse], hits.ns[diffuse]
-        wi, dist, value, pdf_l, light_scale = self.emitters.sample(p, u_sel, u_pt)
-        f_cos, pdf_bsdf = self.eval_bsdf(hits.wo[diffuse], wi, ns, ng, hits.mat[diffuse])
-        ok = (max3(f_cos) > 0) & (max3(value) > 0) & (dist > 0)
-        if not ok.any():
-            return
-        # Delta lights (pdf inf) cannot be hit by BSDF sampling: weight 1.
-        w = np.where(np.isinf(pdf_l[ok]), 1.0, power_heuristic(pdf_l[ok], pdf_bsdf[ok]))
-        contrib = throughput[diffuse[ok]] * f_cos[ok] * value[ok] * w[:, None]
-        self._count("sample light", time.perf_counter() - t0)
-        # Trace shadow rays: from the offset surface point to just short of the light.
-        t1 = time.perf_counter()
-        start = p[ok]
-        if self.plan.terminator:
-            start = start + self.terminator_offsets(_take(hits, diffuse[ok]), wi[ok])
-        origin = offset_ray_origin(start, ng[ok], wi[ok], hits.scale[diffuse[ok]])
-        finite = np.isfinite(dist[ok])
-        # Aim from the offset origin at the sampled point itself: reusing wi from the
-        # un-offset point would reach a grazing emitter's plane early and self-occlude.
-        target = p[ok] + wi[ok] * np.where(finite, dist[ok], 0.0)[:, None]
-        seg = target - origin
-        seg_len = np.linalg.norm(seg, axis=1)
-        direction = np.where(finite[:, None], seg / np.maximum(seg_len, 1e-300)[:, None], wi[ok])
-        light_eps = RAY_EPSILON * np.maximum(light_scale[ok], 1e-30)
-        blocked = self.accel.occluded(origin, direction,
-                                      np.where(finite, seg_len - light_eps, 3e38))
-        self._count("trace shadow rays", time.perf_counter() - t1)
-        vis = ~blocked
-        radiance[rows[ok][vis]] += contrib[vis]
-
-    def terminator_offsets(self, hits: Hits, wi):
-        """(n, 3) shadow-ray origin displacements by the objects' shadow terminator
-        geometry offset (terminator.py), zero on flat triangles."""
-        scene = self.scene
-        cutoff = np.where(scene.smooth[hits.prim],
-                          scene.terminator_offset[scene.object_index[hits.prim]], 0.0)
-        out = np.empty((len(wi), 3))
-        terminator.shadow_origin_offsets(scene.vertices, scene.normals, hits.prim.astype(np.int64),
-                                         hits.bu, hits.bv, hits.ns, hits.ng, wi, cutoff, out)
-        return out
-
-    def _layer(self, k: int, wo, n):
-        """Per-vertex parameters of rough material k's layered lobe at view directions wo,
-        its specular normals n."""
-        tables = self.microfacet[k]
-        mu = np.clip(bsdf.dot(n, wo), 0.0, 1.0)
-        m = len(wo)
-        if self.kind[k] == PRINCIPLED:
-            base, tint, fresnel = np.tile(self.colour[k], (m, 1)), np.ones((m, 3)), "dielectric"
+def generate_camera_rays(pixels, sample, seed, sc, paths):
+    """Camera rays for pixel ids (n,): a filter offset by Cycles' table (the first sample
+    through its middle), a lens point with depth of field, the ray in world space."""
+    rev_sample = reverse_bits(np.uint64(sample))
+    cam = sc.camera
+    m = cam.world_from_camera
+    for i in range(len(pixels)):
+        ps = pixel_seed(pixels[i], seed)
+        paths.pseed[i] = ps
+        fx, fy = sample_2d(ps, rev_sample, DIM_FILTER) if sample != 0 else (0.5, 0.5)
+        rx = (pixels[i] % cam.width) + 0.5 + filter_offset(fx, sc.film_filter)
+        ry = (pixels[i] // cam.width) + 0.5 + filter_offset(fy, sc.film_filter)
+        x, y = camera.raster_to_plane(rx, ry, cam)
+        # (The generic kernel has the lens code and checks the camera at run time.)
+        if HAS_DOF and cam.aperture > 0.0:
+            ua, ub = sample_2d(ps, rev_sample, DIM_LENS)
+            if HAS_POLYGON_APERTURE and cam.blades >= 3:
+                lx, ly = camera.lens_polygon(ua, ub, cam)
+            else:
+                lx, ly = camera.lens_disk(ua, ub, cam)
+            px, py, pz, dx, dy, dz, tmax = camera.thin_lens_ray(x, y, lx, ly, cam)
         else:
-            base, tint, fresnel = np.zeros((m, 3)), np.tile(self.colour[k], (m, 1)), "none"
-        comp = tables.compensation(mu, bsdf.layer_fms(tables, self.kind[k] == PRINCIPLED,
-                                                      self.colour[k]))
-        return dict(base=base, alpha=np.full(m, tables.alpha), eta=np.full(m, self.ior[k]),
-                    spec_tint=tint, fresnel=fresnel, comp=comp, albedo=tables.albedo(mu))
-
-    def eval_bsdf(self, wo, wi, ns, ng, mat):
-        """f * cos (n, 3) and sampling pdf (n,) of the non-delta BSDFs, for light sampling."""
-        f_cos, pdf = np.zeros((len(wo), 3)), np.zeros(len(wo))
-        kind = self.kind[mat]
-        sel = np.nonzero(kind == DIFFUSE)[0]
-        if len(sel):
-            f_cos[sel], pdf[sel] = bsdf.eval_diffuse(wi[sel], ns[sel], self.colour[mat[sel]])
-        for k in self.microfacet:
-            sel = np.nonzero(mat == k)[0]
-            if len(sel):
-                n_spec = bsdf.valid_specular_normals(ng[sel], wo[sel], ns[sel])
-                lobe = self._layer(k, wo[sel], n_spec)
-                f_cos[sel], pdf[sel], _ = bsdf.eval_layered(wo[sel], wi[sel], ns[sel], ng[sel],
-                                                            n_spec=n_spec,
-                                                            **lobe)
-        return f_cos, pdf
-
-    def sample_bsdf(self, hits: Hits, stream, live, depth):
-        """Sample each vertex's BSDF by material kind (only the kinds the plan lists)."""
-        t0 = time.perf_counter()
-        n = len(live)
-        wi = np.zeros((n, 3))
-        weight = np.zeros((n, 3))
-        pdf = np.full(n, bsdf.DELTA_PDF)
-        kind = self.kind[hits.mat]
-        colour = self.colour[hits.mat]
-        if self.plan.diffuse:
-            sel = np.nonzero(kind == DIFFUSE)[0]
-            if len(sel):
-                u = stream.get_2d(Dim.bounce(depth, Dim.BSDF), rows=live[sel])
-                wi[sel], weight[sel], pdf[sel] = bsdf.sample_diffuse(
-                    hits.wo[sel], hits.ns[sel], hits.ng[sel], colour[sel], u)
-        if self.plan.mirror:
-            sel = np.nonzero(kind == MIRROR)[0]
-            if len(sel):
-                wi[sel], weight[sel], pdf[sel] = bsdf.sample_mirror(
-                    hits.wo[sel], _specular_normal(hits, sel), colour[sel])
-        if self.plan.metal:
-            sel = np.nonzero(kind == METAL)[0]
-            if len(sel):
-                wi[sel], weight[sel], pdf[sel] = bsdf.sample_metal(
-                    hits.wo[sel], _specular_normal(hits, sel), colour[sel])
-        if self.microfacet:
-            rough = np.nonzero(np.isin(kind, (PRINCIPLED, GLOSSY)))[0]
-            if len(rough):
-                u_lobe = stream.get_1d(Dim.bounce(depth, Dim.LOBE), rows=live[rough])
-                u2 = stream.get_2d(Dim.bounce(depth, Dim.BSDF), rows=live[rough])
-                mat = hits.mat[rough]
-                for k in self.microfacet:
-                    part = np.nonzero(mat == k)[0]
-                    if len(part) == 0:
-                        continue
-                    sel = rough[part]
-                    n_spec = _specular_normal(hits, sel)
-                    lobe = self._layer(k, hits.wo[sel], n_spec)
-                    wi[sel], weight[sel], pdf[sel] = bsdf.sample_layered(
-                        hits.wo[sel], hits.ns[sel], hits.ng[sel], u_lobe=u_lobe[part],
-                        n_spec=n_spec,
-                        u=u2[part], **lobe)
-        if self.plan.glass:
-            sel = np.nonzero(kind == GLASS)[0]
-            if len(sel):
-                m = hits.mat[sel]
-                eta = np.where(hits.front[sel], self.ior[m], 1.0 / self.ior[m])
-                u = stream.get_1d(Dim.bounce(depth, Dim.LOBE), rows=live[sel])
-                wi[sel], weight[sel], pdf[sel], _ = bsdf.sample_dielectric(
-                    hits.wo[sel], _specular_normal(hits, sel), eta, self.reflection_tint[m],
-                    self.transmission_tint[m], u, self.settings.fresnel)
-        self._count("sample BSDF", time.perf_counter() - t0)
-        return wi, weight, pdf
-
-    def spawn_rays(self, hits: Hits, wi: np.ndarray):
-        return offset_ray_origin(hits.p, hits.ng, wi, hits.scale), wi
+            px, py, pz, dx, dy, dz, tmax = camera.pinhole_ray(x, y, cam)
+        for j in range(3):
+            paths.o64[i, j] = px * m[j, 0] + py * m[j, 1] + pz * m[j, 2] + cam.position[j]
+            paths.origin32[i, j] = paths.o64[i, j]
+            dj = dx * m[j, 0] + dy * m[j, 1] + dz * m[j, 2]
+            paths.dir32[i, j] = dj
+            paths.d64[i, j] = dj
+        paths.tmax32[i] = min(tmax, 3e38)
+        if DEBUG:
+            _debug_mark(paths, i, 1, paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2])
 
 
-def _specular_normal(hits: Hits, sel: np.ndarray) -> np.ndarray:
-    """The normal of specular lobes (delta and GGX): the shading normal tilted so the
-    mirror direction stays above the surface (bsdf.valid_specular_normal)."""
-    return bsdf.valid_specular_normals(hits.ng[sel], hits.wo[sel], hits.ns[sel])
+def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
+    """Light objects crossed before the surface (lights are transparent), then sun discs
+    for escaped rays, MIS-weighted after soft bounces. Camera rays see the lights visible
+    to the camera; other rays the lights with MIS on (Cycles)."""
+    em = sc.emitters
+    L = em.objects
+    t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
+    ox, oy, oz = paths.o64[i, 0], paths.o64[i, 1], paths.o64[i, 2]
+    dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
+    num_tri = len(em.v0)  # light entries 0..num_tri-1 are triangles, then the light objects
+    if HAS_LIGHT_HITS:
+        hit_seen = _HIT_CAMERA if depth == 0 else _HIT_BSDF
+        t_surface = np.float64(tfar) if f >= 0 else np.float64(paths.tmax32[i])
+        for j in range(L.shape[0]):
+            if L[j, hit_seen] == 0:
+                continue
+            th, l0, l1, l2 = lights.intersect_object(j, ox, oy, oz, dx, dy, dz, t_surface, L)
+            if math.isinf(th):
+                continue
+            w = 1.0
+            if mis:
+                pdf_l = emitter_pmf(ox, oy, oz, num_tri + j, em) * lights.object_pdf(
+                    j, ox, oy, oz, dx, dy, dz, th, L)
+                w = power_heuristic(paths.prev_pdf[i], pdf_l)
+            _add(paths, row, t0, t1, t2, l0, l1, l2, w)
+    if HAS_SUN_DISCS and f < 0:
+        sun_seen = _SUN_CAMERA if depth == 0 else _SUN_BSDF
+        for j in range(L.shape[0]):
+            cos_half = L[j, _COS_ANGLE]
+            if L[j, sun_seen] == 0 or not (dx * -L[j, _DIRECTION] + dy * -L[j, _DIRECTION + 1]
+                                           + dz * -L[j, _DIRECTION + 2] >= cos_half):
+                continue
+            w = 1.0
+            if mis:
+                pdf_l = emitter_pmf(ox, oy, oz, num_tri + j, em) / (
+                    2.0 * np.pi * (1.0 - cos_half))
+                w = power_heuristic(paths.prev_pdf[i], pdf_l)
+            sr = L[j, _SUN_RADIANCE]
+            _add(paths, row, t0, t1, t2, L[j, _POWER] * sr, L[j, _POWER + 1] * sr,
+                 L[j, _POWER + 2] * sr, w)
+    if DEBUG:
+        _debug_mark(paths, row, 2, paths.radiance[row, 0], paths.radiance[row, 1],
+                    paths.radiance[row, 2])
 
 
-def offset_ray_origin(p: np.ndarray, ng: np.ndarray, wi: np.ndarray, scale: np.ndarray):
-    """Move p off the surface toward the side of wi by a scale-aware epsilon."""
-    side = np.where(bsdf.dot(wi, ng) >= 0.0, 1.0, -1.0)
-    return p + (side * RAY_EPSILON * np.maximum(scale, 1e-30))[:, None] * ng
+def handle_escaped(i, row, sc, paths, mis):
+    """Escaped rays take the world: the environment map, MIS-weighted against its light
+    sampling, or a constant colour (found by BSDF sampling only, as in Cycles)."""
+    t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
+    if HAS_ENVIRONMENT and sc.emitters.env_entry >= 0:
+        env = sc.emitters.environment
+        dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
+        u_e, v_e = environment.to_uv(dx, dy, dz, env.texture_from_world)
+        l0, l1, l2 = environment.lookup(u_e, v_e, env.image)
+        w = 1.0
+        if mis:
+            pdf_l = emitter_pmf(paths.o64[i, 0], paths.o64[i, 1], paths.o64[i, 2],
+                                sc.emitters.env_entry, sc.emitters) * environment.pdf(u_e, v_e,
+                                                                                      env)
+            w = power_heuristic(paths.prev_pdf[i], pdf_l)
+        _add(paths, row, t0, t1, t2, l0, l1, l2, w)
+    elif HAS_WORLD_COLOUR:
+        _add(paths, row, t0, t1, t2, sc.world[0], sc.world[1], sc.world[2], 1.0)
+    if DEBUG:
+        _debug_mark(paths, row, 3, paths.radiance[row, 0], paths.radiance[row, 1],
+                    paths.radiance[row, 2])
 
 
-def power_heuristic(pdf_a: np.ndarray, pdf_b: np.ndarray) -> np.ndarray:
-    """MIS weight of strategy a against b (beta = 2), safe for zero and infinite pdfs
-    (an infinite pdf is a delta strategy: it takes the whole weight)."""
-    a = np.asarray(pdf_a, np.float64)
-    b = np.asarray(pdf_b, np.float64)
-    m = np.maximum(np.maximum(a, b), 1e-300)
-    m = np.where(np.isinf(m), 1.0, m)
-    with np.errstate(invalid="ignore"):
-        a2, b2 = (a / m) ** 2, (b / m) ** 2
-        w = np.where(a2 + b2 > 0, a2 / np.maximum(a2 + b2, 1e-300), 0.0)
-    return np.where(np.isinf(a), 1.0, np.where(np.isinf(b), 0.0, w))
+def surface_interaction(i, f, tfar, bu, bv, sc, paths):
+    """The hit point from the barycentrics in float64 (embree works in float32), the
+    geometric normal and the shading normal flipped to the incoming side (the shading
+    normal falls back to the geometric one where it degenerates), the specular lobes'
+    normal (bsdf.valid_specular_normal) and the ray-offset scale."""
+    g = sc.geometry
+    vt = g.vertices
+    dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
+    u = np.float64(bu)
+    v = np.float64(bv)
+    w0 = 1.0 - u - v
+    px = w0 * vt[f, 0, 0] + u * vt[f, 1, 0] + v * vt[f, 2, 0]
+    py = w0 * vt[f, 0, 1] + u * vt[f, 1, 1] + v * vt[f, 2, 1]
+    pz = w0 * vt[f, 0, 2] + u * vt[f, 1, 2] + v * vt[f, 2, 2]
+    nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
+    front = dx * nx + dy * ny + dz * nz < 0.0
+    sign = 1.0 if front else -1.0
+    nx, ny, nz = nx * sign, ny * sign, nz * sign
+    sx, sy, sz = nx, ny, nz
+    if HAS_SHADING_NORMALS:
+        if g.smooth[f]:
+            nm = g.normals
+            ax = (w0 * nm[f, 0, 0] + u * nm[f, 1, 0] + v * nm[f, 2, 0]) * sign
+            ay = (w0 * nm[f, 0, 1] + u * nm[f, 1, 1] + v * nm[f, 2, 1]) * sign
+            az = (w0 * nm[f, 0, 2] + u * nm[f, 1, 2] + v * nm[f, 2, 2]) * sign
+            length = math.sqrt(ax * ax + ay * ay + az * az)
+            if length > 1e-12:
+                sx, sy, sz = ax / length, ay / length, az / length
+    mat = sc.geometry.material_index[f]
+    mx, my, mz = sx, sy, sz
+    if sc.materials.kind[mat] != DIFFUSE:
+        mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
+    scale = max(g.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+    return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
+                  v, mat, np.float64(tfar), scale)
 
 
-def max3(a: np.ndarray) -> np.ndarray:
-    """Per-row maximum of an (n, 3) array (faster than a reduction over a short axis)."""
-    return np.maximum(np.maximum(a[:, 0], a[:, 1]), a[:, 2])
+def handle_emission(i, row, x, sc, paths, mis):
+    """Emission of the hit triangle (two-sided), MIS-weighted against light sampling after
+    soft bounces."""
+    e = sc.materials.emission
+    le0, le1, le2 = e[x.mat, 0], e[x.mat, 1], e[x.mat, 2]
+    if not max(le0, max(le1, le2)) > 0:
+        return
+    w = 1.0
+    if mis:
+        em = sc.emitters
+        cos_l = abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)
+        entry = em.entry_of_triangle[x.f]
+        pm = 0.0
+        if entry >= 0:
+            pm = emitter_pmf(x.px + x.wox * x.t, x.py + x.woy * x.t, x.pz + x.woz * x.t, entry,
+                             em)
+        pdf_l = pm / em.area_by_triangle[x.f] * x.t * x.t / max(cos_l, 1e-300)
+        w = power_heuristic(paths.prev_pdf[i], pdf_l)
+    _add(paths, row, paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2],
+         le0, le1, le2, w)
+    if DEBUG:
+        _debug_mark(paths, row, 5, paths.radiance[row, 0], paths.radiance[row, 1],
+                    paths.radiance[row, 2])
 
 
-def _take(hits: Hits, sel) -> Hits:
-    return Hits(*(getattr(hits, f)[sel] for f in Hits.__dataclass_fields__))
+def russian_roulette(depth, t0, t1, t2, pseed, rev_sample):
+    """Cycles' rule: none for the first vertices, then survival with probability
+    q = min(sqrt(max channel), 1) and the survivor divided by q (so at most sqrt(t): a small
+    q never blows a path up). Returns (survives, throughput)."""
+    if depth < ROULETTE_MIN_BOUNCE:
+        return True, t0, t1, t2
+    q = min(math.sqrt(max(t0, max(t1, t2))), 1.0)
+    if not sample_1d(pseed, rev_sample, bounce_dim(depth, ROULETTE)) < q:
+        return False, t0, t1, t2
+    return True, t0 / q, t1 / q, t2 / q
+
+
+def emitter_pmf(px, py, pz, entry, em):
+    """lights.entry_pmf on the Emitters: the global distribution alone without a grid."""
+    if HAS_LIGHT_GRID:
+        return lights.entry_pmf(px, py, pz, entry, em.pmf, em.grid, em.lo, em.cell,
+                                em.local_pmf, em.has_mass)
+    return em.pmf[entry]
+
+
+def sample_emitter(x, u_sel, ua, ub, em):
+    """An emitter chosen from the vertex (by power, or by the grid's local distribution)
+    and a point or direction on it: (wi, distance (inf: none), radiance / (selection x
+    pdf), combined pdf, length scale at the light for the shadow ray's offset)."""
+    if len(em.pmf) == 0:  # the generic kernel on a scene without emitters
+        return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if HAS_LIGHT_GRID:
+        e, p_sel = lights.choose(x.px, x.py, x.pz, u_sel, em.pmf, em.cdf, em.grid, em.lo,
+                                 em.cell, em.local_pmf, em.local_cdf_flat, em.has_mass)
+    else:
+        e = lights.sample_cdf(em.cdf, u_sel)
+        p_sel = em.pmf[e]
+    num_tri = len(em.v0)
+    light_scale = 0.0
+    if HAS_EMISSION and e < num_tri:
+        wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_triangle(e, x.px, x.py, x.pz, ua, ub,
+                                                                   em)
+        light_scale = em.scale[e]
+    elif HAS_ENVIRONMENT and e == em.env_entry and e >= 0:
+        wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_environment(ua, ub, em.environment)
+    elif HAS_LIGHT_OBJECTS:
+        wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_object(e - num_tri, x.px, x.py, x.pz,
+                                                                 ua, ub, em.objects)
+        if not math.isinf(dist):
+            light_scale = max(abs(x.px + wx * dist), max(abs(x.py + wy * dist),
+                                                         abs(x.pz + wz * dist)))
+    else:
+        return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ps = p_sel if p_sel > 0 else 1.0
+    return wx, wy, wz, dist, q0 / ps, q1 / ps, q2 / ps, pdf * p_sel, light_scale
+
+
+def shadow_origin(x, wx, wy, wz, sc):
+    """Where the shadow ray toward w starts: lifted toward the smooth surface near the
+    terminator (terminator.py), then offset to w's side of the surface."""
+    ox, oy, oz = x.px, x.py, x.pz
+    if HAS_TERMINATOR:
+        g = sc.geometry
+        if g.smooth[x.f]:
+            cutoff = g.terminator_offset[g.object_index[x.f]]
+            if cutoff > 0.0:
+                amount, gx, gy, gz = terminator.offset_amount(cutoff, x.sx, x.sy, x.sz, x.nx,
+                                                              x.ny, x.nz, wx, wy, wz)
+                if amount > 0.0:
+                    lx, ly, lz = terminator.smooth_surface_offset(
+                        g.vertices[x.f], g.normals[x.f], 1.0 - x.u - x.v, x.u, x.v, gx, gy, gz)
+                    ox, oy, oz = ox + lx * amount, oy + ly * amount, oz + lz * amount
+    eps = RAY_EPSILON * max(x.scale, 1e-30)
+    if wx * x.nx + wy * x.ny + wz * x.nz < 0.0:
+        eps = -eps
+    return ox + eps * x.nx, oy + eps * x.ny, oz + eps * x.nz
+
+
+def sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow, rev_sample):
+    """Next-event estimation at a diffuse or rough vertex: an emitter, the BSDF toward it,
+    MIS against BSDF sampling (delta lights take it all); the shadow ray, from the offset
+    origin to just short of the sampled point, is queued. Returns the shadow rays queued."""
+    ps = paths.pseed[row]
+    u_sel = sample_1d(ps, rev_sample, bounce_dim(depth, LIGHT_SELECT))
+    ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, LIGHT_POINT))
+    wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub,
+                                                                      sc.emitters)
+    g0 = g1 = g2 = pdf_b = 0.0
+    k = sc.materials.kind[x.mat]
+    if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
+        g0, g1, g2, pdf_b = bsdf.eval_layered(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz,
+                                              x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False)
+    elif HAS_DIFFUSE:
+        pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
+        c = sc.materials.colour
+        g0, g1, g2 = c[x.mat, 0] * pdf_b, c[x.mat, 1] * pdf_b, c[x.mat, 2] * pdf_b
+    if not (max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0):
+        return n_shadow
+    w = 1.0 if math.isinf(pdf_l) else power_heuristic(pdf_l, pdf_b)
+    t = paths.throughput
+    c0, c1, c2 = t[i, 0] * g0 * q0 * w, t[i, 1] * g1 * q1 * w, t[i, 2] * g2 * q2 * w
+    if DEBUG:
+        _debug_mark(paths, row, 6, c0, c1, c2)
+    if not max(c0, max(c1, c2)) > 0:
+        return n_shadow
+    ox, oy, oz = shadow_origin(x, wx, wy, wz, sc)
+    s = n_shadow
+    shadow.row[s] = row
+    shadow.origin[s, 0], shadow.origin[s, 1], shadow.origin[s, 2] = ox, oy, oz
+    if math.isinf(dist):
+        shadow.direction[s, 0], shadow.direction[s, 1], shadow.direction[s, 2] = wx, wy, wz
+        shadow.tmax[s] = 3e38
+    else:
+        # Aim at the sampled point itself: reusing w from the un-offset point would reach a
+        # grazing emitter's plane early and self-occlude.
+        gx, gy, gz = x.px + wx * dist - ox, x.py + wy * dist - oy, x.pz + wz * dist - oz
+        seg = math.sqrt(gx * gx + gy * gy + gz * gz)
+        sl = max(seg, 1e-300)
+        shadow.direction[s, 0], shadow.direction[s, 1], shadow.direction[s, 2] = (
+            gx / sl, gy / sl, gz / sl)
+        shadow.tmax[s] = seg - RAY_EPSILON * max(light_scale, 1e-30)
+    shadow.contrib[s, 0], shadow.contrib[s, 1], shadow.contrib[s, 2] = c0, c1, c2
+    return s + 1
+
+
+def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
+    """A direction from the vertex's BSDF (only the kinds the plan has): (w, weight, pdf,
+    ok); the pdf is DELTA_PDF for delta lobes."""
+    ps = paths.pseed[row]
+    mt = sc.materials
+    k = mt.kind[x.mat]
+    if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
+        u_lobe = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        return bsdf.sample_layered(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.mx, x.my, x.mz,
+                                   x.nx, x.ny, x.nz, lobe, u_lobe, ua, ub)
+    if HAS_DIFFUSE and k == DIFFUSE:
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
+        return wx, wy, wz, mt.colour[x.mat, 0], mt.colour[x.mat, 1], mt.colour[x.mat, 2], pdf, ok
+    if HAS_GLASS and k == GLASS:
+        eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
+        u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
+        wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
+            x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
+            mt.transmission_tint[x.mat], u, EXACT_FRESNEL)
+        return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
+    wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
+    c = mt.colour
+    if HAS_METAL and k == METAL:
+        return (wx, wy, wz, bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 0]),
+                bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 1]),
+                bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 2]), DELTA_PDF, True)
+    if HAS_MIRROR and k == MIRROR:
+        return wx, wy, wz, c[x.mat, 0], c[x.mat, 1], c[x.mat, 2], DELTA_PDF, True
+    return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
+
+
+def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
+    """Continue the path as row `out` of the compacted batch: leave the surface toward the
+    side of the new direction, into embree's buffers."""
+    side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
+    eps = side * RAY_EPSILON * max(x.scale, 1e-30)
+    paths.o64[out, 0] = x.px + eps * x.nx
+    paths.o64[out, 1] = x.py + eps * x.ny
+    paths.o64[out, 2] = x.pz + eps * x.nz
+    for j in range(3):
+        paths.origin32[out, j] = paths.o64[out, j]
+    paths.dir32[out, 0], paths.dir32[out, 1], paths.dir32[out, 2] = wx, wy, wz
+    paths.tmax32[out] = np.inf
+    paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
+    paths.throughput[out, 0], paths.throughput[out, 1], paths.throughput[out, 2] = t0, t1, t2
+    paths.prev_pdf[out] = pdf
+    paths.live[out] = row
+
+
+def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shadow, profile):
+    """One bounce for the m live paths (batch rows paths.live[:m]) after embree's closest
+    hits (prim, tfar, bu, bv): the stages above, per path. The paths that go on are
+    compacted to the front of the batch; shadow rays are queued in `shadow`. profile (3,)
+    uint64 (PROFILE kernels) receives cycle counts: the loop, sample light, sample BSDF.
+    Returns (paths that go on, shadow rays queued)."""
+    if PROFILE:
+        c_loop = _cycles()
+    out = 0
+    n_shadow = 0
+    for i in range(m):
+        row = paths.live[i]
+        f = prim[i]
+        mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
+        if HAS_LIGHT_HITS or HAS_SUN_DISCS:
+            handle_light_hits(i, row, depth, f, tfar[i], sc, paths, mis)
+        if f < 0:
+            handle_escaped(i, row, sc, paths, mis)
+            continue
+        x = surface_interaction(i, f, tfar[i], bu[i], bv[i], sc, paths)
+        if depth == 0:
+            paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
+            paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
+            if DEBUG:
+                _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
+        if HAS_EMISSION:
+            handle_emission(i, row, x, sc, paths, mis)
+        # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
+        k = sc.materials.kind[x.mat]
+        if depth > max_bounces or k == NONE:
+            continue
+        alive, t0, t1, t2 = russian_roulette(depth, paths.throughput[i, 0],
+                                             paths.throughput[i, 1], paths.throughput[i, 2],
+                                             paths.pseed[row], rev_sample)
+        if not alive:
+            continue
+        paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = t0, t1, t2
+        lobe = bsdf.Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0)
+        if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
+            mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
+            lobe = bsdf.layer_at(x.mat, mu, sc.materials.ior[x.mat], sc.materials.layers)
+        if PROFILE:
+            c_light = _cycles()
+        if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY):
+            n_shadow = sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow,
+                                    rev_sample)
+        if PROFILE:
+            c_bsdf = _cycles()
+            profile[1] += c_bsdf - c_light
+        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, lobe, sc, paths,
+                                                      rev_sample)
+        t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
+        if DEBUG:
+            _debug_mark(paths, row, 7, t0 + wx, t1 + wy, t2 + wz)
+        if ok and max(t0, max(t1, t2)) > 0:
+            spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths)
+            out += 1
+        if PROFILE:
+            profile[2] += _cycles() - c_bsdf
+    if PROFILE:
+        profile[0] += _cycles() - c_loop
+    return out, n_shadow
+
+
+def accumulate_unoccluded(radiance, shadow, occluded_prim, count):
+    """Add the contributions of shadow rays that reached their light (embree's occlusion
+    query leaves prim -1 on unblocked rays)."""
+    for j in range(count):
+        if occluded_prim[j] < 0:
+            row = shadow.row[j]
+            radiance[row, 0] += shadow.contrib[j, 0]
+            radiance[row, 1] += shadow.contrib[j, 1]
+            radiance[row, 2] += shadow.contrib[j, 2]
+
+
+def all_finite(radiance, depth, normal):
+    """Whether every sample of a chunk is finite in all the passes it feeds."""
+    for i in range(len(depth)):
+        if not (np.isfinite(radiance[i, 0]) and np.isfinite(radiance[i, 1])
+                and np.isfinite(radiance[i, 2]) and np.isfinite(depth[i])
+                and np.isfinite(normal[i, 0]) and np.isfinite(normal[i, 1])
+                and np.isfinite(normal[i, 2])):
+            return False
+    return True
+
+
+# name -> (function, numba options): what a kernel compiles. Stages taking the scene's
+# structures are inlined into `shade` by numba; the entry points are compiled on their own.
+STAGES = {f.__name__: (f, INLINE) for f in (
+    _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction, handle_emission,
+    russian_roulette, emitter_pmf, sample_emitter, shadow_origin, sample_light, sample_bsdf,
+    spawn)}
+STAGES.update({f.__name__: (f, JIT) for f in (
+    generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

@@ -1,9 +1,10 @@
-"""numba when it is installed, else a do-nothing decorator.
+"""numba when it is installed, else the same functions as plain Python.
 
-numba is optional: platforms without its wheel (macOS x86-64 in Blender, Blender 3.4's
-legacy install) render with the numpy stages. `kernel.AVAILABLE` is the switch the core
-reads at run time (tests turn it off to check the numpy path); `NUMBA` only says whether
-the import worked.
+Every formula of the core is a small function decorated with `njit(**JIT)`; numba compiles
+and inlines them into the per-bounce kernel (integrator.py). Without numba (a platform
+without its wheel) the decorator leaves the function as it is, and the same kernel runs as
+Python: the same image, about two orders of magnitude slower (README, "Platforms").
+`NUMBA` says which of the two this process has.
 """
 
 from __future__ import annotations
@@ -23,6 +24,16 @@ except ImportError:  # pragma: no cover - exercised on platforms without numba
             return args[0]
         return lambda f: f
 
-    intrinsic = njit
+    def intrinsic(f):
+        return None
 
-__all__ = ["NUMBA", "cgutils", "intrinsic", "ir", "njit", "types"]
+# Options of every compiled formula: cached on disk, no GIL (the render's threads run the
+# kernels side by side), numpy's floating-point semantics (division by zero gives inf or
+# NaN, as the formulas expect, rather than raising).
+JIT = dict(cache=True, nogil=True, error_model="numpy")
+# Stage functions and formulas that take the scene's arrays: inlined into the caller by
+# numba itself, so no reference counting is paid per call (a helper taking a tuple of
+# arrays cost ~100 ns a call, measured, more than the rest of a light sample).
+INLINE = dict(JIT, inline="always")
+
+__all__ = ["INLINE", "JIT", "NUMBA", "cgutils", "intrinsic", "ir", "njit", "types"]

@@ -15,6 +15,10 @@ Cycles (see cycles_conventions.md, section 7), with P the light's colour x power
 - area: radiance P / (pi A) from the front side (local -Z) only, A including object
   scale (pi/4 x the box for disk and ellipse), times the spread attenuation.
 
+`LightObjects` and `LightSampler` build the emitters' data once (`LightSampler.data()`, the
+kernel's `Emitters`); the functions below sample, evaluate and intersect one light for one
+point and are compiled into the kernel.
+
 Light objects do not block rays. Camera and BSDF rays that pass through an area light, a
 point or spot light of radius > 0 or a sun disc pick up its radiance and continue, as
 Cycles treats lights as transparent surfaces.
@@ -22,10 +26,16 @@ Cycles treats lights as transparent surfaces.
 
 from __future__ import annotations
 
+import math
+from collections import namedtuple
+
 import numpy as np
 
-from . import sampling
+from . import environment
 from .environment import EnvironmentMap
+from .jit import INLINE, JIT, njit
+from .sampling import (Distribution1D, build_frame, concentric_disk, cross_rows, sample_cdf,
+                       uniform_cone, uniform_cone_pdf, uniform_triangle)
 from .scene import Scene
 
 POINT, SPOT, SUN, AREA = 0, 1, 2, 3
@@ -33,29 +43,23 @@ LIGHT_TYPES = {"POINT": POINT, "SPOT": SPOT, "SUN": SUN, "AREA": AREA}
 ELLIPTIC_SHAPES = ("DISK", "ELLIPSE")
 
 
-def _dot(a, b):
-    return np.einsum("ij,ij->i", a, b)
+LOCAL_WEIGHT = 0.75  # the chance of the local distribution where a voxel has one
 
+# The emitters as the kernel reads them (LightSampler.data()):
+#   pmf, cdf (k,): the global choice by power; grid (voxels per axis, 0: none), grid_lo (3,),
+#   cell (3,), local_pmf (g^3, k), local_cdf_flat (g^3 k,), has_mass (g^3,): the local one;
+#   entry_of_triangle, area_by_triangle (t,); per emissive triangle v0, e1, e2, normal (k, 3),
+#   area (k,), radiance (k, 3), scale (k,); objects (j, COLUMNS); environment (None or
+#   environment.Environment) and its entry (-1: none).
+Emitters = namedtuple("Emitters", "pmf cdf grid lo cell local_pmf local_cdf_flat has_mass "
+                                  "entry_of_triangle area_by_triangle v0 e1 e2 normal area "
+                                  "radiance scale objects environment env_entry")
 
-def _normalize(v):
-    n = np.linalg.norm(v, axis=1, keepdims=True)
-    return v / np.where(n > 0, n, 1.0)
-
-
-def smoothstep(f):
-    f = np.clip(f, 0.0, 1.0)
-    return f * f * (3.0 - 2.0 * f)
-
-
-def spread_attenuation(cos_theta, half_spread):
-    """Cycles' soft-box grid attenuation of an area light, normalised to keep power."""
-    if half_spread >= 0.5 * np.pi - 1e-6:
-        return np.ones_like(cos_theta)
-    t = np.tan(half_spread)
-    norm = 3.0 / half_spread**3 if half_spread <= 0.05 else 1.0 / (t - half_spread)
-    c = np.clip(cos_theta, 1e-12, 1.0)
-    tan_a = np.sqrt(np.maximum(1.0 - c * c, 0.0)) / c
-    return np.maximum((t - tan_a) * norm, 0.0)
+(_TYPE, _POWER, _CENTRE, _AXIS_U, _AXIS_V, _DIRECTION, _LOCAL, _RADIUS, _SOFT, _COS_SPOT,
+ _SPOT_SMOOTH, _COS_ANGLE, _SUN_RADIANCE, _LEN_U, _LEN_V, _ELLIPTIC, _AREA_SIZE, _SPREAD_ON,
+ _SPREAD_TAN, _SPREAD_NORM, _FACTOR, _HIT_CAMERA, _HIT_BSDF, _SUN_CAMERA, _SUN_BSDF,
+ COLUMNS) = (0, 1, 4, 7, 10, 13, 16, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38,
+              39, 40, 41, 42, 43)
 
 
 class LightObjects:
@@ -129,225 +133,235 @@ class LightObjects:
         return ((self.type == AREA) & (self.area > 0)) | (
             ((self.type == POINT) | (self.type == SPOT)) & (self.radius > 0))
 
-    # ------------------------------------------------------------------ helpers
-    def spot_attenuation(self, j, w_from_light):
-        """Smoothstep of the spot cone for lights j (n,) at directions from the light."""
-        local = np.einsum("nij,nj->ni", self.local_from_world[j], w_from_light)
-        local = _normalize(local)
-        f = (-local[:, 2] - self.cos_half_spot[j]) * self.spot_smooth[j]
-        att = smoothstep(np.nan_to_num(f, nan=0.0, posinf=1.0, neginf=0.0))
-        return np.where(self.type[j] == SPOT, att, 1.0)
+    def table(self) -> np.ndarray:
+        """The lights as the kernel's (k, COLUMNS) array (columns above)."""
+        o = self
+        if o.count == 0:
+            return np.zeros((0, COLUMNS))
+        h = o.half_spread
+        spread_on = h < 0.5 * np.pi - 1e-6
+        # spread_attenuation's constants, computed as it does (numpy scalars).
+        tan_half = np.array([np.tan(x) for x in h])
+        norm = np.array([3.0 / x**3 if x <= 0.05 else 1.0 / (np.tan(x) - x) if on else 0.0
+                         for x, on in zip(h, spread_on)])
+        lit = o.power.max(axis=1) > 0
+        hit = o.intersectable & lit
+        sun = (o.type == SUN) & (o.cos_half_angle < 1.0) & lit
+        columns = [(_TYPE, o.type), (_POWER, o.power), (_CENTRE, o.centre), (_AXIS_U, o.axis_u),
+                   (_AXIS_V, o.axis_v), (_DIRECTION, o.direction),
+                   (_LOCAL, o.local_from_world.reshape(-1, 9)), (_RADIUS, o.radius),
+                   (_SOFT, o.soft), (_COS_SPOT, o.cos_half_spot), (_SPOT_SMOOTH, o.spot_smooth),
+                   (_COS_ANGLE, o.cos_half_angle), (_SUN_RADIANCE, o.sun_radiance),
+                   (_LEN_U, o.len_u), (_LEN_V, o.len_v), (_ELLIPTIC, o.elliptic),
+                   (_AREA_SIZE, o.area), (_SPREAD_ON, spread_on), (_SPREAD_TAN, tan_half),
+                   (_SPREAD_NORM, norm), (_FACTOR, o.radiance_factor),
+                   (_HIT_CAMERA, hit & o.visible_camera), (_HIT_BSDF, hit & o.use_mis),
+                   (_SUN_CAMERA, sun & o.visible_camera), (_SUN_BSDF, sun & o.use_mis)]
+        data = np.zeros((o.count, COLUMNS))
+        for col, values in columns:
+            values = np.asarray(values, np.float64).reshape(o.count, -1)
+            data[:, col:col + values.shape[1]] = values
+        return data
 
-    def _frame(self, normal):
-        s, t = sampling.build_frame(normal)
-        return s, t
 
-    # ------------------------------------------------------------------ sampling
-    def sample(self, j, p, u):
-        """Sample lights j (n,) from points p (n, 3) with u (n, 2).
+@njit(**JIT)
+def spread_attenuation(cos_theta, on, tan_half, norm):
+    """Cycles' soft-box grid attenuation of an area light at one cosine, normalised to keep
+    power; `on`, tan(half spread) and the normalisation are the light's constants."""
+    if not on:
+        return 1.0
+    c = min(max(cos_theta, 1e-12), 1.0)
+    tan_a = math.sqrt(max(1.0 - c * c, 0.0)) / c
+    return max((tan_half - tan_a) * norm, 0.0)
 
-        Returns wi (n, 3) toward the light, dist (n,) to the sampled point (inf for
-        suns), value (n, 3) = emitted radiance / solid-angle pdf (intensity / d^2 for delta
-        lights), pdf (n,) solid-angle density (inf for delta lights).
-        """
-        n = len(j)
-        wi = np.zeros((n, 3))
-        dist = np.full(n, np.inf)
-        value = np.zeros((n, 3))
-        pdf = np.full(n, np.inf)
-        typ = self.type[j]
-        power = self.power[j]
 
-        # Point and spot lights.
-        ps = np.nonzero((typ == POINT) | (typ == SPOT))[0]
-        if len(ps):
-            self._sample_point(j[ps], p[ps], u[ps], power[ps], ps, wi, dist, value, pdf)
-        # Suns.
-        su = np.nonzero(typ == SUN)[0]
-        if len(su):
-            js = j[su]
-            axis = -self.direction[js]
-            cos_max = self.cos_half_angle[js]
-            disc = cos_max < 1.0
-            s, t = self._frame(axis)
-            cos = 1.0 - u[su, 0] * (1.0 - cos_max)
-            sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-            phi = 2.0 * np.pi * u[su, 1]
-            d_cone = (sin * np.cos(phi))[:, None] * s + (sin * np.sin(phi))[:, None] * t \
-                + cos[:, None] * axis
-            wi[su] = np.where(disc[:, None], d_cone, axis)
-            pdf_cone = 1.0 / (2.0 * np.pi * np.maximum(1.0 - cos_max, 1e-300))
-            pdf[su] = np.where(disc, pdf_cone, np.inf)
-            value[su] = np.where(disc[:, None],
-                                 power[su] * (self.sun_radiance[js] / pdf_cone)[:, None],
-                                 power[su])
-        # Area lights.
-        ar = np.nonzero(typ == AREA)[0]
-        if len(ar):
-            ja = j[ar]
-            uu = u[ar]
-            ell = self.elliptic[ja]
-            disk = sampling.sample_uniform_disk_concentric(uu) * 0.5
-            rect = uu - 0.5
-            local = np.where(ell[:, None], disk, rect)
-            y = (self.centre[ja] + (local[:, 0] * self.len_u[ja])[:, None] * self.axis_u[ja]
-                 + (local[:, 1] * self.len_v[ja])[:, None] * self.axis_v[ja])
-            to = y - p[ar]
-            d = np.linalg.norm(to, axis=1)
-            w = to / np.where(d > 0, d, 1.0)[:, None]
-            cos_l = -_dot(w, self.direction[ja])  # front side: light faces the point
-            ok = (cos_l > 0) & (d > 0) & (self.area[ja] > 0)
-            pdf_sa = np.where(ok, d * d / np.maximum(self.area[ja] * cos_l, 1e-300), np.inf)
-            att = np.ones(len(ar))
-            spread = self.half_spread[ja] < 0.5 * np.pi - 1e-6
-            if spread.any():
-                for h in np.unique(self.half_spread[ja][spread]):
-                    sel = spread & (self.half_spread[ja] == h)
-                    att[sel] = spread_attenuation(cos_l[sel], h)
-            le = power[ar] * (self.radiance_factor[ja] * att)[:, None]
-            wi[ar], dist[ar] = w, d
-            value[ar] = np.where(ok[:, None], le / np.where(ok, pdf_sa, 1.0)[:, None], 0.0)
-            pdf[ar] = np.where(ok, pdf_sa, 0.0)
-        return wi, dist, value, pdf
+@njit(**INLINE)
+def spot_attenuation(j, vx, vy, vz, L):
+    """The smoothstep of spot light j's cone at direction v from the light, measured in its
+    (scaled) local frame; 1 for other lights."""
+    if L[j, _TYPE] != SPOT:
+        return 1.0
+    a = L[j, _LOCAL] * vx + L[j, _LOCAL + 1] * vy + L[j, _LOCAL + 2] * vz
+    b = L[j, _LOCAL + 3] * vx + L[j, _LOCAL + 4] * vy + L[j, _LOCAL + 5] * vz
+    c = L[j, _LOCAL + 6] * vx + L[j, _LOCAL + 7] * vy + L[j, _LOCAL + 8] * vz
+    n = math.sqrt(a * a + b * b + c * c)
+    if n > 0:
+        c = c / n
+    f = (-c - L[j, _COS_SPOT]) * L[j, _SPOT_SMOOTH]
+    if math.isnan(f):
+        f = 0.0
+    elif math.isinf(f):
+        f = 1.0 if f > 0 else 0.0
+    f = min(max(f, 0.0), 1.0)
+    return f * f * (3.0 - 2.0 * f)
 
-    def _sample_point(self, j, p, u, power, rows, wi, dist, value, pdf):
-        to_c = self.centre[j] - p
-        d = np.linalg.norm(to_c, axis=1)
-        w_c = to_c / np.where(d > 0, d, 1.0)[:, None]
-        r = self.radius[j]
-        out = np.zeros((len(j), 3))
-        w_out, d_out = w_c.copy(), d.copy()
-        pdf_out = np.full(len(j), np.inf)
 
-        # r = 0: intensity P / (4 pi), a delta light.
-        delta = r <= 0
-        # r > 0, soft falloff off: a sphere, sampled uniformly in its visible cone; from
-        # inside it (Cycles lights such points too) in every direction, the cone of
-        # cosine -1, each ray reaching its far side.
-        sphere = (r > 0) & ~self.soft[j]
-        inside = d <= r
-        # r > 0, soft falloff on: a disk of radius r facing the shading point.
-        disk = (r > 0) & self.soft[j] & (d > 0)
-        le = power * self.radiance_factor[j][:, None]
-        if delta.any():
-            out[delta] = power[delta] / (4.0 * np.pi * np.maximum(d[delta], 1e-300) ** 2)[:, None]
-        if sphere.any():
-            s_ = np.nonzero(sphere)[0]
-            cos_max = np.where(inside[s_], -1.0, np.sqrt(np.maximum(
-                0.0, 1.0 - (r[s_] / np.where(inside[s_], 1.0, d[s_])) ** 2)))
-            axis = np.where((d[s_] > 0)[:, None], w_c[s_], np.array([0.0, 0.0, 1.0]))
-            s, t = self._frame(axis)
-            cos = 1.0 - u[s_, 0] * (1.0 - cos_max)
-            sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-            phi = 2.0 * np.pi * u[s_, 1]
-            w = (sin * np.cos(phi))[:, None] * s + (sin * np.sin(phi))[:, None] * t \
-                + cos[:, None] * axis
-            # Distance to the sphere along w (law of cosines: near root, far from inside).
-            t_hit = d[s_] * cos - np.where(inside[s_], -1.0, 1.0) * np.sqrt(
-                np.maximum(r[s_] ** 2 - d[s_] ** 2 * (1 - cos * cos), 0.0))
-            pdf_sa = 1.0 / (2.0 * np.pi * np.maximum(1.0 - cos_max, 1e-300))
-            w_out[s_], d_out[s_], pdf_out[s_] = w, t_hit, pdf_sa
-            out[s_] = le[s_] / pdf_sa[:, None]
-        if disk.any():
-            k = np.nonzero(disk)[0]
-            n_d = -w_c[k]  # disk normal, toward the shading point
-            s, t = self._frame(n_d)
-            q = sampling.sample_uniform_disk_concentric(u[k]) * r[k][:, None]
-            y = self.centre[j[k]] + q[:, :1] * s + q[:, 1:] * t
-            to = y - p[k]
-            dd = np.linalg.norm(to, axis=1)
-            w = to / dd[:, None]
-            cos_l = -_dot(w, n_d)
-            pdf_sa = dd * dd / (np.pi * r[k] ** 2 * np.maximum(cos_l, 1e-300))
-            w_out[k], d_out[k], pdf_out[k] = w, dd, pdf_sa
-            out[k] = le[k] / pdf_sa[:, None]
-        # Spot cone along each sampled ray, from the sampled point on the light toward the
-        # shading point (Cycles' spot_light_sample), as light hits evaluate it along the ray
-        # that hit: toward the centre instead, a light of radius > 0 had a sharper cone edge
-        # than Cycles and than its own hits.
-        att = self.spot_attenuation(j, -w_out)
-        # Inside a spot's sphere there is no cone (Cycles' spot_light_sample).
-        att = np.where(sphere & inside, 1.0, att)
-        valid = delta | sphere | disk
-        wi[rows] = w_out
-        dist[rows] = d_out
-        value[rows] = np.where(valid[:, None], out * att[:, None], 0.0)
-        pdf[rows] = np.where(valid, pdf_out, 0.0)
-
-    # ------------------------------------------------------------------ ray hits
-    def pdf(self, j, origin, direction, t):
-        """Solid-angle density with which `sample` picks direction from origin, for
-        intersectable lights j hit at distance t."""
-        typ = self.type[j]
-        to_c = self.centre[j] - origin
-        d = np.linalg.norm(to_c, axis=1)
-        r = self.radius[j]
-        out = np.zeros(len(j))
-        sphere = ((typ == POINT) | (typ == SPOT)) & (r > 0) & ~self.soft[j]
-        cos_max = np.where(d > r, np.sqrt(np.maximum(
-            0.0, 1.0 - (r / np.where(d > r, d, 1.0)) ** 2)), -1.0)
-        out = np.where(sphere, 1.0 / (2.0 * np.pi * np.maximum(1.0 - cos_max, 1e-300)), out)
-        disk = ((typ == POINT) | (typ == SPOT)) & (r > 0) & self.soft[j]
-        cos_d = _dot(to_c / np.where(d > 0, d, 1)[:, None], direction)
-        out = np.where(disk, t * t / (np.pi * np.maximum(r * r * cos_d, 1e-300)), out)
-        area = typ == AREA
-        cos_a = -_dot(direction, self.direction[j])
-        out = np.where(area, t * t / np.maximum(self.area[j] * cos_a, 1e-300), out)
-        return out
-
-    def intersect(self, j: int, o, d, tmax):
-        """Distances (n,) at which rays (o, d) hit light j before tmax (inf if not), and
-        the radiance they pick up there (n, 3)."""
-        n = len(o)
-        t = np.full(n, np.inf)
-        c = self.centre[j]
-        typ = self.type[j]
-        power = self.power[j]
-        if typ == AREA:
-            nrm = self.direction[j]
-            denom = sampling.dot3(d, nrm)
-            front = denom < 0  # travelling against the emission direction
-            th = sampling.dot3(c - o, nrm) / np.where(front, denom, -1.0)
-            hit_p = o + th[:, None] * d
-            lu = sampling.dot3(hit_p - c, self.axis_u[j]) / self.len_u[j]
-            lv = sampling.dot3(hit_p - c, self.axis_v[j]) / self.len_v[j]
-            inside = (lu * lu + lv * lv <= 0.25) if self.elliptic[j] else \
-                (np.abs(lu) <= 0.5) & (np.abs(lv) <= 0.5)
-            ok = front & inside & (th > 0) & (th < tmax)
-            t[ok] = th[ok]
-            att = spread_attenuation(-denom, self.half_spread[j])
-            le = power[None, :] * (self.radiance_factor[j] * att)[:, None]
-            return t, le
-        r = self.radius[j]
-        oc = o - c
-        if self.soft[j]:
-            # A disk facing the ray's origin.
-            dist_c = np.linalg.norm(oc, axis=1)
-            nrm = oc / np.where(dist_c > 0, dist_c, 1.0)[:, None]
-            denom = _dot(d, nrm)
-            th = _dot(-oc, nrm) / np.where(denom < 0, denom, -1.0)
-            hit_p = o + th[:, None] * d - c
-            ok = (denom < 0) & (np.einsum("ij,ij->i", hit_p, hit_p) <= r * r) & (th > 0)
+@njit(**INLINE)
+def sample_object(j, px, py, pz, ua, ub, L):
+    """Next-event estimation of light j from point p: (wi, distance (inf for a sun),
+    radiance / solid-angle pdf per channel, pdf (inf for delta lights))."""
+    typ = L[j, _TYPE]
+    p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
+    v0 = v1 = v2 = 0.0
+    if typ == POINT or typ == SPOT:
+        cx0, cy0, cz0 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
+        tx, ty, tz = cx0 - px, cy0 - py, cz0 - pz
+        d = math.sqrt(tx * tx + ty * ty + tz * tz)
+        dn = d if d > 0 else 1.0
+        cx, cy, cz = tx / dn, ty / dn, tz / dn
+        r = L[j, _RADIUS]
+        soft = L[j, _SOFT] != 0
+        wx, wy, wz, dist, pdf = cx, cy, cz, d, np.inf
+        valid = True
+        if r <= 0:  # intensity P / (4 pi), a delta light
+            g = 4.0 * np.pi * max(d, 1e-300) ** 2
+            v0, v1, v2 = p0 / g, p1 / g, p2 / g
+        elif not soft:  # a sphere: uniform in its visible cone, or everywhere from inside
+            inside = d <= r
+            cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
+            if d <= 0.0:
+                cx, cy, cz = 0.0, 0.0, 1.0
+            wx, wy, wz, cos, pdf = uniform_cone(cx, cy, cz, cos_max, ua, ub)
+            root = math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
+            dist = d * cos + root if inside else d * cos - root
+            f = L[j, _FACTOR]
+            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+        elif soft and d > 0:  # a disk of radius r facing the point
+            nx, ny, nz = -cx, -cy, -cz
+            s, t = build_frame(nx, ny, nz)
+            qa, qb = concentric_disk(ua, ub)
+            qa, qb = qa * r, qb * r
+            yx = cx0 + qa * s[0] + qb * t[0]
+            yy = cy0 + qa * s[1] + qb * t[1]
+            yz = cz0 + qa * s[2] + qb * t[2]
+            tx, ty, tz = yx - px, yy - py, yz - pz
+            dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+            wx, wy, wz = tx / dist, ty / dist, tz / dist
+            cos_l = -(wx * nx + wy * ny + wz * nz)
+            pdf = dist * dist / (np.pi * r ** 2 * max(cos_l, 1e-300))
+            f = L[j, _FACTOR]
+            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
         else:
-            b = _dot(oc, d)
-            oc2 = _dot(oc, oc)
+            valid = False
+        if valid:
+            # Spot cone along each sampled ray, from the sampled point on the light toward
+            # the shading point (Cycles' spot_light_sample), as light hits evaluate it
+            # along the ray that hit; inside a spot's sphere there is no cone.
+            inside_sphere = not soft and r > 0 and d <= r
+            att = 1.0 if inside_sphere else spot_attenuation(j, -wx, -wy, -wz, L)
+            v0, v1, v2 = v0 * att, v1 * att, v2 * att
+        else:
+            v0 = v1 = v2 = 0.0
+            pdf = 0.0
+        return wx, wy, wz, dist, v0, v1, v2, pdf
+    if typ == SUN:
+        ax, ay, az = -L[j, _DIRECTION], -L[j, _DIRECTION + 1], -L[j, _DIRECTION + 2]
+        cos_max = L[j, _COS_ANGLE]
+        if cos_max < 1.0:  # a disc: uniform in its cone
+            wx, wy, wz, _, pdf = uniform_cone(ax, ay, az, cos_max, ua, ub)
+            k = L[j, _SUN_RADIANCE] / pdf
+            return wx, wy, wz, np.inf, p0 * k, p1 * k, p2 * k, pdf
+        return ax, ay, az, np.inf, p0, p1, p2, np.inf
+    # Area light: a uniform point on the rectangle or ellipse.
+    if L[j, _ELLIPTIC] != 0:
+        la, lb = concentric_disk(ua, ub)
+        la, lb = la * 0.5, lb * 0.5
+    else:
+        la, lb = ua - 0.5, ub - 0.5
+    ka, kb = la * L[j, _LEN_U], lb * L[j, _LEN_V]
+    yx = L[j, _CENTRE] + ka * L[j, _AXIS_U] + kb * L[j, _AXIS_V]
+    yy = L[j, _CENTRE + 1] + ka * L[j, _AXIS_U + 1] + kb * L[j, _AXIS_V + 1]
+    yz = L[j, _CENTRE + 2] + ka * L[j, _AXIS_U + 2] + kb * L[j, _AXIS_V + 2]
+    tx, ty, tz = yx - px, yy - py, yz - pz
+    d = math.sqrt(tx * tx + ty * ty + tz * tz)
+    dn = d if d > 0 else 1.0
+    wx, wy, wz = tx / dn, ty / dn, tz / dn
+    cos_l = -(wx * L[j, _DIRECTION] + wy * L[j, _DIRECTION + 1] + wz * L[j, _DIRECTION + 2])
+    pdf = 0.0
+    area = L[j, _AREA_SIZE]
+    if cos_l > 0 and d > 0 and area > 0:
+        pdf = d * d / max(area * cos_l, 1e-300)
+        f = L[j, _FACTOR] * spread_attenuation(cos_l, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
+                                    L[j, _SPREAD_NORM])
+        v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+    return wx, wy, wz, d, v0, v1, v2, pdf
+
+
+@njit(**INLINE)
+def object_pdf(j, ox, oy, oz, dx, dy, dz, t, L):
+    """The solid-angle density of sampling direction d from o toward
+    intersectable light j, hit at distance t."""
+    typ = L[j, _TYPE]
+    if typ == AREA:
+        cos_a = -(dx * L[j, _DIRECTION] + dy * L[j, _DIRECTION + 1] + dz * L[j, _DIRECTION + 2])
+        return t * t / max(L[j, _AREA_SIZE] * cos_a, 1e-300)
+    tx, ty, tz = L[j, _CENTRE] - ox, L[j, _CENTRE + 1] - oy, L[j, _CENTRE + 2] - oz
+    d = math.sqrt(tx * tx + ty * ty + tz * tz)
+    r = L[j, _RADIUS]
+    if (typ == POINT or typ == SPOT) and r > 0:
+        dn = d if d > 0 else 1.0
+        if L[j, _SOFT] != 0:
+            cos_d = tx / dn * dx + ty / dn * dy + tz / dn * dz
+            return t * t / (np.pi * max(r * r * cos_d, 1e-300))
+        cos_max = math.sqrt(max(0.0, 1.0 - (r / dn) ** 2)) if d > r else -1.0
+        return uniform_cone_pdf(cos_max)
+    return 0.0
+
+
+@njit(**INLINE)
+def intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
+    """Where a ray (o, d) hits light j before tmax: (distance (inf: missed), radiance).
+    Light objects are transparent: rays pick up their radiance and go on."""
+    th = np.inf
+    f = L[j, _FACTOR]
+    p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
+    c0, c1, c2 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
+    if L[j, _TYPE] == AREA:
+        nx, ny, nz = L[j, _DIRECTION], L[j, _DIRECTION + 1], L[j, _DIRECTION + 2]
+        denom = dx * nx + dy * ny + dz * nz
+        front = denom < 0  # travelling against the emission direction
+        t = ((c0 - ox) * nx + (c1 - oy) * ny + (c2 - oz) * nz) / (denom if front else -1.0)
+        hx, hy, hz = ox + t * dx - c0, oy + t * dy - c1, oz + t * dz - c2
+        lu = (hx * L[j, _AXIS_U] + hy * L[j, _AXIS_U + 1] + hz * L[j, _AXIS_U + 2]) / L[j, _LEN_U]
+        lv = (hx * L[j, _AXIS_V] + hy * L[j, _AXIS_V + 1] + hz * L[j, _AXIS_V + 2]) / L[j, _LEN_V]
+        if L[j, _ELLIPTIC] != 0:
+            inside = lu * lu + lv * lv <= 0.25
+        else:
+            inside = abs(lu) <= 0.5 and abs(lv) <= 0.5
+        if front and inside and t > 0 and t < tmax:
+            th = t
+        f = f * spread_attenuation(-denom, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN], L[j, _SPREAD_NORM])
+    else:
+        r = L[j, _RADIUS]
+        ocx, ocy, ocz = ox - c0, oy - c1, oz - c2
+        if L[j, _SOFT] != 0:  # a disk facing the ray's origin
+            dc = math.sqrt(ocx * ocx + ocy * ocy + ocz * ocz)
+            dn = dc if dc > 0 else 1.0
+            nx, ny, nz = ocx / dn, ocy / dn, ocz / dn
+            denom = dx * nx + dy * ny + dz * nz
+            t = (-ocx * nx + -ocy * ny + -ocz * nz) / (denom if denom < 0 else -1.0)
+            hx, hy, hz = ox + t * dx - c0, oy + t * dy - c1, oz + t * dz - c2
+            ok = denom < 0 and hx * hx + hy * hy + hz * hz <= r * r and t > 0
+        else:
+            b = ocx * dx + ocy * dy + ocz * dz
+            oc2 = ocx * ocx + ocy * ocy + ocz * ocz
             disc = b * b - (oc2 - r * r)
-            # The near root from outside, the far one from inside (the light is seen there).
-            th = -b - np.where(oc2 > r * r, 1.0, -1.0) * np.sqrt(np.maximum(disc, 0.0))
-            ok = (disc >= 0) & (th > 0)
-        if typ == SPOT:
-            # One-sided: a spot is hit only by rays heading toward its centre's side.
-            ok &= _dot(d, oc) < 0.0
-        ok &= th < tmax
-        t[ok] = th[ok]
-        le = np.tile(power * self.radiance_factor[j], (n, 1))
-        if typ == SPOT:
-            att = self.spot_attenuation(np.full(n, j), -d)
-            # From inside its sphere there is no cone (Cycles' spot.h).
-            if not self.soft[j]:
-                att = np.where(_dot(oc, oc) > r * r, att, 1.0)
-            le = le * att[:, None]
-        return t, le
+            # The near root from outside, the far one from inside.
+            t = -b - (1.0 if oc2 > r * r else -1.0) * math.sqrt(max(disc, 0.0))
+            ok = disc >= 0 and t > 0
+        if L[j, _TYPE] == SPOT:
+            # One-sided: a spot is hit only by rays heading toward its centre's side;
+            # from inside its sphere there is no cone (Cycles' spot.h).
+            ok = ok and dx * ocx + dy * ocy + dz * ocz < 0.0
+            if ok and t < tmax:
+                th = t
+            att = 1.0
+            if L[j, _SOFT] != 0 or ocx * ocx + ocy * ocy + ocz * ocz > r * r:
+                att = spot_attenuation(j, -dx, -dy, -dz, L)
+            return th, p0 * f * att, p1 * f * att, p2 * f * att
+        if ok and t < tmax:
+            th = t
+    return th, p0 * f, p1 * f, p2 * f
 
 
 class LightSampler:
@@ -361,14 +375,14 @@ class LightSampler:
     known at any point, so `pmf(points, entries)` is exact for MIS.
     """
 
-    LOCAL_WEIGHT = 0.75
+    LOCAL_WEIGHT = LOCAL_WEIGHT
     GRID = 8  # voxels per axis
     MIN_ENTRIES, MAX_ENTRIES = 8, 20_000  # the grid is (GRID^3, entries) floats
 
     def __init__(self, scene: Scene):
         emission = scene.materials.emission[scene.material_index]
         v = scene.vertices
-        area = 0.5 * np.linalg.norm(sampling.cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]),
+        area = 0.5 * np.linalg.norm(cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]),
                                     axis=1)
         # Two-sided exitance pi L per side, times area: the triangle's flux.
         tri_power = 2.0 * np.pi * area * emission.mean(axis=1) if len(v) else np.zeros(0)
@@ -379,7 +393,7 @@ class LightSampler:
         # Per-emitter constants, gathered once rather than per sample.
         c = self.corners
         self.v0, self.e1, self.e2 = c[:, 0], c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
-        nrm = sampling.cross_rows(self.e1, self.e2)
+        nrm = cross_rows(self.e1, self.e2)
         self.normal = nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
         self.scale = np.abs(c).max(axis=(1, 2)) if len(c) else np.zeros(0)
         radius = max(scene.extent, 1e-3) * 2.0
@@ -392,7 +406,7 @@ class LightSampler:
             [np.pi * self.environment.mean_radiance * np.pi * radius**2]
         weights = np.concatenate([tri_power[self.index], self.objects.selection_power(),
                                   env_power])
-        self.distribution = sampling.Distribution1D(weights)
+        self.distribution = Distribution1D(weights)
         k = len(self.index)
         self.num_triangles = k
         self.num_entries = len(weights)
@@ -432,102 +446,93 @@ class LightSampler:
         self.local_cdf_flat = (cdf + np.arange(len(cdf))[:, None]).ravel()
         self.grid_has_mass = total[:, 0] > 0
 
-    def _voxel(self, p):
-        ijk = np.clip(((p - self.grid_lo) / self.cell).astype(np.int64), 0, self.GRID - 1)
-        return (ijk[:, 0] * self.GRID + ijk[:, 1]) * self.GRID + ijk[:, 2]
-
-    def pmf(self, p, entries):
-        """Probability (n,) of choosing `entries` (n,) from points p (n, 3)."""
-        glob = self.distribution.pmf[entries]
-        if not hasattr(self, "local_pmf"):
-            return glob
-        vox = self._voxel(p)
-        local = self.local_pmf[vox, entries]
-        a = np.where(self.grid_has_mass[vox], self.LOCAL_WEIGHT, 0.0)
-        return a * local + (1.0 - a) * glob
-
-    def choose(self, p, u):
-        """Entries (n,) chosen from points p (n, 3) with u (n,) and their probability."""
-        if not hasattr(self, "local_pmf"):
-            k = self.distribution.sample(u)
-            return k, self.distribution.pmf[k]
-        vox = self._voxel(p)
-        a = np.where(self.grid_has_mass[vox], self.LOCAL_WEIGHT, 0.0)
-        use_local = u < a
-        k = np.empty(len(p), np.int64)
-        if (~use_local).any():
-            ug = (u[~use_local] - a[~use_local]) / (1.0 - a[~use_local])
-            k[~use_local] = self.distribution.sample(ug)
-        if use_local.any():
-            ul = np.minimum(u[use_local] / a[use_local], 1.0 - 1e-12)
-            v = vox[use_local]
-            flat = np.searchsorted(self.local_cdf_flat, v + ul, side="right")
-            k[use_local] = np.clip(flat - v * self.num_entries, 0, self.num_entries - 1)
-        return k, self.pmf(p, k)
-
     def __len__(self):
         return self.num_entries
 
-    def sample(self, p, u_select, u_point):
-        """Next-event estimation from points p (n, 3).
+    def data(self) -> "Emitters":
+        """The kernel's Emitters."""
+        if hasattr(self, "local_pmf"):
+            grid = (self.GRID, self.grid_lo, self.cell, self.local_pmf, self.local_cdf_flat,
+                    self.grid_has_mass)
+        else:
+            grid = (0, np.zeros(3), np.ones(3), np.zeros((1, self.num_entries)), np.zeros(0),
+                    np.zeros(1, np.bool_))
+        env = self.environment.data() if self.environment is not None else None
+        return Emitters(self.distribution.pmf, self.distribution.cdf, *grid,
+                        self.entry_of_triangle, self.area_by_triangle, self.v0, self.e1, self.e2,
+                        self.normal, self.area, self.radiance, self.scale,
+                        self.objects.table(), env, int(self.environment_index))
 
-        Returns wi (n, 3), dist (n,) to the sampled point (inf toward a sun), value
-        (n, 3) = radiance / (selection probability x solid-angle pdf), pdf (n,) the
-        combined solid-angle density (inf for delta lights), light_scale (n,) a length
-        scale at the sampled point for the shadow ray's offset.
-        """
-        n = len(p)
-        k_all, p_sel = self.choose(p, u_select)
-        is_tri = k_all < self.num_triangles
-        wi = np.zeros((n, 3))
-        dist = np.full(n, np.inf)
-        value = np.zeros((n, 3))
-        pdf = np.zeros(n)
-        scale = np.zeros(n)
-        tri = np.nonzero(is_tri)[0]
-        if len(tri):
-            k = k_all[tri]
-            b = sampling.sample_uniform_triangle(u_point[tri])
-            y = self.v0[k] + b[:, 1:2] * self.e1[k] + b[:, 2:3] * self.e2[k]
-            to = y - p[tri]
-            d = np.sqrt(np.einsum("ij,ij->i", to, to))
-            w = to / np.where(d > 0, d, 1.0)[:, None]
-            cos_l = np.abs(_dot(self.normal[k], w))
-            ok = (cos_l > 0) & (d > 0)
-            pdf_sa = np.where(ok, d * d / np.maximum(self.area[k] * cos_l, 1e-300), 0.0)
-            wi[tri], dist[tri] = w, d
-            value[tri] = self.radiance[k] * np.where(ok, 1.0 / np.where(ok, pdf_sa, 1.0),
-                                                     0.0)[:, None]
-            pdf[tri] = pdf_sa
-            scale[tri] = self.scale[k]
-        is_env = k_all == self.environment_index
-        env = np.nonzero(is_env)[0]
-        if len(env):
-            w, pdf_sa = self.environment.sample(u_point[env])
-            wi[env] = w
-            value[env] = self.environment.lookup(w) / np.maximum(pdf_sa, 1e-300)[:, None]
-            pdf[env] = pdf_sa
-        obj = np.nonzero(~is_tri & ~is_env)[0]
-        if len(obj):
-            j = k_all[obj] - self.num_triangles
-            w, d, val, pdf_sa = self.objects.sample(j, p[obj], u_point[obj])
-            wi[obj], dist[obj], value[obj], pdf[obj] = w, d, val, pdf_sa
-            finite = np.isfinite(d)
-            scale[obj] = np.where(finite, np.abs(p[obj] + w * np.where(finite, d, 0)[:, None])
-                                  .max(axis=1), 0.0)
-        value /= np.where(p_sel > 0, p_sel, 1.0)[:, None]
-        return wi, dist, value, pdf * p_sel, scale
 
-    def pdf_triangle_area(self, p, triangle: np.ndarray) -> np.ndarray:
-        """Area density of sampling points on emissive triangles from points p (n, 3),
-        selection included."""
-        entry = self.entry_of_triangle[triangle]
-        pm = np.where(entry >= 0, self.pmf(p, np.maximum(entry, 0)), 0.0)
-        return pm / self.area_by_triangle[triangle]
+@njit(**JIT)
+def voxel(px, py, pz, lo, cell, grid):
+    i = min(max(int((px - lo[0]) / cell[0]), 0), grid - 1)
+    j = min(max(int((py - lo[1]) / cell[1]), 0), grid - 1)
+    k = min(max(int((pz - lo[2]) / cell[2]), 0), grid - 1)
+    return (i * grid + j) * grid + k
 
-    def pmf_light(self, p, j: int) -> np.ndarray:
-        """Probability (n,) of choosing light object j from points p (n, 3)."""
-        return self.pmf(p, np.full(len(p), self.num_triangles + j))
 
-    def pmf_environment(self, p) -> np.ndarray:
-        return self.pmf(p, np.full(len(p), self.environment_index))
+@njit(**JIT)
+def entry_pmf(px, py, pz, entry, pmf, grid, lo, cell, local_pmf, has_mass):
+    """The probability of choosing emitter `entry` from point p (the arrays of Emitters:
+    a helper taking the structure itself would pay reference counts on every call)."""
+    if grid == 0:
+        return pmf[entry]
+    vox = voxel(px, py, pz, lo, cell, grid)
+    a = LOCAL_WEIGHT if has_mass[vox] else 0.0
+    return a * local_pmf[vox, entry] + (1.0 - a) * pmf[entry]
+
+
+@njit(**JIT)
+def choose(px, py, pz, u, pmf, cdf, grid, lo, cell, local_pmf, local_cdf_flat, has_mass):
+    """An emitter chosen from point p with u: (entry, probability). With a grid, the
+    local distribution of p's voxel with probability LOCAL_WEIGHT, else the global one."""
+    k_count = len(pmf)
+    if grid == 0:
+        k = sample_cdf(cdf, u)
+        return k, pmf[k]
+    vox = voxel(px, py, pz, lo, cell, grid)
+    a = LOCAL_WEIGHT if has_mass[vox] else 0.0
+    if u < a:
+        ul = min(u / a, 1.0 - 1e-12)
+        flat = np.searchsorted(local_cdf_flat, vox + ul, side="right")
+        k = min(max(flat - vox * k_count, 0), k_count - 1)
+    else:
+        k = sample_cdf(cdf, (u - a) / (1.0 - a))
+    return k, a * local_pmf[vox, k] + (1.0 - a) * pmf[k]
+
+
+@njit(**INLINE)
+def sample_triangle(e, px, py, pz, ua, ub, em):
+    """A uniform point on emissive triangle entry e seen from p: (wi, distance, radiance /
+    solid-angle pdf per channel, the solid-angle pdf). Two-sided emission."""
+    b0, b1, b2 = uniform_triangle(ua, ub)
+    tx = em.v0[e, 0] + b1 * em.e1[e, 0] + b2 * em.e2[e, 0] - px
+    ty = em.v0[e, 1] + b1 * em.e1[e, 1] + b2 * em.e2[e, 1] - py
+    tz = em.v0[e, 2] + b1 * em.e1[e, 2] + b2 * em.e2[e, 2] - pz
+    dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+    dn = dist if dist > 0 else 1.0
+    wx, wy, wz = tx / dn, ty / dn, tz / dn
+    cos_l = abs(em.normal[e, 0] * wx + em.normal[e, 1] * wy + em.normal[e, 2] * wz)
+    q0 = q1 = q2 = pdf = 0.0
+    if cos_l > 0 and dist > 0:
+        pdf = triangle_pdf(dist, cos_l, em.area[e])
+        inv = 1.0 / pdf
+        q0, q1, q2 = em.radiance[e, 0] * inv, em.radiance[e, 1] * inv, em.radiance[e, 2] * inv
+    return wx, wy, wz, dist, q0, q1, q2, pdf
+
+
+@njit(**JIT)
+def triangle_pdf(dist, cos_l, area):
+    """The solid-angle density of a uniform point on a triangle of this area."""
+    return dist * dist / max(area * cos_l, 1e-300)
+
+
+@njit(**INLINE)
+def sample_environment(ua, ub, env):
+    """A direction from the environment map: (wi, inf, radiance / pdf, pdf)."""
+    wx, wy, wz, pdf = environment.sample(ua, ub, env)
+    u_e, v_e = environment.to_uv(wx, wy, wz, env.texture_from_world)
+    q0, q1, q2 = environment.lookup(u_e, v_e, env.image)
+    pd = max(pdf, 1e-300)
+    return wx, wy, wz, np.inf, q0 / pd, q1 / pd, q2 / pd, pdf

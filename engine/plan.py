@@ -1,13 +1,13 @@
 """The render plan: which stages a scene needs, derived before rendering.
 
-The integrator consults the plan and skips whatever a scene does not use: no lens
-sampling without depth of field, no glass code without glass, no light sampling
-without emitters, no normal interpolation for flat meshes, and so on.
+The plan decides what the scene's kernel is compiled with (`kernel_constants`,
+integrator.py): no lens sampling without depth of field, no glass code without glass, no
+light sampling without emitters, no normal interpolation for flat meshes, and so on.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -49,7 +49,9 @@ class Plan:
     fresnel: str
     max_bounces: int
     triangles: int
-    kernel: str = "numpy"
+    # Which kernel rendered: "specialised" (made for this plan), "generic", or both in turn
+    # ("generic, then specialised from pass N"); set by the renderer.
+    kernel: str = ""
     kernel_note: str = ""
     # Some smooth triangle's object has a shadow terminator geometry offset > 0.
     terminator: bool = False
@@ -60,7 +62,7 @@ class Plan:
         return self.emitters and (self.diffuse or self.principled or self.glossy)
 
     def stages(self) -> list[str]:
-        s = [f"{self.kernel} kernel", "generate camera rays"]
+        s = ["generate camera rays"]
         if self.dof:
             s.append("sample lens (%s)" % ("polygon" if self.polygon_aperture else "disk"))
         s.append("intersect")
@@ -82,12 +84,28 @@ class Plan:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
         return s
 
+    def kernel_constants(self, light_grid: bool) -> dict:
+        """The compile-time constants of this plan's kernel (integrator.PLAN_CONSTANTS;
+        light_grid: the emitters have a many-lights grid)."""
+        return dict(
+            HAS_DIFFUSE=self.diffuse, HAS_MIRROR=self.mirror, HAS_METAL=self.metal,
+            HAS_GLASS=self.glass, HAS_ROUGH=self.principled or self.glossy, HAS_DOF=self.dof,
+            HAS_POLYGON_APERTURE=self.polygon_aperture,
+            HAS_SHADING_NORMALS=self.shading_normals, HAS_EMISSION=self.num_emitters > 0,
+            HAS_LIGHT_SAMPLING=self.light_sampling, HAS_LIGHT_OBJECTS=self.light_objects > 0,
+            HAS_LIGHT_HITS=self.light_hits, HAS_SUN_DISCS=self.sun_discs,
+            HAS_ENVIRONMENT=self.environment,
+            HAS_WORLD_COLOUR=self.world_light and not self.environment,
+            HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
+            EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
+
     def describe(self) -> str:
         return (f"{self.triangles} triangles, {self.num_emitters} emissive, "
                 f"{self.light_objects} lights, max_bounces {self.max_bounces}, "
-                f"fresnel {self.fresnel}, {self.kernel} kernel"
+                f"fresnel {self.fresnel}"
+                + (f", {self.kernel} kernel" if self.kernel else "")
                 + (f" ({self.kernel_note})" if self.kernel_note else "")
-                + "; stages: " + " -> ".join(self.stages()[1:]))
+                + "; stages: " + " -> ".join(self.stages()))
 
     def as_dict(self) -> dict:
         d = asdict(self)
@@ -124,18 +142,4 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)
-    return _choose_kernel(plan, scene, settings)
-
-
-def _choose_kernel(plan: Plan, scene: Scene, settings: RenderSettings) -> Plan:
-    """The compiled kernels where numba is there and cover the scene, else numpy."""
-    from . import kernel
-
-    if settings.kernel == "numpy":
-        return plan
-    why = "numba is not installed" if not kernel.AVAILABLE else kernel.unsupported(scene, plan)
-    if why:
-        if settings.kernel == "compiled":
-            raise ValueError(f"kernel 'compiled' cannot render this scene: {why}")
-        return replace(plan, kernel_note=f"numpy: {why}")
-    return replace(plan, kernel="compiled")
+    return plan

@@ -16,44 +16,19 @@ import os
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import kernels
 from .accel import Accel
 from .camera import CameraModel
-from .film import Film, PixelFilter
-from .integrator import Integrator
+from .film import Film, Pass
 from .lights import LightSampler
 from .plan import Plan, make_plan
 from .scene import RenderSettings, Scene
 
 log = logging.getLogger("specula")
-
-
-@dataclass
-class Pass:
-    """What a caller sees after each pass (and what `render` returns).
-
-    combined : (H, W, 4) float32 linear RGBA, row 0 at the bottom (Blender's order)
-    depth : (H, W) float32 mean camera z-depth of the first hit (inf where nothing is hit)
-    normal : (H, W, 3) float32 mean world-space shading normal of the first hit
-    error : (H, W) float32 estimated standard error of each pixel's luminance
-    variance : (H, W, 3) float32 estimated variance of each pixel's mean, per channel
-    samples : samples per pixel so far; seconds : wall time since the render began
-    relative_error : estimated relative RMS error of the image (see Film)
-    progress : fraction of the sample budget done
-    """
-
-    combined: np.ndarray
-    depth: np.ndarray
-    normal: np.ndarray
-    error: np.ndarray
-    variance: np.ndarray
-    samples: int
-    seconds: float
-    relative_error: float
-    progress: float
 
 
 @dataclass
@@ -65,6 +40,8 @@ class RenderResult(Pass):
     cancelled: bool = False
     warnings: list | None = None
     time_to_first_pass: float = 0.0
+    # Seconds the render's threads spent per stage (intersect, shade, ...), summed.
+    stage_seconds: dict | None = None
 
 
 class _Gate:
@@ -75,7 +52,94 @@ class _Gate:
         self.discard = False
 
 
-class NonFiniteError(RuntimeError):
+class StageTimers:
+    """Seconds and calls per stage, summed over the render's threads."""
+
+    def __init__(self):
+        self.seconds: dict[str, float] = {}
+        self.calls: dict[str, int] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, stage: str, seconds: float) -> None:
+        with self._lock:
+            self.calls[stage] = self.calls.get(stage, 0) + 1
+            self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
+
+
+class Kernels:
+    """The kernels of one render: the one in use, the plan's own compiling in the
+    background if the render started with the generic one, and a DEBUG kernel made on
+    demand to name the stage of a non-finite sample."""
+
+    profile = False  # the benchmark's per-stage profile (PROFILE kernels)
+
+    def __init__(self, scene, settings, plan, accel, emitters, camera, timers):
+        self.scene, self.settings, self.plan = scene, settings, plan
+        self.accel, self.emitters, self.camera, self.timers = accel, emitters, camera, timers
+        grid = emitters is not None and hasattr(emitters, "local_pmf")
+        self.constants = plan.kernel_constants(grid)
+        self.constants["PROFILE"] = self.profile
+        generic = kernels.generic_constants(plan.fresnel == "exact")
+        generic["PROFILE"] = self.profile
+        self.pending = None
+        self.switched_at = 0
+        own = kernels.ready_kernel(self.constants)
+        if own is None and settings.kernel != "generic":
+            probe = kernels.Kernel(self.constants)
+            if probe.on_disk() or settings.kernel == "specialised" or \
+                    kernels.ready_kernel(generic) is None:
+                own = kernels.build_now(self.constants, self._compile)
+        if own is not None and settings.kernel != "generic":
+            self.tracer = self.tracer_for(own)
+            return
+        self.tracer = self.tracer_for(kernels.build_now(generic, self._compile))
+        if settings.kernel == "auto":
+            self.pending = kernels.build_in_background(self.constants, self._compile)
+
+    def tracer_for(self, kernel) -> kernels.Tracer:
+        data = kernels.scene_data(self.scene, self.settings, self.plan, self.emitters,
+                                  self.camera, kernel.generic)
+        return kernels.Tracer(kernel, data, self.accel, self.settings, self.timers)
+
+    def _compile(self, kernel) -> None:
+        """Compile every entry point of `kernel` by tracing one pixel with it."""
+        tracer = kernels.Tracer(kernel, kernels.scene_data(
+            self.scene, self.settings, self.plan, self.emitters, self.camera, kernel.generic),
+            self.accel, self.settings, lambda stage, seconds: None)
+        tracer.trace_pixels(np.zeros(1, np.int64), 0)
+        kernel.all_finite(np.zeros((1, 3)), np.zeros(1), np.zeros((1, 3)))
+
+    def switch_if_ready(self, sample: int) -> None:
+        """At a pass boundary: take the plan's own kernel once it has compiled."""
+        if self.pending is None or self.pending.is_alive():
+            return
+        self.pending = None
+        own = kernels.ready_kernel(self.constants)
+        if own is not None:
+            self.tracer = self.tracer_for(own)
+            self.switched_at = sample
+
+    def describe(self) -> tuple[str, str]:
+        """(kernel, note) for the plan."""
+        k = self.tracer.kernel
+        if self.switched_at:
+            return "generic, then specialised", f"switched at pass {self.switched_at + 1}"
+        return ("generic" if k.generic else "specialised"), \
+            (f"compiled in {k.compile_seconds:.1f} s" if k.compile_seconds > 1.0 else "")
+
+    def use_debug_kernel(self) -> None:
+        self.pending = None
+        self.tracer = self.tracer_for(kernels.build_now(
+            dict(self.tracer.kernel.constants, DEBUG=True, PROFILE=False), self._compile))
+
+    def explain_nonfinite(self, pixels, sample) -> list[str]:
+        debug = kernels.build_now(dict(self.tracer.kernel.constants, DEBUG=True, PROFILE=False),
+                                  self._compile)
+        return self.tracer.explain_nonfinite(pixels, sample, self.settings.width,
+                                             self.tracer_for(debug))
+
+
+class NonFiniteError(FloatingPointError):
     """A pass produced NaN or inf; the message names the pixel and stage."""
 
 
@@ -90,7 +154,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     on_pass : optional callable(Pass) run after every pass (for display and progress).
     should_stop : optional callable() -> bool checked between passes; True cancels,
         keeping the passes done.
-    debug : trace NaN/inf to the stage that produced it (slower).
+    debug : render with the DEBUG kernel, which names the stage of a NaN/inf (slower).
     """
     settings.validate()
     t0 = time.perf_counter()
@@ -99,11 +163,12 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     accel = Accel(scene)
     emitters = LightSampler(scene) if plan.emitters else None
     camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
-    pixel_filter = PixelFilter(settings.filter_type, settings.filter_width)
     x0, y0, x1, y1 = settings.window
     film = Film(x1 - x0, y1 - y0)
-    integrator = Integrator(scene, settings, plan, accel, emitters, camera, pixel_filter,
-                            debug=debug)
+    timers = StageTimers()
+    kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
+    if debug:
+        kernel.use_debug_kernel()
     n_pixels = (x1 - x0) * (y1 - y0)
 
     def frame_ids(local: np.ndarray) -> np.ndarray:
@@ -112,20 +177,33 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         ly, lx = np.divmod(local, x1 - x0)
         return (ly + y0) * settings.width + lx + x0
 
-    def trace_and_fold(local: np.ndarray, sample: int, gate: _Gate) -> None:
+    def trace(pixels: np.ndarray, sample: int, tracer):
+        """One sample for each pixel, with messages for samples that came out non-finite
+        in any pass they feed (traced again by the DEBUG kernel to name the stage)."""
+        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample)
+        if tracer.kernel.all_finite(radiance, depth, normal):
+            return radiance, depth, normal, []
+        if debug:
+            raise NonFiniteError(tracer.explain_nonfinite(pixels[stage > 0][:1], sample,
+                                                          settings.width, tracer)[0])
+        bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
+                & np.all(np.isfinite(normal), axis=1))
+        return radiance, depth, normal, kernel.explain_nonfinite(pixels[bad], sample)
+
+    def trace_and_fold(local: np.ndarray, sample: int, gate: _Gate, tracer) -> None:
         """One chunk's sample, folded into the film by the worker itself once the gate of
         its pass opens: the main thread opens it after it has finished with the previous
         pass, so each pixel gets its samples in order (the film does not depend on thread
         timing) and a pass is folded whole or, if the render stopped, not at all."""
         if gate.discard:
             return
-        _, radiance, depth, normal, rejected = integrator.trace_pixels(frame_ids(local), sample)
+        radiance, depth, normal, rejected = trace(frame_ids(local), sample, tracer)
         gate.opened.wait()
         if gate.discard:
             return
         t1 = time.perf_counter()
         film.add(local, radiance, depth, normal, rejected)
-        integrator._count("film", time.perf_counter() - t1)
+        timers("film", time.perf_counter() - t1)
 
     threads = _thread_count(settings)
     # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
@@ -141,7 +219,8 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         def launch(index):
             """Queue pass `index`: one sample per pixel, chunk by chunk over the pool."""
             gate = _Gate()
-            return gate, [pool.submit(trace_and_fold, c, index, gate) for c in chunks]
+            return gate, [pool.submit(trace_and_fold, c, index, gate, kernel.tracer)
+                          for c in chunks]
 
         gate, jobs = launch(0)
         gate.opened.set()
@@ -149,7 +228,9 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         try:
             while sample < settings.samples:
                 # Queue the next pass before waiting for this one, so the workers go on
-                # tracing while this thread folds statistics and calls back.
+                # tracing while this thread folds statistics and calls back; the plan's own
+                # kernel takes over from the pass after it has compiled.
+                kernel.switch_if_ready(sample + 1)
                 ahead = launch(sample + 1) if sample + 1 < settings.samples else None
                 for job in jobs:
                     job.result()
@@ -191,6 +272,25 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     # The film is final now; the last pass's snapshot already shows it, if there was one.
     if snap is None or snap.samples != sample:
         snap = film.snapshot(sample, elapsed, sample / settings.samples)
+    name, note = kernel.describe()
+    plan = replace(plan, kernel=name, kernel_note=note)
     return RenderResult(**{**snap.__dict__, "seconds": elapsed}, plan=plan,
                         stop_reason=stop_reason, cancelled=cancelled,
-                        warnings=list(scene.warnings) + film.rejected, time_to_first_pass=first)
+                        warnings=list(scene.warnings) + film.rejected, time_to_first_pass=first,
+                        stage_seconds=dict(timers.seconds))
+
+
+def warm_up() -> None:
+    """Load the generic kernel now (from numba's cache, or compile it on the first run
+    ever) by rendering a 4x3 image of one emissive triangle with it. The add-on calls it in
+    the background when it registers, so a render can start with it while the kernel made
+    for its scene loads or compiles."""
+    from .scene import Camera, Material, SceneBuilder, World
+
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("warm-up", (0.5, 0.5, 0.5), emission=(1, 1, 1)))
+    b.add_mesh("warm-up", np.array([[-1.0, -1, -2], [1, -1, -2], [0, 1, -2]]),
+               np.array([[0, 1, 2]]), m)
+    camera = Camera(use_dof=True, fstop=1.0, focus_distance=2.0)
+    render(b.build(camera, World((0.1, 0.1, 0.1))),
+           RenderSettings(width=4, height=3, samples=2, threads=1, kernel="generic"))

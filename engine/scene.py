@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .jit import njit
-from .sampling import cross_rows
+from .jit import JIT, njit
 
 # BSDF kinds of the materials table (`Materials.kind`).
 NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
@@ -29,7 +28,7 @@ DELTA_ROUGHNESS = 2e-10 ** 0.25
 
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
-KERNELS = ("auto", "numpy", "compiled")
+KERNELS = ("auto", "generic", "specialised")
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 CAMERA_TYPES = ("PERSP", "ORTHO")
 
@@ -350,8 +349,10 @@ class RenderSettings:
     seed : sample-sequence seed. threads : worker threads (0 = all cores).
     fresnel : "exact" or "schlick". filter_type, filter_width : pixel filter (px).
     chunk_pixels : pixels traced at once per thread, bounding memory.
-    kernel : "auto" (the compiled kernels where numba is installed and the scene's
-        features are covered, else numpy), "numpy" or "compiled" (an error if impossible).
+    kernel : "auto" (the kernel made for the scene's plan, starting with the generic kernel
+        while it compiles if the generic one is loaded and the plan's is not), "generic"
+        (the kernel with every feature, throughout) or "specialised" (the plan's kernel
+        from the first pass, compiling it first if need be).
     region : optional (x0, y0, x1, y1) in full-frame pixels (row 0 at the bottom, x1 and
         y1 exclusive): render only that rectangle (Blender's render border). Pixels are
         sampled exactly as in a whole-frame render, so regions stitch into the same image.
@@ -580,25 +581,12 @@ class SceneBuilder:
 
 
 # -------------------------------------------------------------------- builder passes
-# One compiled loop each where numba is installed (a pass over a million triangles with no
-# temporaries); the numpy versions compute the same values.
+# One compiled loop each: a pass over a million triangles with no temporaries.
 
+@njit(**JIT)
 def _triangle_checks(v, tri, finite_v):
     """(finite, nondegenerate) per triangle: all corners finite; the edge cross product
     above float64 noise, |e1 x e2| > 1e-24 scale^2 (scale: the largest corner coordinate)."""
-    from . import kernel
-    if kernel.AVAILABLE:
-        return _triangle_checks_compiled(v, tri, finite_v)
-    finite = finite_v[tri].all(axis=1) if len(tri) else np.ones(0, bool)
-    corners = np.where(finite_v[:, None], v, 0.0)[tri]
-    cross = cross_rows(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area2_sq = np.einsum("ij,ij->i", cross, cross)
-    scale = np.abs(corners).max(axis=(1, 2), initial=0.0) + np.finfo(np.float64).tiny
-    return finite, (area2_sq > 1e-48 * scale**4) & finite
-
-
-@njit(cache=True, nogil=True)
-def _triangle_checks_compiled(v, tri, finite_v):
     t = len(tri)
     finite = np.empty(t, np.bool_)
     nondegenerate = np.empty(t, np.bool_)
@@ -622,17 +610,9 @@ def _triangle_checks_compiled(v, tri, finite_v):
     return finite, nondegenerate
 
 
+@njit(**JIT)
 def _normals_usable(normals):
     """(t,) whether all three corner normals are finite and non-zero."""
-    from . import kernel
-    if kernel.AVAILABLE:
-        return _normals_usable_compiled(normals)
-    length2 = np.einsum("tci,tci->tc", normals, normals)
-    return (np.isfinite(length2) & (length2 > 0)).all(axis=1)
-
-
-@njit(cache=True, nogil=True)
-def _normals_usable_compiled(normals):
     ok = np.empty(len(normals), np.bool_)
     for i in range(len(normals)):
         ok[i] = True
@@ -644,18 +624,9 @@ def _normals_usable_compiled(normals):
     return ok
 
 
+@njit(**JIT)
 def _bounds(v, tri):
     """(lo, hi) (3,) of the vertices the triangles use."""
-    from . import kernel
-    if kernel.AVAILABLE:
-        return _bounds_compiled(v, tri)
-    used = np.zeros(len(v), bool)
-    used[tri.ravel()] = True
-    return v[used].min(axis=0), v[used].max(axis=0)
-
-
-@njit(cache=True, nogil=True)
-def _bounds_compiled(v, tri):
     lo = np.full(3, np.inf)
     hi = np.full(3, -np.inf)
     for i in range(len(tri)):
@@ -667,38 +638,19 @@ def _bounds_compiled(v, tri):
     return lo, hi
 
 
+@njit(**JIT)
 def _gather_corners(v, tri, origin, out):
     """out (t, 3, 3) = v[tri] - origin."""
-    from . import kernel
-    if kernel.AVAILABLE:
-        _gather_corners_compiled(v, tri, origin, out)
-    else:
-        np.subtract(v[tri], origin, out=out)
-
-
-@njit(cache=True, nogil=True)
-def _gather_corners_compiled(v, tri, origin, out):
     for i in range(len(tri)):
         for k in range(3):
             for j in range(3):
                 out[i, k, j] = v[tri[i, k], j] - origin[j]
 
 
+@njit(**JIT)
 def _unit_normals(normals, smooth, out):
     """out (t, 3, 3): the corner normals of smooth triangles scaled to unit length, zero
     elsewhere (unusable normals never reach the integrator)."""
-    from . import kernel
-    if kernel.AVAILABLE:
-        _unit_normals_compiled(normals, smooth, out)
-        return
-    length = np.sqrt(np.einsum("tci,tci->tc", normals, normals))
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        unit = normals / np.maximum(length, 1e-300)[:, :, None]
-    out[:] = np.where(smooth[:, None, None], unit, 0.0)
-
-
-@njit(cache=True, nogil=True)
-def _unit_normals_compiled(normals, smooth, out):
     for i in range(len(normals)):
         for k in range(3):
             if smooth[i]:

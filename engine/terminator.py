@@ -13,19 +13,17 @@ Specula does the same (intern/cycles/kernel/light/sample.h, shadow_ray_offset an
 shadow_ray_smooth_surface_offset), so a smooth sphere's terminator band matches.
 
 `offset_amount` and `smooth_surface_offset` are scalar functions that the compiled
-kernel inlines; `shadow_origin_offsets` runs them over arrays for the numpy stages.
+kernel inlines (integrator.shadow_ray).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .jit import njit
-
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+from .jit import JIT, njit
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def offset_amount(cutoff, nsx, nsy, nsz, ngx, ngy, ngz, lx, ly, lz):
     """How much (0..1) of the smooth-surface offset a shadow ray toward unit direction l
     gets, with the shading normal ns and geometric normal ng on the incoming side, and
@@ -44,12 +42,12 @@ def offset_amount(cutoff, nsx, nsy, nsz, ngx, ngy, ngz, lx, ly, lz):
     return min(max(amount, 0.0), 1.0), ngx, ngy, ngz
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _dot(ax, ay, az, bx, by, bz):
     return ax * bx + ay * by + az * bz
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def smooth_surface_offset(v, n, w0, w1, w2, ngx, ngy, ngz):
     """The displacement from the flat point with barycentric weights (w0, w1, w2) of the
     triangle with corners v (3, 3) and unit corner normals n (3, 3) to the smooth surface
@@ -89,22 +87,3 @@ def smooth_surface_offset(v, n, w0, w1, w2, ngx, ngy, ngz):
     else:
         h = min(-lowest, h * 0.5)
     return mx * h, my * h, mz * h
-
-
-@njit(**_JIT)
-def shadow_origin_offsets(vertices, normals, prim, w1, w2, ns, ng, wi, cutoff, out):
-    """out (n, 3): the shadow-ray origin displacement of n vertices (triangle prim, the
-    barycentrics of corners 1 and 2, shading and geometric normals on the incoming side,
-    light direction wi, the object's cutoff; 0 where the cutoff is 0)."""
-    for i in range(len(prim)):
-        out[i, 0] = out[i, 1] = out[i, 2] = 0.0
-        if cutoff[i] <= 0.0:
-            continue
-        amount, gx, gy, gz = offset_amount(cutoff[i], ns[i, 0], ns[i, 1], ns[i, 2],
-                                           ng[i, 0], ng[i, 1], ng[i, 2],
-                                           wi[i, 0], wi[i, 1], wi[i, 2])
-        if amount > 0.0:
-            f = prim[i]
-            ox, oy, oz = smooth_surface_offset(vertices[f], normals[f], 1.0 - w1[i] - w2[i],
-                                               w1[i], w2[i], gx, gy, gz)
-            out[i, 0], out[i, 1], out[i, 2] = ox * amount, oy * amount, oz * amount

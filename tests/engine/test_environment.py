@@ -3,18 +3,21 @@
 import numpy as np
 import pytest
 
-from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from engine import Camera, Material, RenderSettings, SceneBuilder, World, environment, render
 from engine.environment import EnvironmentMap
 from tests.scenes import look_at, uv_sphere
 from tests.stats import SIGNIFICANCE, chi2_test
 
 
 def test_equirectangular_mapping_follows_blender():
-    env = EnvironmentMap(np.ones((8, 16, 3)))
+    m = EnvironmentMap(np.ones((8, 16, 3))).texture_from_world
     d = np.array([[1.0, 0, 0], [0, 1.0, 0], [-1.0, 0, 0], [0, 0, 1.0], [0, 0, -1.0]])
-    u, v = env.to_uv(d)
+    u, v = np.array([environment.to_uv(*x, m) for x in d]).T
     assert np.allclose(u[:3], [0.5, 0.25, 0.0]) and np.allclose(v, [0.5, 0.5, 0.5, 1.0, 0.0])
-    assert np.allclose(env.from_uv(u, v), d, atol=1e-12)
+    # The inverse mapping, as `sample` applies it: a one-pixel map puts (ua, ub) at (u, v).
+    one = EnvironmentMap(np.ones((1, 1, 3))).data()
+    back = np.array([environment.sample(a, b, one)[:3] for a, b in zip(u, v)])
+    assert np.allclose(back, d, atol=1e-12)
 
 
 def test_rotation_turns_the_lookup(rng):
@@ -22,27 +25,39 @@ def test_rotation_turns_the_lookup(rng):
     rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # 90 deg about z
     d = rng.normal(size=(100, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    assert np.allclose(EnvironmentMap(img, rot).lookup(d), EnvironmentMap(img).lookup(d @ rot.T))
+    turned, plain = EnvironmentMap(img, rot).data(), EnvironmentMap(img).data()
+
+    def lookup(env, x):
+        return environment.lookup(*environment.to_uv(*x, env.texture_from_world), env.image)
+    assert np.allclose([lookup(turned, x) for x in d], [lookup(plain, x) for x in d @ rot.T])
+    # The sampled directions turn with the map: world_from_texture undoes texture_from_world.
+    for ua, ub in rng.random((20, 2)):
+        w = np.array(environment.sample(ua, ub, turned)[:3])
+        assert np.allclose(w @ rot.T, environment.sample(ua, ub, plain)[:3])
 
 
 def test_sampling_follows_luminance_and_pdf_is_consistent(rng):
     """Chi-square over the map's pixels: counts in proportion to luminance x cos(elev)."""
     h, w, n = 9, 17, 200_000
     img = rng.random((h, w, 3)) ** 3
-    env = EnvironmentMap(img)
-    d, pdf = env.sample(rng.random((n, 2)))
-    u, v = env.to_uv(d)
+    env_map = EnvironmentMap(img)
+    env = env_map.data()
+    m = env.texture_from_world
+    samples = np.array([environment.sample(a, b, env) for a, b in rng.random((n, 2))])
+    d, pdf = samples[:, :3], samples[:, 3]
+    u, v = np.array([environment.to_uv(*x, m) for x in d]).T
     cells = np.minimum((v * h).astype(int), h - 1) * w + np.minimum((u * w).astype(int), w - 1)
     observed = np.bincount(cells, minlength=h * w)
-    p, dof = chi2_test(observed, n * env.distribution.pmf)
+    p, dof = chi2_test(observed, n * env_map.distribution.pmf)
     assert dof > 100 and p > SIGNIFICANCE / 10, p
-    assert np.allclose(env.pdf(d), pdf, rtol=1e-6)
+    assert np.allclose([environment.pdf(a, b, env) for a, b in zip(u, v)], pdf, rtol=1e-6)
     # The density integrates to one over the sphere (Monte Carlo with uniform directions).
     z = rng.uniform(-1, 1, 400_000)
     phi = rng.uniform(0, 2 * np.pi, 400_000)
     s = np.sqrt(1 - z * z)
     dirs = np.column_stack([s * np.cos(phi), s * np.sin(phi), z])
-    assert np.mean(env.pdf(dirs)) * 4 * np.pi == pytest.approx(1.0, rel=0.01)
+    density = [environment.pdf(*environment.to_uv(*x, m), env) for x in dirs]
+    assert np.mean(density) * 4 * np.pi == pytest.approx(1.0, rel=0.01)
 
 
 def test_uniform_map_equals_a_constant_world():

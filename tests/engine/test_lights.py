@@ -211,8 +211,9 @@ def test_many_lights_use_the_spatial_grid_and_stay_unbiased():
 
 
 def test_spatial_choice_samples_its_own_pmf(rng):
-    """choose() draws entries with exactly the probabilities pmf() reports (used by MIS)."""
-    from engine.lights import LightSampler
+    """choose() draws entries with exactly the probabilities entry_pmf() reports (used by
+    MIS)."""
+    from engine.lights import LightSampler, choose, entry_pmf
 
     b = SceneBuilder()
     pm = b.add_material(Material.diffuse("plane", (RHO,) * 3))
@@ -222,19 +223,27 @@ def test_spatial_choice_samples_its_own_pmf(rng):
         b.add_light(light)
     sampler = LightSampler(b.build(Camera(), World()))
     assert hasattr(sampler, "local_pmf")
+    em = sampler.data()
+    assert em.grid > 0
     n = 200_000
-    p = np.tile([[3.0, -4.0, 0.0]], (n, 1))
-    k, pm_k = sampler.choose(p, rng.random(n))
+    p = (3.0, -4.0, 0.0)
+    chosen = [choose(*p, u, em.pmf, em.cdf, em.grid, em.lo, em.cell, em.local_pmf,
+                     em.local_cdf_flat, em.has_mass) for u in rng.random(n)]
+    k = np.array([c[0] for c in chosen])
+    pm_k = np.array([c[1] for c in chosen])
+    probs = np.array([entry_pmf(*p, e, em.pmf, em.grid, em.lo, em.cell, em.local_pmf,
+                                em.has_mass) for e in range(len(sampler))])
+    assert probs.sum() == pytest.approx(1.0)
     counts = np.bincount(k, minlength=len(sampler))
-    expected = sampler.pmf(p[:len(sampler)], np.arange(len(sampler))) * n
-    assert np.allclose(pm_k, sampler.pmf(p, k))
+    expected = probs * n
+    assert np.allclose(pm_k, probs[k])  # p is the same for every draw
     from tests.stats import chi2_test
     pval, _ = chi2_test(counts, expected)
     assert pval > 1e-3
     # The local part favours the nearest light over the global power order.
-    local_best = np.argmax(sampler.pmf(p[:len(sampler)], np.arange(len(sampler))))
+    local_best = np.argmax(probs)
     pos = np.array([np.asarray(light.matrix)[:3, 3] for light in many_lights_scene(12)])
     d2 = np.sum((pos - [3.0, -4.0, 0.0]) ** 2, axis=1)
     power = np.array([np.mean(light.power) for light in many_lights_scene(12)])
     assert local_best == np.argmax(power / np.maximum(d2, 1e-3)) or \
-        sampler.pmf(p[:1], np.array([local_best]))[0] > sampler.distribution.pmf[local_best]
+        probs[local_best] > sampler.distribution.pmf[local_best]

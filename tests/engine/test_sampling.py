@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from engine import sampling
-from engine.camera import CameraModel
-from engine.film import PixelFilter
+from engine.camera import CameraModel, lens_disk
+from engine.film import PixelFilter, filter_offset
+from engine.jit import njit
 from engine.scene import Camera
 from tests.stats import SIGNIFICANCE, chi2_test, expected_2d, histogram_2d, sidak
 
@@ -21,19 +22,41 @@ def assert_chi2(observed, expected):
     assert p > ALPHA, f"chi-square rejects the distribution: p = {p:.3g}, dof = {dof}"
 
 
+def warp(fn, u, *args):
+    """A scalar warp fn(ua, ub, *args) mapped over u (n, 2): its outputs as columns."""
+    return np.column_stack(np.vectorize(lambda ua, ub: fn(ua, ub, *args))(u[:, 0], u[:, 1]))
+
+
+@njit(cache=True)
+def filter_offsets(u, table):
+    """filter_offset for every entry of u, through the filter's table."""
+    out = np.empty_like(u)
+    for k in range(u.size):
+        out.flat[k] = filter_offset(u.flat[k], table)
+    return out
+
+
+@njit(cache=True)
+def lens_points(u, cam):
+    """lens_disk for the rows of u (n, 2): lens points (n, 2) in scene units."""
+    out = np.empty_like(u)
+    for k in range(len(u)):
+        out[k, 0], out[k, 1] = lens_disk(u[k, 0], u[k, 1], cam)
+    return out
+
+
 def test_cosine_hemisphere(rng):
-    w = sampling.sample_cosine_hemisphere(rng.random((N, 2)))
+    w = warp(sampling.cosine_hemisphere, rng.random((N, 2)))
     assert np.allclose(np.linalg.norm(w, axis=1), 1.0)
     pts = np.column_stack([w[:, 2], np.arctan2(w[:, 1], w[:, 0])])
     obs = histogram_2d(pts, (0, -np.pi), (1, np.pi), RES)
     # Density in (cos theta, phi): solid angle d(omega) = d(cos) d(phi), pdf = cos / pi.
     exp = expected_2d(lambda p: p[:, 0] / np.pi, (0, -np.pi), (1, np.pi), RES, N)
     assert_chi2(obs, exp)
-    assert np.allclose(sampling.cosine_hemisphere_pdf(w[:, 2]), w[:, 2] / np.pi)
 
 
 def test_concentric_disk(rng):
-    p = sampling.sample_uniform_disk_concentric(rng.random((N, 2)))
+    p = warp(sampling.concentric_disk, rng.random((N, 2)))
     r2 = np.einsum("ij,ij->i", p, p)
     assert r2.max() <= 1.0 + 1e-12
     # Uniform on the disk <=> (r^2, phi) uniform on [0, 1] x [-pi, pi].
@@ -56,7 +79,7 @@ def polygon_contains(p, blades, rotation):
 
 @pytest.mark.parametrize("blades,rotation", [(3, 0.0), (5, 0.7), (8, -2.0)])
 def test_polygon_aperture(rng, blades, rotation):
-    p = sampling.sample_regular_polygon(rng.random((N, 2)), blades, rotation)
+    p = warp(sampling.regular_polygon, rng.random((N, 2)), blades, rotation)
     assert polygon_contains(p, blades, rotation).mean() > 1 - 1e-9
     obs = histogram_2d(p, (-1, -1), (1, 1), RES)
     area = sampling.regular_polygon_area(blades)
@@ -71,7 +94,7 @@ def test_polygon_vertices_follow_cycles_convention():
     u = np.array([[0.0, 1.0], [1.0 / blades, 1.0 - 1e-12]])
     u[:, 0] += 1.0 - 1e-12  # fractional part -> sqrt(v) = 1: the outer edge
     u[:, 0] = (np.arange(2) + 1.0 - 1e-12) / blades
-    p = sampling.sample_regular_polygon(u, blades, rot)
+    p = warp(sampling.regular_polygon, u, blades, rot)
     angles = np.arctan2(p[:, 1], p[:, 0])
     expected = rot + (2 * np.arange(2) + 1) * np.pi / blades
     assert np.allclose(np.angle(np.exp(1j * (angles - expected))), 0, atol=1e-5)
@@ -79,7 +102,7 @@ def test_polygon_vertices_follow_cycles_convention():
 
 
 def test_triangle_area(rng):
-    b = sampling.sample_uniform_triangle(rng.random((N, 2)))
+    b = warp(sampling.uniform_triangle, rng.random((N, 2)))
     assert np.all(b >= -1e-12) and np.allclose(b.sum(axis=1), 1.0)
     obs = histogram_2d(b[:, :2], (0, 0), (1, 1), RES)
     i, j = np.meshgrid(np.arange(RES), np.arange(RES), indexing="ij")
@@ -101,7 +124,7 @@ def _table_mass(f, edges):
 def test_pixel_filter_samples_its_table(rng, kind, width):
     """Offsets follow the table (chi-square, 2D, separable)."""
     f = PixelFilter(kind, width)
-    d = f.sample(rng.random((N, 2)))
+    d = filter_offsets(rng.random((N, 2)), f.table())
     r = f.radius
     assert np.abs(d).max() <= r + 1e-9
     obs = histogram_2d(d, (-r, -r), (r, r), RES)
@@ -141,7 +164,7 @@ def test_lens_samples_through_camera_model(rng):
     """The lens sample the camera uses (disk, polygon, ratio) covers its aperture uniformly."""
     cam = Camera(use_dof=True, fstop=2.0, lens_mm=50.0, blades=0, ratio=2.0)
     model = CameraModel(cam, 4, 4, np.zeros(3))
-    p = model.sample_lens(rng.random((N, 2)))
+    p = lens_points(rng.random((N, 2)), model.data())
     r = cam.aperture_radius
     q = p / r * np.array([cam.ratio, 1.0])  # undo the anamorphic squeeze: unit disk
     pts = np.column_stack([np.einsum("ij,ij->i", q, q), np.arctan2(q[:, 1], q[:, 0])])
@@ -153,7 +176,7 @@ def test_lens_samples_through_camera_model(rng):
 def test_sequence_is_stratified_per_pixel():
     """Every 2D dimension pair is a (0,2)-sequence per pixel: the first 2^k samples put
     exactly one point in each elementary interval of area 2^-k."""
-    pts = np.array([sampling.SampleStream(np.arange(7), i, 3).get_2d(5) for i in range(64)])
+    pts = np.array([sampling.stream_2d(np.arange(7), i, 3, 5) for i in range(64)])
     for p in range(7):
         for a in range(7):
             cx = np.floor(pts[:, p, 0] * 2**a)
@@ -162,14 +185,13 @@ def test_sequence_is_stratified_per_pixel():
 
 
 def test_sequence_1d_is_stratified():
-    x = np.array([sampling.SampleStream(np.arange(7), i, 9).get_1d(3) for i in range(32)])
+    x = np.array([sampling.stream_1d(np.arange(7), i, 9, 3) for i in range(32)])
     for p in range(7):
         assert len(set(np.floor(x[:, p] * 32))) == 32
 
 
 def test_sequence_is_uniform_across_pixels_and_decorrelated_across_dimensions():
-    s = sampling.SampleStream(np.arange(N), 5, 11)
-    a, b = s.get_2d(2), s.get_2d(3)
+    a, b = sampling.stream_2d(np.arange(N), 5, 11, 2), sampling.stream_2d(np.arange(N), 5, 11, 3)
     obs = histogram_2d(a, (0, 0), (1, 1), RES)
     assert_chi2(obs, np.full_like(obs, N / RES**2))
     # Pairs taken from two different dimensions must be jointly uniform too.
@@ -178,11 +200,16 @@ def test_sequence_is_uniform_across_pixels_and_decorrelated_across_dimensions():
 
 
 def test_sequence_depends_on_seed_and_is_deterministic():
-    a = sampling.SampleStream(np.arange(100), 3, 1).get_2d(4)
-    assert np.array_equal(a, sampling.SampleStream(np.arange(100), 3, 1).get_2d(4))
-    assert not np.allclose(a, sampling.SampleStream(np.arange(100), 3, 2).get_2d(4))
-    # Subsets of rows give the same values as the full batch (thread-chunk independence).
+    a = sampling.stream_2d(np.arange(100), 3, 1, 4)
+    assert np.array_equal(a, sampling.stream_2d(np.arange(100), 3, 1, 4))
+    assert not np.allclose(a, sampling.stream_2d(np.arange(100), 3, 2, 4))
+    # Subsets of pixels give the same values as the full batch (thread-chunk independence),
+    # and so does the kernel's per-sample path (pixel seed, bit-reversed sample index).
     rows = np.array([5, 17, 63])
-    assert np.array_equal(sampling.SampleStream(np.arange(100), 3, 1).get_2d(4, rows=rows),
-                          a[rows])
-    assert np.array_equal(sampling.SampleStream(np.arange(100)[rows], 3, 1).get_2d(4), a[rows])
+    assert np.array_equal(sampling.stream_2d(np.arange(100)[rows], 3, 1, 4), a[rows])
+    rev = sampling.reverse_bits(np.uint64(3))
+    for r in rows:
+        assert sampling.sample_2d(sampling.pixel_seed(r, 1), rev, 4) == tuple(a[r])
+    x = sampling.stream_1d(np.arange(100), 3, 1, 4)
+    assert not np.array_equal(x, sampling.stream_1d(np.arange(100), 3, 2, 4))
+    assert all(sampling.sample_1d(sampling.pixel_seed(r, 1), rev, 4) == x[r] for r in rows)

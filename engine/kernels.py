@@ -1,0 +1,282 @@
+"""Kernels per plan: compiling, caching, and the bounce loop between embree and `shade`.
+
+`Kernel(constants)` compiles integrator.py's stages for one plan (specialise.py); numba
+caches each on disk, so a plan seen before loads in well under a second. `kernel_for`
+hands a render a kernel that is ready now and, when that is not the plan's own, compiles
+the plan's kernel on a background thread for the renderer to switch to at a pass
+boundary. Both give the same pixels: a specialised kernel only leaves out code the scene
+cannot reach.
+
+`Tracer` traces one sample for a batch of pixels with one kernel: camera rays, then per
+bounce embree's closest hits, `shade`, and the shadow rays.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import numpy as np
+
+from . import integrator, specialise
+from .bsdf import layer_tables
+from .camera import CameraModel
+from .film import BACKGROUND_DEPTH, PixelFilter
+from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
+                         SceneData, ShadowRays)
+from .jit import NUMBA
+from .lights import COLUMNS, Emitters
+from .environment import Environment
+from .sampling import cross_rows, reverse_bits
+
+F32 = np.float32
+GENERIC = {name: True for name in PLAN_CONSTANTS}
+GENERIC.update(PROFILE=False, DEBUG=False)
+
+
+def key_of(constants: dict) -> tuple:
+    return tuple(bool(constants[name]) for name in PLAN_CONSTANTS)
+
+
+def tag_of(constants: dict) -> str:
+    bits = "".join("1" if b else "0" for b in key_of(constants))
+    return f"p{int(bits, 2):x}_{specialise.source_hash()}"
+
+
+class Kernel:
+    """integrator.py's stages compiled for one set of plan constants.
+
+    cache=False and `overrides` (global name -> replacement) compile a one-off kernel with
+    some formula swapped, for tests that put a wrong formula in on purpose."""
+
+    def __init__(self, constants: dict, cache: bool = True, overrides: dict | None = None):
+        self.constants = dict(constants)
+        self.key = key_of(self.constants)
+        self.generic = all(self.constants[n] for n in PLAN_CONSTANTS
+                           if n not in ("EXACT_FRESNEL", "PROFILE", "DEBUG"))
+        self.tag = tag_of(self.constants) + ("" if cache else f"_once{id(self):x}")
+        namespace, stages = dict(vars(integrator)), dict(integrator.STAGES)
+        for name, replacement in (overrides or {}).items():
+            if name in stages:
+                stages[name] = (replacement, stages[name][1])
+            else:
+                namespace[name] = replacement
+        f = specialise.specialise(stages, namespace, self.constants, self.tag, cache=cache)
+        self.generate_camera_rays = f["generate_camera_rays"]
+        self.shade = f["shade"]
+        self.accumulate_unoccluded = f["accumulate_unoccluded"]
+        self.all_finite = f["all_finite"]
+        self.compile_seconds = 0.0
+
+    def covers(self, constants: dict) -> bool:
+        """Whether this kernel has every feature `constants` asks for (and the same
+        Fresnel): a kernel built without glass cannot be handed a glass scene."""
+        return all(self.constants[n] or not constants[n] for n in PLAN_CONSTANTS
+                   if n not in ("EXACT_FRESNEL", "PROFILE", "DEBUG")) and \
+            self.constants["EXACT_FRESNEL"] == constants["EXACT_FRESNEL"]
+
+    def _marker(self) -> str | None:
+        """A file beside numba's cache saying this plan's kernel compiled before."""
+        cache = getattr(self.shade, "_cache", None)
+        path = getattr(cache, "_cache_path", None)
+        return os.path.join(path, f"specula-{self.tag}.ready") if path else None
+
+    def on_disk(self) -> bool:
+        marker = self._marker()
+        return bool(marker and os.path.exists(marker))
+
+    def mark_ready(self) -> None:
+        marker = self._marker()
+        if marker:
+            try:
+                with open(marker, "w"):
+                    pass
+            except OSError:  # a read-only cache: the kernel still works, it just reloads
+                pass
+
+    def compiled(self) -> bool:
+        return not NUMBA or bool(self.shade.signatures)
+
+    def describe(self) -> str:
+        off = [n for n in PLAN_CONSTANTS if not self.constants[n]
+               and n not in ("PROFILE", "DEBUG", "EXACT_FRESNEL")]
+        return "generic kernel" if self.generic else \
+            "specialised kernel (without " + ", ".join(n[4:].lower() for n in off) + ")"
+
+
+# ------------------------------------------------------------------ the kernel store
+_lock = threading.Lock()
+_ready: dict[tuple, Kernel] = {}
+_building: dict[tuple, threading.Thread] = {}
+
+
+def ready_kernel(constants: dict) -> Kernel | None:
+    """The kernel for these constants if it is loaded in this process."""
+    with _lock:
+        return _ready.get(key_of(constants))
+
+
+def build_now(constants: dict, compile_with) -> Kernel:
+    """Load (from numba's cache) or compile the kernel for `constants` now; `compile_with`
+    (Kernel) runs it once on real data so every entry point compiles with real types."""
+    k = ready_kernel(constants)
+    if k is not None:
+        return k
+    k = Kernel(constants)
+    t0 = time.perf_counter()
+    compile_with(k)
+    k.compile_seconds = time.perf_counter() - t0
+    k.mark_ready()
+    with _lock:
+        _ready.setdefault(k.key, k)
+        return _ready[k.key]
+
+
+def build_in_background(constants: dict, compile_with) -> threading.Thread:
+    """Start (or join) compiling the kernel for `constants` on a daemon thread."""
+    key = key_of(constants)
+    with _lock:
+        thread = _building.get(key)
+        if thread is not None:
+            return thread
+
+        def run():
+            try:
+                build_now(constants, compile_with)
+            finally:
+                with _lock:
+                    _building.pop(key, None)
+
+        thread = threading.Thread(target=run, name="specula-kernel", daemon=True)
+        _building[key] = thread
+    thread.start()
+    return thread
+
+
+def generic_constants(exact_fresnel: bool = True) -> dict:
+    return dict(GENERIC, EXACT_FRESNEL=exact_fresnel)
+
+
+# ------------------------------------------------------------------ scene data
+def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool) -> SceneData:
+    """The scene as a kernel reads it. A specialised kernel gets None for the parts its plan
+    does not use; the generic one gets harmless stand-ins (no emitters, flat normals, no
+    environment) that its run-time checks skip."""
+    v = scene.vertices
+    t = len(v)
+    n = cross_rows(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    tri_normal = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    tri_scale = np.abs(v).max(axis=(1, 2)) if t else np.zeros(0)
+    smooth_needed = generic or plan.shading_normals or plan.terminator
+    normals = smooth = obj = offset = None
+    if smooth_needed:
+        normals = scene.normals if scene.normals is not None else np.zeros((1, 3, 3))
+        smooth = scene.smooth.astype(np.bool_) if scene.normals is not None else \
+            np.zeros(t, np.bool_)
+    if generic or plan.terminator:
+        obj = scene.object_index.astype(np.int64)
+        offset = np.asarray(scene.terminator_offset, np.float64)
+        if len(offset) == 0:
+            offset = np.zeros(1)
+    geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
+                        normals, smooth, obj, offset)
+    m = scene.materials
+    rough = plan.principled or plan.glossy
+    used = np.unique(scene.material_index)
+    layers = layer_tables(m, used) if (rough or generic) else None
+    materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
+                              m.transmission_tint, m.emission, layers)
+    em = emitters.data() if emitters is not None else None
+    if generic:
+        em = _generic_emitters(em, t)
+    return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
+                     cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table())
+
+
+def _generic_emitters(em, num_triangles: int) -> Emitters:
+    """Emitters with every part present, as the generic kernel is compiled for."""
+    z3, z = np.zeros((0, 3)), np.zeros(0)
+    stand_in_env = Environment(np.zeros((1, 1, 3), F32), np.eye(3), np.eye(3), np.ones(1),
+                               np.ones(1))
+    if em is None:
+        return Emitters(z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z,
+                        np.zeros(1, np.bool_), np.full(num_triangles, -1, np.int64),
+                        np.ones(num_triangles), z3, z3, z3, z3, z, z3, z,
+                        np.zeros((0, COLUMNS)), stand_in_env, -1)
+    if em.environment is None:
+        em = em._replace(environment=stand_in_env)
+    return em
+
+
+# ------------------------------------------------------------------ tracing
+class Tracer:
+    """Traces one sample for batches of pixels with one kernel; thread-safe.
+
+    profile : `shade` reads the CPU's cycle counter around its stages (a PROFILE kernel),
+    and the stage timers split its time into surface interaction, light sampling and BSDF
+    sampling."""
+
+    def __init__(self, kernel: Kernel, data: SceneData, accel, settings, count):
+        self.kernel, self.data, self.accel, self.settings = kernel, data, accel, settings
+        self._count = count  # callable(stage, seconds)
+        self.profile = bool(kernel.constants["PROFILE"])
+
+    def trace_pixels(self, pixels: np.ndarray, sample: int):
+        """One sample for each pixel id in `pixels` (n,): radiance (n, 3), depth (n,),
+        normal (n, 3) and, with a DEBUG kernel, the stage that first went non-finite (n,)."""
+        k, s = self.kernel, self.settings
+        n = len(pixels)
+        paths = Paths(np.arange(n, dtype=np.int64), np.empty(n, np.uint64), np.empty((n, 3)),
+                      np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
+                      np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
+                      np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32))
+        t0 = time.perf_counter()
+        k.generate_camera_rays(np.asarray(pixels, np.int64), sample, s.seed, self.data, paths)
+        self._count("generate camera rays", time.perf_counter() - t0)
+        rev_sample = reverse_bits(np.uint64(sample))
+        # Shadow rays: at most one per path and bounce.
+        shadow = ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
+                            np.empty(n, F32), np.empty((n, 3)))
+        profile = np.zeros(3 if self.profile else 0, np.uint64)
+        m = n
+        for depth in range(s.max_bounces + 2):
+            if m == 0:
+                break
+            t0 = time.perf_counter()
+            prim, tfar, bu, bv = self.accel.intersect_raw(paths.origin32[:m], paths.dir32[:m],
+                                                          paths.tmax32[:m])
+            self._count("intersect", time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            m, count = k.shade(depth, rev_sample, s.max_bounces, self.data, prim, tfar, bu, bv,
+                               m, paths, shadow, profile)
+            self._count_shade(time.perf_counter() - t0, profile)
+            if count:
+                t0 = time.perf_counter()
+                blocked = self.accel.occluded_raw(shadow.origin[:count], shadow.direction[:count],
+                                                  shadow.tmax[:count])
+                k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)
+                self._count("trace shadow rays", time.perf_counter() - t0)
+        return paths.radiance, paths.depth, paths.normal, paths.nonfinite
+
+    def _count_shade(self, seconds: float, profile: np.ndarray) -> None:
+        if len(profile) == 0 or profile[0] == 0:
+            self._count("shade", seconds)
+            return
+        light, bsdf = profile[1] / profile[0], profile[2] / profile[0]
+        self._count("surface interaction", seconds * (1.0 - light - bsdf))
+        self._count("sample light", seconds * light)
+        self._count("sample BSDF", seconds * bsdf)
+        profile[:] = 0
+
+    def explain_nonfinite(self, pixels: np.ndarray, sample: int, width: int,
+                          debug_tracer: "Tracer") -> list[str]:
+        """Messages naming the stage and pixel of non-finite samples: the bad samples are
+        traced again (sampling is deterministic) by a DEBUG kernel that marks the stage."""
+        msgs = []
+        for p in pixels[:5]:
+            stage = int(debug_tracer.trace_pixels(np.array([p]), sample)[3][0])
+            where = f"pixel (x={p % width}, y={p // width})"
+            msgs.append(f"stage '{STAGE_NAMES[stage]}' produced a non-finite value at {where}"
+                        if stage else f"non-finite sample at {where}, stage unknown")
+        return msgs
