@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+import types
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from .camera import CameraModel
 from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
                          SceneData, ShadowRays)
-from .jit import NUMBA
+from .jit import INLINE, NUMBA
 from .lights import COLUMNS, Emitters
 from .environment import Environment
 from .sampling import cross_rows, reverse_bits
@@ -58,8 +59,10 @@ class Kernel:
         self.tag = tag_of(self.constants) + ("" if cache else f"_once{id(self):x}")
         namespace, stages = dict(vars(integrator)), dict(integrator.STAGES)
         for name, replacement in (overrides or {}).items():
-            if name in stages:
+            if name in stages:  # a stage swapped for another
                 stages[name] = (replacement, stages[name][1])
+            elif isinstance(replacement, types.FunctionType):  # a new stage it may call
+                stages[name] = (replacement, INLINE)
             else:
                 namespace[name] = replacement
         f = specialise.specialise(stages, namespace, self.constants, self.tag, cache=cache)

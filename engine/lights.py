@@ -197,6 +197,65 @@ def spot_attenuation(j, vx, vy, vz, L):
 
 
 @njit(**INLINE)
+def _sample_point_light(j, px, py, pz, ua, ub, L):
+    """sample_object for a point or spot light: a delta light (radius 0), a sphere (soft
+    falloff off: uniform in its visible cone, everywhere from inside) or a disk facing the
+    point (soft falloff on)."""
+    p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
+    v0 = v1 = v2 = 0.0
+    cx0, cy0, cz0 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
+    tx, ty, tz = cx0 - px, cy0 - py, cz0 - pz
+    d = math.sqrt(tx * tx + ty * ty + tz * tz)
+    dn = d if d > 0 else 1.0
+    cx, cy, cz = tx / dn, ty / dn, tz / dn
+    r = L[j, _RADIUS]
+    soft = L[j, _SOFT] != 0
+    wx, wy, wz, dist, pdf = cx, cy, cz, d, np.inf
+    valid = True
+    if r <= 0:  # intensity P / (4 pi), a delta light
+        g = 4.0 * np.pi * max(d, 1e-300) ** 2
+        v0, v1, v2 = p0 / g, p1 / g, p2 / g
+    elif not soft:  # a sphere: uniform in its visible cone, or everywhere from inside
+        inside = d <= r
+        cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
+        if d <= 0.0:
+            cx, cy, cz = 0.0, 0.0, 1.0
+        wx, wy, wz, cos, pdf = uniform_cone(cx, cy, cz, cos_max, ua, ub)
+        root = math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
+        dist = d * cos + root if inside else d * cos - root
+        f = L[j, _FACTOR]
+        v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+    elif soft and d > 0:  # a disk of radius r facing the point
+        nx, ny, nz = -cx, -cy, -cz
+        s, t = build_frame(nx, ny, nz)
+        qa, qb = concentric_disk(ua, ub)
+        qa, qb = qa * r, qb * r
+        yx = cx0 + qa * s[0] + qb * t[0]
+        yy = cy0 + qa * s[1] + qb * t[1]
+        yz = cz0 + qa * s[2] + qb * t[2]
+        tx, ty, tz = yx - px, yy - py, yz - pz
+        dist = math.sqrt(tx * tx + ty * ty + tz * tz)
+        wx, wy, wz = tx / dist, ty / dist, tz / dist
+        cos_l = -(wx * nx + wy * ny + wz * nz)
+        pdf = dist * dist / (np.pi * r ** 2 * max(cos_l, 1e-300))
+        f = L[j, _FACTOR]
+        v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+    else:
+        valid = False
+    if valid:
+        # Spot cone along each sampled ray, from the sampled point on the light toward
+        # the shading point (Cycles' spot_light_sample), as light hits evaluate it
+        # along the ray that hit; inside a spot's sphere there is no cone.
+        inside_sphere = not soft and r > 0 and d <= r
+        att = 1.0 if inside_sphere else spot_attenuation(j, -wx, -wy, -wz, L)
+        v0, v1, v2 = v0 * att, v1 * att, v2 * att
+    else:
+        v0 = v1 = v2 = 0.0
+        pdf = 0.0
+    return wx, wy, wz, dist, v0, v1, v2, pdf
+
+
+@njit(**INLINE)
 def sample_object(j, px, py, pz, ua, ub, L):
     """Next-event estimation of light j from point p: (wi, distance (inf for a sun),
     radiance / solid-angle pdf per channel, pdf (inf for delta lights))."""
@@ -204,56 +263,7 @@ def sample_object(j, px, py, pz, ua, ub, L):
     p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
     v0 = v1 = v2 = 0.0
     if typ == POINT or typ == SPOT:
-        cx0, cy0, cz0 = L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2]
-        tx, ty, tz = cx0 - px, cy0 - py, cz0 - pz
-        d = math.sqrt(tx * tx + ty * ty + tz * tz)
-        dn = d if d > 0 else 1.0
-        cx, cy, cz = tx / dn, ty / dn, tz / dn
-        r = L[j, _RADIUS]
-        soft = L[j, _SOFT] != 0
-        wx, wy, wz, dist, pdf = cx, cy, cz, d, np.inf
-        valid = True
-        if r <= 0:  # intensity P / (4 pi), a delta light
-            g = 4.0 * np.pi * max(d, 1e-300) ** 2
-            v0, v1, v2 = p0 / g, p1 / g, p2 / g
-        elif not soft:  # a sphere: uniform in its visible cone, or everywhere from inside
-            inside = d <= r
-            cos_max = -1.0 if inside else math.sqrt(max(0.0, 1.0 - (r / d) ** 2))
-            if d <= 0.0:
-                cx, cy, cz = 0.0, 0.0, 1.0
-            wx, wy, wz, cos, pdf = uniform_cone(cx, cy, cz, cos_max, ua, ub)
-            root = math.sqrt(max(r ** 2 - d ** 2 * (1 - cos * cos), 0.0))
-            dist = d * cos + root if inside else d * cos - root
-            f = L[j, _FACTOR]
-            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
-        elif soft and d > 0:  # a disk of radius r facing the point
-            nx, ny, nz = -cx, -cy, -cz
-            s, t = build_frame(nx, ny, nz)
-            qa, qb = concentric_disk(ua, ub)
-            qa, qb = qa * r, qb * r
-            yx = cx0 + qa * s[0] + qb * t[0]
-            yy = cy0 + qa * s[1] + qb * t[1]
-            yz = cz0 + qa * s[2] + qb * t[2]
-            tx, ty, tz = yx - px, yy - py, yz - pz
-            dist = math.sqrt(tx * tx + ty * ty + tz * tz)
-            wx, wy, wz = tx / dist, ty / dist, tz / dist
-            cos_l = -(wx * nx + wy * ny + wz * nz)
-            pdf = dist * dist / (np.pi * r ** 2 * max(cos_l, 1e-300))
-            f = L[j, _FACTOR]
-            v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
-        else:
-            valid = False
-        if valid:
-            # Spot cone along each sampled ray, from the sampled point on the light toward
-            # the shading point (Cycles' spot_light_sample), as light hits evaluate it
-            # along the ray that hit; inside a spot's sphere there is no cone.
-            inside_sphere = not soft and r > 0 and d <= r
-            att = 1.0 if inside_sphere else spot_attenuation(j, -wx, -wy, -wz, L)
-            v0, v1, v2 = v0 * att, v1 * att, v2 * att
-        else:
-            v0 = v1 = v2 = 0.0
-            pdf = 0.0
-        return wx, wy, wz, dist, v0, v1, v2, pdf
+        return _sample_point_light(j, px, py, pz, ua, ub, L)
     if typ == SUN:
         ax, ay, az = -L[j, _DIRECTION], -L[j, _DIRECTION + 1], -L[j, _DIRECTION + 2]
         cos_max = L[j, _COS_ANGLE]

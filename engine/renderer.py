@@ -26,7 +26,7 @@ from .camera import CameraModel
 from .film import Film, Pass
 from .lights import LightSampler
 from .plan import Plan, make_plan
-from .scene import RenderSettings, Scene
+from .scene import Camera, Material, RenderSettings, Scene, SceneBuilder, World
 
 log = logging.getLogger("specula")
 
@@ -83,17 +83,21 @@ class Kernels:
         generic["PROFILE"] = self.profile
         self.pending = None
         self.switched_at = 0
+        # SPECULA_KERNEL=generic makes "auto" mean "generic" (the test suite: one compile
+        # instead of one per plan; tests/engine/test_kernel.py checks the plans' kernels).
+        mode = settings.kernel if settings.kernel != "auto" else \
+            os.environ.get("SPECULA_KERNEL", "auto")
         own = kernels.ready_kernel(self.constants)
-        if own is None and settings.kernel != "generic":
+        if own is None and mode != "generic":
             probe = kernels.Kernel(self.constants)
-            if probe.on_disk() or settings.kernel == "specialised" or \
+            if probe.on_disk() or mode == "specialised" or \
                     kernels.ready_kernel(generic) is None:
                 own = kernels.build_now(self.constants, self._compile)
-        if own is not None and settings.kernel != "generic":
+        if own is not None and mode != "generic":
             self.tracer = self.tracer_for(own)
             return
         self.tracer = self.tracer_for(kernels.build_now(generic, self._compile))
-        if settings.kernel == "auto":
+        if mode == "auto":
             self.pending = kernels.build_in_background(self.constants, self._compile)
 
     def tracer_for(self, kernel) -> kernels.Tracer:
@@ -147,6 +151,75 @@ def _thread_count(settings: RenderSettings) -> int:
     return settings.threads or os.cpu_count() or 1
 
 
+class _Worker:
+    """What a worker thread does with one chunk of a pass."""
+
+    def __init__(self, settings, kernel, film, timers, debug):
+        self.settings, self.kernel, self.film, self.timers = settings, kernel, film, timers
+        self.debug = debug
+
+    def frame_ids(self, local: np.ndarray) -> np.ndarray:
+        """Full-frame ids of window pixels: sampling and camera rays use the full frame's
+        numbering, so a region renders exactly the pixels a whole-frame render would."""
+        x0, y0, x1, _ = self.settings.window
+        ly, lx = np.divmod(local, x1 - x0)
+        return (ly + y0) * self.settings.width + lx + x0
+
+    def trace(self, pixels: np.ndarray, sample: int, tracer):
+        """One sample for each pixel, with messages for samples that came out non-finite
+        in any pass they feed (traced again by the DEBUG kernel to name the stage)."""
+        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample)
+        if tracer.kernel.all_finite(radiance, depth, normal):
+            return radiance, depth, normal, []
+        if self.debug:
+            raise NonFiniteError(tracer.explain_nonfinite(pixels[stage > 0][:1], sample,
+                                                          self.settings.width, tracer)[0])
+        bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
+                & np.all(np.isfinite(normal), axis=1))
+        return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample)
+
+    def trace_and_fold(self, local: np.ndarray, sample: int, gate: _Gate, tracer) -> None:
+        """One chunk's sample, folded into the film by the worker itself once the gate of
+        its pass opens: the main thread opens it after it has finished with the previous
+        pass, so each pixel gets its samples in order (the film does not depend on thread
+        timing) and a pass is folded whole or, if the render stopped, not at all."""
+        if gate.discard:
+            return
+        radiance, depth, normal, rejected = self.trace(self.frame_ids(local), sample, tracer)
+        gate.opened.wait()
+        if gate.discard:
+            return
+        t1 = time.perf_counter()
+        self.film.add(local, radiance, depth, normal, rejected)
+        self.timers("film", time.perf_counter() - t1)
+
+
+def _stop_reason(settings, sample, elapsed, rel, should_stop) -> str:
+    """Why a render stops after this pass before its sample count ("" if it goes on)."""
+    if settings.time_limit and elapsed >= settings.time_limit:
+        return "time limit"
+    if settings.target_error and sample >= 2 and rel <= settings.target_error:
+        return "target error"
+    if should_stop is not None and should_stop():
+        return "cancelled"
+    return ""
+
+
+def _prepare(scene, settings, debug):
+    """The plan, the film, the stage timers and the kernels of a render."""
+    plan = make_plan(scene, settings)
+    log.info("specula plan: %s", plan.describe())
+    accel = Accel(scene)
+    emitters = LightSampler(scene) if plan.emitters else None
+    camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
+    x0, y0, x1, y1 = settings.window
+    timers = StageTimers()
+    kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
+    if debug:
+        kernel.use_debug_kernel()
+    return plan, Film(x1 - x0, y1 - y0), timers, kernel
+
+
 def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=None,
            debug: bool = False) -> RenderResult:
     """Render `scene` progressively.
@@ -158,59 +231,16 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     """
     settings.validate()
     t0 = time.perf_counter()
-    plan = make_plan(scene, settings)
-    log.info("specula plan: %s", plan.describe())
-    accel = Accel(scene)
-    emitters = LightSampler(scene) if plan.emitters else None
-    camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
-    x0, y0, x1, y1 = settings.window
-    film = Film(x1 - x0, y1 - y0)
-    timers = StageTimers()
-    kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
-    if debug:
-        kernel.use_debug_kernel()
-    n_pixels = (x1 - x0) * (y1 - y0)
+    plan, film, timers, kernel = _prepare(scene, settings, debug)
+    n_pixels = film.width * film.height
 
-    def frame_ids(local: np.ndarray) -> np.ndarray:
-        """Full-frame ids of window pixels: sampling and camera rays use the full frame's
-        numbering, so a region renders exactly the pixels a whole-frame render would."""
-        ly, lx = np.divmod(local, x1 - x0)
-        return (ly + y0) * settings.width + lx + x0
-
-    def trace(pixels: np.ndarray, sample: int, tracer):
-        """One sample for each pixel, with messages for samples that came out non-finite
-        in any pass they feed (traced again by the DEBUG kernel to name the stage)."""
-        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample)
-        if tracer.kernel.all_finite(radiance, depth, normal):
-            return radiance, depth, normal, []
-        if debug:
-            raise NonFiniteError(tracer.explain_nonfinite(pixels[stage > 0][:1], sample,
-                                                          settings.width, tracer)[0])
-        bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
-                & np.all(np.isfinite(normal), axis=1))
-        return radiance, depth, normal, kernel.explain_nonfinite(pixels[bad], sample)
-
-    def trace_and_fold(local: np.ndarray, sample: int, gate: _Gate, tracer) -> None:
-        """One chunk's sample, folded into the film by the worker itself once the gate of
-        its pass opens: the main thread opens it after it has finished with the previous
-        pass, so each pixel gets its samples in order (the film does not depend on thread
-        timing) and a pass is folded whole or, if the render stopped, not at all."""
-        if gate.discard:
-            return
-        radiance, depth, normal, rejected = trace(frame_ids(local), sample, tracer)
-        gate.opened.wait()
-        if gate.discard:
-            return
-        t1 = time.perf_counter()
-        film.add(local, radiance, depth, normal, rejected)
-        timers("film", time.perf_counter() - t1)
-
+    worker = _Worker(settings, kernel, film, timers, debug)
     threads = _thread_count(settings)
     # Equal chunks, a multiple of the thread count, none above chunk_pixels (memory bound).
     n_chunks = threads * max(1, -(-n_pixels // (threads * int(settings.chunk_pixels))))
     chunk = -(-n_pixels // n_chunks)
     starts = list(range(0, n_pixels, chunk))
-    stop_reason, cancelled, first = "samples", False, 0.0
+    stop_reason, cancelled, first = "", False, 0.0
     sample = 0
     snap = None  # the last pass handed to on_pass
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
@@ -219,7 +249,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
         def launch(index):
             """Queue pass `index`: one sample per pixel, chunk by chunk over the pool."""
             gate = _Gate()
-            return gate, [pool.submit(trace_and_fold, c, index, gate, kernel.tracer)
+            return gate, [pool.submit(worker.trace_and_fold, c, index, gate, kernel.tracer)
                           for c in chunks]
 
         gate, jobs = launch(0)
@@ -248,14 +278,9 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                     on_pass(snap)
                 if sample >= settings.samples:
                     break
-                if settings.time_limit and elapsed >= settings.time_limit:
-                    stop_reason = "time limit"
-                    break
-                if settings.target_error and sample >= 2 and rel <= settings.target_error:
-                    stop_reason = "target error"
-                    break
-                if should_stop is not None and should_stop():
-                    stop_reason, cancelled = "cancelled", True
+                stop_reason = _stop_reason(settings, sample, elapsed, rel, should_stop)
+                if stop_reason:
+                    cancelled = stop_reason == "cancelled"
                     break
                 if ahead is not None:
                     gate, jobs = ahead
@@ -268,13 +293,18 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 ahead[0].opened.set()
                 for job in ahead[1]:
                     job.cancel()
-    elapsed = time.perf_counter() - t0
+    return _result(scene, settings, plan, film, timers, kernel, snap, sample,
+                   time.perf_counter() - t0, stop_reason or "samples", cancelled, first)
+
+
+def _result(scene, settings, plan, film, timers, kernel, snap, sample, elapsed, stop_reason,
+            cancelled, first) -> RenderResult:
     # The film is final now; the last pass's snapshot already shows it, if there was one.
     if snap is None or snap.samples != sample:
         snap = film.snapshot(sample, elapsed, sample / settings.samples)
     name, note = kernel.describe()
-    plan = replace(plan, kernel=name, kernel_note=note)
-    return RenderResult(**{**snap.__dict__, "seconds": elapsed}, plan=plan,
+    return RenderResult(**{**snap.__dict__, "seconds": elapsed},
+                        plan=replace(plan, kernel=name, kernel_note=note),
                         stop_reason=stop_reason, cancelled=cancelled,
                         warnings=list(scene.warnings) + film.rejected, time_to_first_pass=first,
                         stage_seconds=dict(timers.seconds))
@@ -285,8 +315,6 @@ def warm_up() -> None:
     ever) by rendering a 4x3 image of one emissive triangle with it. The add-on calls it in
     the background when it registers, so a render can start with it while the kernel made
     for its scene loads or compiles."""
-    from .scene import Camera, Material, SceneBuilder, World
-
     b = SceneBuilder()
     m = b.add_material(Material.diffuse("warm-up", (0.5, 0.5, 0.5), emission=(1, 1, 1)))
     b.add_mesh("warm-up", np.array([[-1.0, -1, -2], [1, -1, -2], [0, 1, -2]]),

@@ -49,26 +49,22 @@ class RecordingAccel(Accel):
 
 @contextmanager
 def profiled_render():
-    """Keep the Accel and Integrator of the renders inside the block (the last ones in
-    `seen`), for embree's share and the per-stage split."""
+    """Keep the Accel of the renders inside the block (the last one in `seen`), for
+    embree's share; the render's own stage timers give the per-stage split."""
     import engine.renderer as renderer
 
     seen = {}
-    original_accel, original_integrator = renderer.Accel, renderer.Integrator
+    original_accel = renderer.Accel
 
     def accel(scene):
         seen["accel"] = a = original_accel(scene)
         return a
 
-    def integrator(*args, **kwargs):
-        seen["integrator"] = i = original_integrator(*args, **kwargs)
-        return i
-
-    renderer.Accel, renderer.Integrator = accel, integrator
+    renderer.Accel = accel
     try:
         yield seen
     finally:
-        renderer.Accel, renderer.Integrator = original_accel, original_integrator
+        renderer.Accel = original_accel
 
 
 def shares(seen, wall, threads):
@@ -76,7 +72,7 @@ def shares(seen, wall, threads):
     'intersect' and 'trace shadow rays' include their embreex calls; 'other' is what no
     stage covers: the bounce loop's Python glue and threads waiting at pass ends."""
     busy = wall * threads
-    stages = {k: round(v / busy, 3) for k, v in sorted(seen["integrator"].stage_seconds.items(),
+    stages = {k: round(v / busy, 3) for k, v in sorted(seen["result"].stage_seconds.items(),
                                                          key=lambda kv: -kv[1])}
     stages["other"] = round(1.0 - sum(stages.values()), 3)
     return round(seen["accel"].seconds / busy, 3), stages
@@ -91,7 +87,7 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
     render(scene, replace(settings, width=16, height=12, samples=1))  # load compiled code
     with profiled_render() as seen:
         t0 = time.perf_counter()
-        result = render(scene, settings)
+        seen["result"] = result = render(scene, settings)
         wall = time.perf_counter() - t0
     accel = seen["accel"]
     threads_used = settings.threads or os.cpu_count()
@@ -111,18 +107,18 @@ def run(width=480, height=360, samples=8, threads=0, max_bounces=8, kernel="auto
     raw_seconds = time.perf_counter() - t0
     fraction, stages = shares(seen, wall, threads_used)
     profiled = None
-    if result.plan.kernel == "compiled":
+    if True:
         # Profile: the same render with `shade` counting cycles per stage, so its time
         # splits into surface interaction, light sampling and BSDF sampling.
-        from engine import kernel as kernel_module
-        kernel_module.CompiledTracer.profile = True
+        renderer.Kernels.profile = True
         try:
+            render(scene, replace(settings, width=16, height=12, samples=1))
             with profiled_render() as seen_p:
                 t0 = time.perf_counter()
-                render(scene, settings)
+                seen_p["result"] = render(scene, settings)
                 profiled = shares(seen_p, time.perf_counter() - t0, threads_used)[1]
         finally:
-            kernel_module.CompiledTracer.profile = False
+            renderer.Kernels.profile = False
     return {
         "scene": "CBspheres", "kernel": result.plan.kernel, "resolution": f"{width}x{height}",
         "samples": result.samples,
@@ -144,10 +140,10 @@ def main():
     ap.add_argument("--samples", type=int, default=8)
     ap.add_argument("--threads", type=int, default=0)
     ap.add_argument("--out", default="out/bench")
-    ap.add_argument("--kernel", choices=("both", "numpy", "compiled"), default="both",
-                    help="both: the numpy integrator, then the compiled kernels, in one run")
+    ap.add_argument("--kernel", choices=("both", "generic", "specialised"), default="both",
+                    help="both: the generic kernel, then the scene's own, in one run")
     args = ap.parse_args()
-    kernels = ("numpy", "compiled") if args.kernel == "both" else (args.kernel,)
+    kernels = ("generic", "specialised") if args.kernel == "both" else (args.kernel,)
     reports = [run(samples=args.samples, threads=args.threads, kernel=k) for k in kernels]
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "core.json"), "w") as f:

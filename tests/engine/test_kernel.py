@@ -1,9 +1,10 @@
-"""The compiled kernels (engine/kernel.py) against the numpy integrator.
+"""Kernels per plan (engine/kernels.py): the generic kernel against the one made for the
+scene's plan.
 
-The kernels draw the same sample values and run the same arithmetic as the numpy stages,
-so on every scene they cover they must give the same image up to float rounding, pass by
-pass. All the statistical and known-answer tests of the numpy integrator (furnace,
-invisible glass, the Cycles comparisons' power tests) then carry over to them.
+A specialised kernel only leaves out code its scene cannot reach, so on every scene both
+must give the same image to the last bit, pass by pass: a render may start with the
+generic kernel and switch at a pass boundary. All the statistical and known-answer tests
+(furnace, invisible glass, the Cycles comparisons' power tests) then hold for both.
 """
 
 from dataclasses import replace
@@ -11,53 +12,36 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from engine import kernel, render
-from engine.sampling import SampleStream
-from engine.scene import GLASS, Camera, Light, Material, SceneBuilder, World
+from engine import render, sampling
+from engine.scene import Camera, Light, Material, SceneBuilder, World
 from tests import scenes
-
-pytestmark = pytest.mark.skipif(not kernel.AVAILABLE, reason="numba is not installed")
 
 
 def both(scene, **kw):
     st = scenes.settings(width=40, height=30, samples=4, **kw)
-    a = render(scene, replace(st, kernel="numpy"))
-    b = render(scene, replace(st, kernel="compiled"))
-    assert a.plan.kernel == "numpy" and b.plan.kernel == "compiled"
+    a = render(scene, replace(st, kernel="generic"))
+    b = render(scene, replace(st, kernel="specialised"))
+    assert a.plan.kernel == "generic" and b.plan.kernel == "specialised"
     return a, b
 
 
 def assert_same_image(a, b):
-    """Equal up to float rounding in every pass (a wrong IOR or one bounce fewer changes
-    pixels by percent; see test_a_wrong_renderer_is_told_apart)."""
+    """Equal to the last bit in every pass (a wrong IOR or one bounce fewer changes pixels
+    by percent; see test_a_wrong_renderer_is_told_apart)."""
     for name in ("combined", "depth", "normal", "variance"):
-        x, y = getattr(a, name), getattr(b, name)
-        np.testing.assert_allclose(y, x, rtol=1e-5, atol=1e-6, err_msg=name)
+        np.testing.assert_array_equal(getattr(b, name), getattr(a, name), err_msg=name)
     assert a.samples == b.samples
 
 
 # ----------------------------------------------------------------- sample sequences
-@pytest.mark.parametrize("sample", [0, 1, 7, 1000, 2**31 + 5])
-def test_sample_values_are_bit_identical_to_sample_stream(sample):
-    rng = np.random.default_rng(4)
-    pixels = rng.integers(0, 2**33, 500)
-    for seed in (0, 17, 2**32 - 1):
-        stream = SampleStream(pixels, sample, seed)
-        for dim in (0, 1, 2, 9, 57):
-            np.testing.assert_array_equal(kernel.stream_2d(pixels, sample, seed, dim),
-                                          stream.get_2d(dim))
-            np.testing.assert_array_equal(kernel.stream_1d(pixels, sample, seed, dim),
-                                          stream.get_1d(dim))
-
-
 def test_guided_interpolation_is_np_interp():
     from engine.film import PixelFilter
 
     f = PixelFilter("BLACKMAN_HARRIS", 1.5)
-    guide = kernel.interp_guide(f._cdf)
+    guide = sampling.interp_guide(f._cdf)
     u = np.concatenate([np.random.default_rng(2).random(2000), [0.0, 0.5, 1.0 - 2**-53],
                         f._cdf[::997]])
-    got = np.array([kernel._interp(x, f._cdf, f._x, guide) for x in u])
+    got = np.array([sampling.guided_interp(x, f._cdf, f._x, guide) for x in u])
     np.testing.assert_array_equal(got, np.interp(u, f._cdf, f._x))
 
 
@@ -72,7 +56,7 @@ def test_guided_interpolation_is_np_interp():
     dict(filter_type="BOX", filter_width=1.0),
     dict(threads=1, chunk_pixels=97),
 ])
-def test_cbspheres_matches_numpy(opts):
+def test_cbspheres_same_in_both_kernels(opts):
     assert_same_image(*both(scenes.cbspheres(), **opts))
 
 
@@ -84,12 +68,12 @@ def test_cbspheres_matches_numpy(opts):
     dict(type="ORTHO", ortho_scale=2.5, use_dof=True, fstop=8.0, focus_distance=3.0),
     dict(sensor_fit="VERTICAL", sensor_height=20.0),
 ])
-def test_cameras_match_numpy(cam):
+def test_cameras_same_in_both_kernels(cam):
     scene = scenes.cornell_box().build(scenes.cornell_camera(**cam), World((0, 0, 0)))
     assert_same_image(*both(scene))
 
 
-def test_metal_tinted_glass_world_light_and_emissive_diffuse_match_numpy():
+def test_metal_tinted_glass_world_light_and_emissive_diffuse_same_in_both_kernels():
     b = SceneBuilder()
     floor = b.add_material(Material.diffuse("floor", (0.5, 0.6, 0.4), emission=(0.05, 0, 0)))
     metal = b.add_material(Material.metal("gold", (1.0, 0.75, 0.3)))
@@ -107,7 +91,7 @@ def test_metal_tinted_glass_world_light_and_emissive_diffuse_match_numpy():
 
 
 @pytest.mark.parametrize("emitters", [1, 24])
-def test_principled_and_rough_glossy_match_numpy(emitters):
+def test_principled_and_rough_glossy_same_in_both_kernels(emitters):
     """The layered GGX lobes (light sampling with MIS on both lobes, energy compensation
     tables) under one ceiling light or 24 small ones (the light grid)."""
     b = scenes.cornell_box(spheres=False, emitter_radiance=10.0 if emitters == 1 else 0.0)
@@ -131,7 +115,7 @@ def test_principled_and_rough_glossy_match_numpy(emitters):
 
 
 @pytest.mark.parametrize("light", ["area", "point"])
-def test_shadow_terminator_offset_matches_numpy(light):
+def test_shadow_terminator_offset_same_in_both_kernels(light):
     """Coarse smooth spheres with terminator offsets 0, 0.1 and 1 lit from the side: the
     lifted shadow-ray origins (terminator.py) and the diffuse light evaluation without the
     geometric cut, in both paths; and the offset changes the image."""
@@ -207,7 +191,7 @@ def _sky(h=16, w=32):
 
 
 @pytest.mark.parametrize("lights", [[], LIGHTS["area"]])
-def test_environment_map_matches_numpy(lights):
+def test_environment_map_same_in_both_kernels(lights):
     """An open scene lit by a rotated environment map (importance-sampled, MIS), alone and
     beside an area light; diffuse, Principled and glass surfaces."""
     b = SceneBuilder()
@@ -230,7 +214,7 @@ def test_environment_map_matches_numpy(lights):
 
 
 @pytest.mark.parametrize("name", list(LIGHTS))
-def test_light_objects_match_numpy(name):
+def test_light_objects_same_in_both_kernels(name):
     """Every light type and option: next-event estimation on diffuse and Principled
     surfaces, lights and sun discs hit by camera and BSDF rays (MIS), a ceiling emitter
     beside them."""
@@ -249,7 +233,7 @@ def test_light_objects_match_numpy(name):
     assert_same_image(a, c)
 
 
-def test_many_emitters_use_the_light_grid_and_match_numpy():
+def test_many_emitters_use_the_light_grid_and_same_in_both_kernels():
     """24 emissive quads: the spatial light grid (LightSampler.GRID) is in use."""
     b = scenes.cornell_box(spheres=True, emitter_radiance=0.0)
     rng = np.random.default_rng(5)
@@ -268,41 +252,13 @@ def test_many_emitters_use_the_light_grid_and_match_numpy():
 def test_a_wrong_renderer_is_told_apart():
     """Power of the comparison: IOR 1.45 -> 1.46 or one bounce fewer fails it."""
     ref = render(scenes.cbspheres(), scenes.settings(width=40, height=30, samples=4,
-                                                     kernel="numpy"))
+                                                     kernel="generic"))
     for scene, kw in ((scenes.cbspheres(glass_ior=1.46), {}),
                       (scenes.cbspheres(), dict(max_bounces=7))):
         other = render(scene, scenes.settings(width=40, height=30, samples=4,
-                                              kernel="compiled", **kw))
+                                              kernel="specialised", **kw))
         with pytest.raises(AssertionError):
             assert_same_image(ref, other)
-
-
-# ----------------------------------------------------------------- the plan's choice
-def test_auto_takes_the_kernels_where_they_cover_the_scene(monkeypatch):
-    """Every material kind is ported, so every scene takes the kernels; a kind the kernels
-    lacked (as glass here, pretending) would send the scene to the numpy stages, saying why,
-    and an explicit kernel="compiled" would refuse it."""
-    from engine.plan import make_plan
-
-    plan = make_plan(scenes.cbspheres(), scenes.settings())
-    assert plan.kernel == "compiled" and "compiled kernel" in plan.describe()
-    monkeypatch.setattr(kernel, "SUPPORTED", tuple(k for k in kernel.SUPPORTED if k != GLASS))
-    plan = make_plan(scenes.cbspheres(), scenes.settings())
-    assert plan.kernel == "numpy" and plan.kernel_note == "numpy: material kinds glass"
-    with pytest.raises(ValueError, match="glass"):
-        make_plan(scenes.cbspheres(), scenes.settings(kernel="compiled"))
-
-
-def test_without_numba_everything_takes_the_numpy_path(monkeypatch):
-    """A platform without the numba wheel (macOS x64): same image from the numpy stages
-    and the numpy film."""
-    st = scenes.settings(width=24, height=18, samples=3)
-    compiled = render(scenes.cbspheres(), st)
-    monkeypatch.setattr(kernel, "AVAILABLE", False)
-    fallback = render(scenes.cbspheres(), st)
-    assert fallback.plan.kernel == "numpy"
-    assert fallback.plan.kernel_note == "numpy: numba is not installed"
-    assert_same_image(fallback, compiled)
 
 
 def test_no_emitters_means_no_light_sampling_kernel(monkeypatch):
@@ -315,66 +271,118 @@ def test_no_emitters_means_no_light_sampling_kernel(monkeypatch):
     monkeypatch.setattr(Accel, "occluded_raw", boom)
     scene = scenes.cornell_box(emitter_radiance=0.0).build(scenes.cornell_camera(),
                                                           World((1, 1, 1)))
-    r = render(scene, scenes.settings(width=16, height=12, samples=2))
-    assert r.plan.kernel == "compiled" and not r.plan.light_sampling
+    r = render(scene, scenes.settings(width=16, height=12, samples=2, kernel="specialised"))
+    assert r.plan.kernel == "specialised" and not r.plan.light_sampling
     assert r.combined[..., :3].mean() > 0
 
 
 def test_profile_mode_renders_the_same_image(monkeypatch):
     """The per-stage cycle counting of the benchmark's profile changes no pixel."""
     plain = render(scenes.cbspheres(), scenes.settings(width=24, height=18, samples=2))
-    monkeypatch.setattr(kernel.CompiledTracer, "profile", True)
+    from engine import renderer
+    monkeypatch.setattr(renderer.Kernels, "profile", True)
     profiled = render(scenes.cbspheres(), scenes.settings(width=24, height=18, samples=2))
     assert_same_image(plain, profiled)
 
 
-def _messy_builder():
-    """Two meshes with NaN vertices, degenerate triangles, unusable and unnormalised
-    shading normals, far from the origin."""
-    rng = np.random.default_rng(9)
-    b = SceneBuilder()
-    m = b.add_material(Material.diffuse("grey", (0.5, 0.5, 0.5)))
-    v = rng.normal(size=(60, 3)) + 1e4
-    v[7] = np.nan
-    tri = rng.integers(0, 60, (80, 3))
-    tri[3] = (5, 5, 6)
-    normals = rng.normal(size=(80, 3, 3)) * 3.0
-    normals[10, 1] = 0.0
-    normals[11, 2] = np.inf
-    with pytest.warns(UserWarning):
-        b.add_mesh("messy", v, tri, m, corner_normals=normals)
-    b.add_mesh("flat", v[:3] * 2.0, [[0, 1, 2]], m)
-    return b
+# ----------------------------------------------------------------- kernels per plan
+def _kernel_of(scene, **kw):
+    from engine import kernels
+
+    r = render(scene, scenes.settings(width=8, height=6, samples=1, kernel="specialised", **kw))
+    return r, kernels.ready_kernel(r.plan.kernel_constants(False)) or \
+        kernels.ready_kernel(r.plan.kernel_constants(True))
 
 
-def test_compiled_scene_building_matches_numpy(monkeypatch):
-    compiled = _messy_builder().build(Camera(), World())
-    monkeypatch.setattr(kernel, "AVAILABLE", False)
-    plain = _messy_builder().build(Camera(), World())
-    for name in ("vertices", "origin", "normals", "smooth", "material_index", "object_index",
-                 "shared_vertices", "shared_triangles"):
-        np.testing.assert_allclose(getattr(compiled, name), getattr(plain, name), rtol=1e-15,
-                                   atol=0, err_msg=name)
-    assert compiled.warnings == plain.warnings and compiled.num_triangles < 81
-    assert np.isfinite(compiled.normals).all()
+# A formula only a feature uses (compiled on its own, so its name is in the kernel's IR).
+MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "eval_layered",
+           "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "concentric_disk",
+           "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
+           "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
+           "HAS_LIGHT_GRID": "voxel"}
 
 
-def test_film_statistics_match_numpy(monkeypatch):
-    """The compiled per-pass statistics (error, variance, relative error) against the numpy
-    methods, on a film with 0, 1 and several samples per pixel."""
-    from engine.film import Film
+def _ir(kernel):
+    return "\n".join(kernel.shade.inspect_llvm().values()) + "\n".join(
+        kernel.generate_camera_rays.inspect_llvm().values())
 
-    rng = np.random.default_rng(3)
-    film = Film(23, 17)
-    n = 23 * 17
-    for k in range(5):
-        pixels = np.arange(n)[rng.random(n) < 0.1 + 0.15 * k]
-        film.add(pixels, rng.gamma(0.5, 2.0, (len(pixels), 3)), rng.random(len(pixels)),
-                 rng.normal(size=(len(pixels), 3)))
-    assert {0, 1}.issubset(set(film.count.tolist())) and film.count.max() >= 3
-    error, variance, rel = film.statistics()
-    monkeypatch.setattr(kernel, "AVAILABLE", False)
-    e2, v2, r2 = film.statistics()
-    np.testing.assert_array_equal(error, e2)
-    np.testing.assert_array_equal(variance, v2)
-    assert rel == pytest.approx(r2, rel=1e-12) and np.isfinite(rel)
+
+def test_a_diffuse_only_kernel_has_no_code_for_absent_features():
+    """The plan's kernel is compiled without the stages a scene cannot reach: a diffuse
+    box's kernel holds no dielectric, GGX, metal, lens, light-object, environment,
+    terminator or light-grid code, while the generic kernel holds all of it."""
+    from engine import kernels
+
+    box = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(), World((0, 0, 0)))
+    r, own = _kernel_of(box)
+    assert own is not None and not own.generic and r.plan.kernel == "specialised"
+    render(box, scenes.settings(width=8, height=6, samples=1, kernel="generic"))
+    generic = kernels.ready_kernel(kernels.generic_constants())
+    own_ir, generic_ir = _ir(own), _ir(generic)
+    for name, marker in MARKERS.items():
+        assert marker in generic_ir, f"{marker} missing from the generic kernel"
+        assert marker not in own_ir, f"{name} off, but {marker} was compiled in"
+    assert len(own_ir) < 0.5 * len(generic_ir)
+
+
+def test_a_kernel_without_glass_does_not_cover_a_glass_scene():
+    from engine import kernels
+    from engine.plan import make_plan
+
+    box = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(), World((0, 0, 0)))
+    _, own = _kernel_of(box)
+    glass = make_plan(scenes.cbspheres(), scenes.settings()).kernel_constants(False)
+    assert glass["HAS_GLASS"] and not own.covers(glass)
+    assert kernels.ready_kernel(kernels.generic_constants()).covers(glass) or \
+        kernels.Kernel(kernels.generic_constants()).covers(glass)
+
+
+def test_a_render_switches_to_its_own_kernel_at_a_pass_boundary(monkeypatch):
+    """Started with the generic kernel (the plan's not loaded), a render switches to the
+    plan's kernel once it has compiled, between passes, and its image is the same to the
+    last bit as a render with either kernel throughout."""
+    from engine import kernels
+
+    monkeypatch.setenv("SPECULA_KERNEL", "auto")
+    scene = scenes.cbspheres()
+    st = scenes.settings(width=24, height=18, samples=6)
+    generic = render(scene, replace(st, kernel="generic"))
+    own = render(scene, replace(st, kernel="specialised"))
+    constants = own.plan.kernel_constants(False)
+    monkeypatch.delitem(kernels._ready, kernels.key_of(constants))  # not loaded yet
+
+    def wait_for_the_kernel(p):
+        if p.samples == 2:
+            for thread in list(kernels._building.values()):
+                thread.join()
+
+    switched = render(scene, st, on_pass=wait_for_the_kernel)
+    assert switched.plan.kernel == "generic, then specialised", switched.plan.kernel
+    assert switched.plan.kernel_note == "switched at pass 3"
+    assert_same_image(generic, own)
+    assert_same_image(generic, switched)
+
+
+def test_without_numba_the_same_functions_run_as_python(tmp_path):
+    """A platform without numba runs the very same stage functions as Python
+    (NUMBA_DISABLE_JIT gives numba's decorators back the plain functions): the same image."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "import json, sys; from engine import render; from tests import scenes\n"
+        "r = render(scenes.cbspheres(), scenes.settings(width=6, height=4, samples=2,"
+        " max_bounces=3, kernel=sys.argv[1]))\n"
+        "print(json.dumps(r.combined[..., :3].ravel().tolist()))\n")
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    out = {}
+    for jit in ("0", "1"):
+        env = dict(os.environ, NUMBA_DISABLE_JIT=jit, PYTHONWARNINGS="ignore")
+        run = subprocess.run([sys.executable, "-c", script, "specialised"], cwd=root, env=env,
+                             capture_output=True, text=True, timeout=600)
+        assert run.returncode == 0, run.stderr[-2000:]
+        out[jit] = np.array(json.loads(run.stdout.strip().splitlines()[-1]))
+    np.testing.assert_allclose(out["1"], out["0"], rtol=1e-12, atol=1e-15)
+    assert out["0"].max() > 0

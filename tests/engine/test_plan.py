@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from engine import RenderSettings, World, bsdf, camera, render
+from engine import RenderSettings, World, render
 from engine.plan import make_plan
 from tests import scenes
 
@@ -27,46 +27,43 @@ def test_plan_of_cbspheres_lists_every_stage():
     assert plan.as_dict()["stages"] == plan.stages()
 
 
-def test_absent_features_do_not_run(monkeypatch):
-    """Flat diffuse Cornell box, no DOF: glass, mirror, metal, lens and normal
-    interpolation must not run."""
-    monkeypatch.setattr(bsdf, "sample_dielectric", boom)
-    monkeypatch.setattr(bsdf, "sample_mirror", boom)
-    monkeypatch.setattr(bsdf, "sample_metal", boom)
-    monkeypatch.setattr(camera.CameraModel, "sample_lens", boom)
-    from engine import integrator
-    monkeypatch.setattr(integrator.Integrator, "interpolate_normals", boom)
+def test_absent_features_are_not_in_the_kernel():
+    """Flat diffuse Cornell box, no DOF: the plan's kernel is compiled without glass,
+    mirror, metal, rough lobes, lens and normal interpolation (their code is absent from
+    its IR: tests/engine/test_kernel.py)."""
     r = render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=2,
-                                                     kernel="numpy"))
-    assert r.plan.stages() == ["numpy kernel", "generate camera rays", "intersect",
+                                                     kernel="specialised"))
+    assert r.plan.stages() == ["generate camera rays", "intersect",
                                "handle escaped rays (black)", "handle emission", "sample light",
                                "trace shadow rays", "sample BSDF (diffuse)"]
+    c = r.plan.kernel_constants(False)
+    for name in ("HAS_GLASS", "HAS_MIRROR", "HAS_METAL", "HAS_ROUGH", "HAS_DOF",
+                 "HAS_SHADING_NORMALS", "HAS_LIGHT_OBJECTS", "HAS_ENVIRONMENT"):
+        assert not c[name], name
+    assert c["HAS_DIFFUSE"] and c["HAS_EMISSION"] and c["HAS_LIGHT_SAMPLING"]
+    assert r.plan.kernel == "specialised"
     assert np.isfinite(r.combined).all() and r.combined[..., :3].mean() > 0
 
 
 def test_no_emitters_means_no_light_sampling(monkeypatch):
     import engine.renderer
-    from engine import integrator
-    monkeypatch.setattr(integrator.Integrator, "sample_light", boom)
-    monkeypatch.setattr(integrator.Integrator, "handle_emission", boom)
     monkeypatch.setattr(engine.renderer, "LightSampler", boom)
     b = scenes.cornell_box(spheres=False, emitter_radiance=0.0)
     scene = b.build(scenes.cornell_camera(), World((1, 1, 1)))
-    r = render(scene, scenes.settings(width=16, height=12, samples=2, kernel="numpy"))
+    r = render(scene, scenes.settings(width=16, height=12, samples=2, kernel="specialised"))
     assert not r.plan.emitters and r.combined[..., :3].mean() > 0
+    c = r.plan.kernel_constants(False)
+    assert not (c["HAS_LIGHT_SAMPLING"] or c["HAS_EMISSION"] or c["HAS_LIGHT_GRID"])
 
 
-def test_dof_runs_the_lens_only_when_on(monkeypatch):
-    calls = []
-    original = camera.CameraModel.sample_lens
-    monkeypatch.setattr(camera.CameraModel, "sample_lens",
-                        lambda self, u: calls.append(len(u)) or original(self, u))
-    render(diffuse_only_scene(use_dof=True, fstop=2.0, focus_distance=3.0),
-           scenes.settings(width=16, height=12, samples=1, kernel="numpy"))
-    assert sum(calls) == 16 * 12
-    calls.clear()
-    render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=1, kernel="numpy"))
-    assert calls == []
+def test_dof_compiles_the_lens_only_when_on():
+    on = render(diffuse_only_scene(use_dof=True, fstop=2.0, focus_distance=3.0),
+                scenes.settings(width=16, height=12, samples=1, kernel="specialised"))
+    off = render(diffuse_only_scene(), scenes.settings(width=16, height=12, samples=1,
+                                                       kernel="specialised"))
+    assert on.plan.kernel_constants(False)["HAS_DOF"]
+    assert not off.plan.kernel_constants(False)["HAS_DOF"]
+    assert "sample lens (disk)" in on.plan.stages() and "sample lens" not in str(off.plan.stages())
 
 
 def test_plan_is_logged(caplog):

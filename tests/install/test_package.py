@@ -81,7 +81,7 @@ def test_bl_info_covers_blender_34():
 
 def test_core_imports_only_relative_stdlib_numpy_embreex_numba():
     """So the core works as `specula.bundled.engine` without sys.path changes (numba and
-    its llvmlite only in engine/kernel.py, and optional there)."""
+    its llvmlite through engine/jit.py, which runs the same functions as Python without them)."""
     allowed = set(sys.stdlib_module_names) | {"numpy", "embreex", "numba", "llvmlite"}
     for path in glob.glob(os.path.join(helpers.ROOT, "engine", "*.py")):
         with open(path, encoding="utf-8") as f:

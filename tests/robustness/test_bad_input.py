@@ -162,16 +162,15 @@ def test_cancelling_mid_render_keeps_the_image_and_leaves_no_thread():
 def test_a_failed_render_leaves_no_thread(monkeypatch):
     """An exception in a worker (here a poisoned stage) propagates and still shuts the
     pool down."""
-    from engine import integrator
+    from engine.accel import Accel
 
     def boom(self, *a, **k):
         raise RuntimeError("stage failed")
 
-    monkeypatch.setattr(integrator.Integrator, "intersect", boom)
+    monkeypatch.setattr(Accel, "intersect_raw", boom)
     baseline = threading.active_count()
     with pytest.raises(RuntimeError, match="stage failed"):
-        render(scenes.cbspheres(), scenes.settings(width=8, height=8, samples=2, threads=2,
-                                                   kernel="numpy"))
+        render(scenes.cbspheres(), scenes.settings(width=8, height=8, samples=2, threads=2))
     assert threading.active_count() == baseline
 
 

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from engine import Camera, Light, Material, RenderSettings, SceneBuilder, World, render
-from engine.integrator import Integrator
 from tests.robustness.helpers import all_finite, image_mean_and_error, look_at
 
 FLOOR = np.array([[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0.0]])
@@ -99,14 +98,17 @@ def test_russian_roulette_never_divides_by_a_tiny_survival_probability():
     """Throughputs down to the smallest subnormal, and 0: survivors are divided by
     q = min(sqrt(max channel), 1) >= their throughput, so the result is at most
     sqrt(throughput) <= 1 and finite; q = 0 never survives (no 0/0)."""
-    t = np.array([1.0, 0.5, 1e-8, 1e-300, 5e-324, 0.0])
-    throughput = np.column_stack([t, t * 0.5, np.zeros_like(t)])
-    before = throughput.copy()
-    keep = Integrator.russian_roulette(None, throughput, _ZeroStream(), np.arange(len(t)), 5)
-    assert np.isfinite(throughput).all()
-    assert list(keep) == [True] * 5 + [False]
-    assert np.all(throughput[keep] <= 1.0)
-    assert np.all(throughput[keep][:, 0] <= np.sqrt(before[keep][:, 0]) * (1 + 1e-12))
+    from engine import integrator
+    from engine.jit import INLINE, njit
+
+    roulette = njit(**INLINE)(integrator.russian_roulette)
+    pseed = np.uint64(12345)
+    for t in (1.0, 0.5, 1e-8, 1e-300, 5e-324, 0.0):
+        alive, t0, t1, t2 = roulette(5, t, t * 0.5, 0.0, pseed, np.uint64(0))
+        assert np.isfinite([t0, t1, t2]).all()
+        if alive:
+            assert t0 <= 1.0 and t0 <= np.sqrt(t) * (1 + 1e-12)
+        if t == 0.0:
+            assert not alive
     # Before the roulette bounce nothing is touched.
-    assert Integrator.russian_roulette(None, before.copy(), _ZeroStream(), np.arange(6), 1) \
-        is None
+    assert roulette(1, 1e-300, 0.0, 0.0, pseed, np.uint64(0)) == (True, 1e-300, 0.0, 0.0)
