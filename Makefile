@@ -28,7 +28,7 @@ scenes: $(STAMP)
 scenes-3.4: $(STAMP)
 	mkdir -p $(B34_USER)/scripts/modules $(B34_USER)/config
 	$(PY) -m pip install --quiet --target $(B34_USER)/scripts/modules --only-binary=:all: \
-		--upgrade numpy==1.26.4 embreex==4.4.0.post1
+		--upgrade numpy==1.26.4 embreex==4.4.0.post1 numba==0.68.1 llvmlite==0.50.0
 	BLENDER_USER_SCRIPTS=$(B34_USER)/scripts BLENDER_USER_CONFIG=$(B34_USER)/config \
 		blender -b --python blend_scenes/build_scenes.py -- --out blend_scenes/v3.4
 

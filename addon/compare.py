@@ -137,7 +137,7 @@ def _render_specula(scene, log):
     try:
         # Importing the core and loading its compiled functions is paid once per process,
         # not per scene: not part of the timed export.
-        core.load().kernel.warm_up()
+        core.load().warm_up()
         t0 = time.perf_counter()
         core_scene, settings, warnings = renderers.export_specula(scene)
     except (exporter.ExportError, ValueError, ImportError) as exc:

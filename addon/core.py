@@ -90,7 +90,7 @@ def warm_up_in_background() -> None:
     Render does not wait for them. Failures are left for that render to report."""
     def run():
         try:
-            load().kernel.warm_up()
+            load().warm_up()
         except Exception:  # noqa: BLE001 - the render will say what is wrong
             pass
 

@@ -24,6 +24,7 @@ from . import kernels
 from .accel import Accel
 from .camera import CameraModel
 from .film import Film, Pass
+from .jit import NUMBA
 from .lights import LightSampler
 from .plan import Plan, make_plan
 from .scene import Camera, Material, RenderSettings, Scene, SceneBuilder, World
@@ -125,6 +126,9 @@ class Kernels:
 
     def describe(self) -> tuple[str, str]:
         """(kernel, note) for the plan."""
+        if not NUMBA:
+            return "generic" if self.tracer.kernel.generic else "specialised", \
+                "run as Python: numba is not installed"
         k = self.tracer.kernel
         if self.switched_at:
             return "generic, then specialised", f"switched at pass {self.switched_at + 1}"

@@ -21,7 +21,8 @@ ARTIFACTS = os.path.join(ROOT, "out", "artifacts")
 SCENES_34 = os.path.join(ROOT, "blend_scenes", "v3.4")
 SCENE_NAMES = ("cbspheres", "cbdragon", "default")
 # What the legacy add-on needs in Blender's Python (Debian's Blender 3.4 has no numpy).
-LEGACY_MODULES = ("numpy==1.26.4", "embreex==4.4.0.post1")
+LEGACY_MODULES = ("numpy==1.26.4", "embreex==4.4.0.post1", "numba==0.68.1",
+                  "llvmlite==0.50.0")
 # bpy module versions of the smoke test: venv folder -> the LTS release it holds.
 COMPAT_VENVS = {"4.2": ".venv-bpy42", "4.5": ".venv-bpy45"}
 BLENDER = shutil.which("blender")
@@ -77,7 +78,7 @@ def legacy_env(user):
 
 
 def install_legacy(user, legacy_zip):
-    """Install as docs/INSTALL.md tells a Blender 3.4 - 4.1 user: numpy and embreex into the
+    """Install as docs/INSTALL.md tells a Blender 3.4 - 4.1 user: numpy, embreex and numba into the
     user scripts' `modules` folder (on Blender's sys.path), then Preferences > Add-ons >
     Install... with the zip, enable, save preferences."""
     env = legacy_env(user)

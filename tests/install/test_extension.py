@@ -59,5 +59,6 @@ def test_install_file_enable_render(release, dist, tmp_path):
     # The extension's numba compiles the kernels, and every scene renders with them
     # (default.blend: Principled and a point light).
     kernels = {name: r["kernel"] for name, r in result["renders"].items()}
-    assert set(kernels.values()) == {"compiled"}, kernels
+    assert set(kernels.values()) <= {"generic", "specialised", "generic, then specialised"}, \
+        kernels
     print(sys.version, result["renders"])
