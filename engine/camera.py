@@ -20,7 +20,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .jit import INLINE, njit
+from .jit import INLINE, JIT, njit
 from .sampling import concentric_disk, regular_polygon
 from .scene import Camera
 
@@ -114,24 +114,24 @@ def pinhole_ray(x, y, cam):
     return c * dx, c * dy, c * dz, dx, dy, dz, (cam.clip_end - cam.clip_start) * z_inv
 
 
-@njit(**INLINE)
-def thin_lens_ray(x, y, lx, ly, cam):
+@njit(**JIT)
+def thin_lens_ray(x, y, lx, ly, focus, clip_start, clip_end, ortho):
     """As pinhole_ray from lens point (lx, ly), aimed where the pinhole ray meets the focus
-    plane; the clip distances stay the pinhole ray's (Cycles)."""
-    if cam.ortho:
-        norm = math.sqrt(lx * lx + ly * ly + cam.focus * cam.focus)
-        dx, dy, dz = -lx / norm, -ly / norm, cam.focus / norm
-        s = cam.clip_start
-        return x + lx + s * dx, y + ly + s * dy, s * dz, dx, dy, dz, cam.clip_end - s
+    plane at `focus`; the clip distances stay the pinhole ray's (Cycles)."""
+    if ortho:
+        norm = math.sqrt(lx * lx + ly * ly + focus * focus)
+        dx, dy, dz = -lx / norm, -ly / norm, focus / norm
+        return x + lx + clip_start * dx, y + ly + clip_start * dy, clip_start * dz, dx, dy, \
+            dz, clip_end - clip_start
     norm = math.sqrt(x * x + y * y + 1.0)
     dx, dy, dz = x / norm, y / norm, 1.0 / norm
     z_inv = 1.0 / dz
-    k = cam.focus / dz
+    k = focus / dz
     fx, fy, fz = dx * k - lx, dy * k - ly, dz * k
     norm = math.sqrt(fx * fx + fy * fy + fz * fz)
     dx, dy, dz = fx / norm, fy / norm, fz / norm
-    c = cam.clip_start * z_inv
-    return lx + c * dx, ly + c * dy, c * dz, dx, dy, dz, (cam.clip_end - cam.clip_start) * z_inv
+    c = clip_start * z_inv
+    return lx + c * dx, ly + c * dy, c * dz, dx, dy, dz, (clip_end - clip_start) * z_inv
 
 
 @njit(**INLINE)

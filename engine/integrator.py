@@ -108,6 +108,12 @@ def _debug_mark(paths, row, stage, a, b, c):
         paths.nonfinite[row] = stage
 
 
+def ray_offset(scale):
+    """How far a spawned or shadow ray starts off its surface (or stops short of the
+    light), for a local coordinate magnitude `scale`."""
+    return RAY_EPSILON * max(scale, 1e-30)
+
+
 def _add(paths, row, t0, t1, t2, l0, l1, l2, w):
     """Radiance l reaching the camera through throughput t with MIS weight w."""
     paths.radiance[row, 0] += t0 * l0 * w
@@ -135,7 +141,8 @@ def generate_camera_rays(pixels, sample, seed, sc, paths):
                 lx, ly = camera.lens_polygon(ua, ub, cam)
             else:
                 lx, ly = camera.lens_disk(ua, ub, cam)
-            px, py, pz, dx, dy, dz, tmax = camera.thin_lens_ray(x, y, lx, ly, cam)
+            px, py, pz, dx, dy, dz, tmax = camera.thin_lens_ray(
+                x, y, lx, ly, cam.focus, cam.clip_start, cam.clip_end, cam.ortho)
         else:
             px, py, pz, dx, dy, dz, tmax = camera.pinhole_ray(x, y, cam)
         for j in range(3):
@@ -346,7 +353,7 @@ def shadow_origin(x, wx, wy, wz, sc):
                     lx, ly, lz = terminator.smooth_surface_offset(
                         g.vertices[x.f], g.normals[x.f], 1.0 - x.u - x.v, x.u, x.v, gx, gy, gz)
                     ox, oy, oz = ox + lx * amount, oy + ly * amount, oz + lz * amount
-    eps = RAY_EPSILON * max(x.scale, 1e-30)
+    eps = ray_offset(x.scale)
     if wx * x.nx + wy * x.ny + wz * x.nz < 0.0:
         eps = -eps
     return ox + eps * x.nx, oy + eps * x.ny, oz + eps * x.nz
@@ -394,7 +401,7 @@ def sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow, rev_sample
         sl = max(seg, 1e-300)
         shadow.direction[s, 0], shadow.direction[s, 1], shadow.direction[s, 2] = (
             gx / sl, gy / sl, gz / sl)
-        shadow.tmax[s] = seg - RAY_EPSILON * max(light_scale, 1e-30)
+        shadow.tmax[s] = seg - ray_offset(light_scale)
     shadow.contrib[s, 0], shadow.contrib[s, 1], shadow.contrib[s, 2] = c0, c1, c2
     return s + 1
 
@@ -436,7 +443,7 @@ def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
     """Continue the path as row `out` of the compacted batch: leave the surface toward the
     side of the new direction, into embree's buffers."""
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
-    eps = side * RAY_EPSILON * max(x.scale, 1e-30)
+    eps = side * ray_offset(x.scale)
     paths.o64[out, 0] = x.px + eps * x.nx
     paths.o64[out, 1] = x.py + eps * x.ny
     paths.o64[out, 2] = x.pz + eps * x.nz
@@ -539,7 +546,7 @@ def all_finite(radiance, depth, normal):
 # name -> (function, numba options): what a kernel compiles. Stages taking the scene's
 # structures are inlined into `shade` by numba; the entry points are compiled on their own.
 STAGES = {f.__name__: (f, INLINE) for f in (
-    _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction, handle_emission,
+    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction, handle_emission,
     russian_roulette, emitter_pmf, sample_emitter, shadow_origin, sample_light, sample_bsdf,
     spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (

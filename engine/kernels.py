@@ -108,6 +108,15 @@ class Kernel:
             "specialised kernel (without " + ", ".join(n[4:].lower() for n in off) + ")"
 
 
+def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -> None:
+    """Compile every entry point of `kernel` by tracing one pixel of the scene with it
+    (numba compiles for the argument types it is called with)."""
+    data = scene_data(scene, settings, plan, emitters, camera, kernel.generic)
+    Tracer(kernel, data, accel, settings, lambda stage, seconds: None).trace_pixels(
+        np.zeros(1, np.int64), 0)
+    kernel.all_finite(np.zeros((1, 3)), np.zeros(1), np.zeros((1, 3)))
+
+
 # ------------------------------------------------------------------ the kernel store
 _lock = threading.Lock()
 _ready: dict[tuple, Kernel] = {}

@@ -107,12 +107,8 @@ class Kernels:
         return kernels.Tracer(kernel, data, self.accel, self.settings, self.timers)
 
     def _compile(self, kernel) -> None:
-        """Compile every entry point of `kernel` by tracing one pixel with it."""
-        tracer = kernels.Tracer(kernel, kernels.scene_data(
-            self.scene, self.settings, self.plan, self.emitters, self.camera, kernel.generic),
-            self.accel, self.settings, lambda stage, seconds: None)
-        tracer.trace_pixels(np.zeros(1, np.int64), 0)
-        kernel.all_finite(np.zeros((1, 3)), np.zeros(1), np.zeros((1, 3)))
+        kernels.compile_on(kernel, self.scene, self.settings, self.plan, self.emitters,
+                           self.camera, self.accel)
 
     def switch_if_ready(self, sample: int) -> None:
         """At a pass boundary: take the plan's own kernel once it has compiled."""

@@ -12,10 +12,10 @@ What goes in each package (a folder named `specula`, the add-on's import name):
                         touches sys.path
   blender_manifest.toml (extensions only) id `specula`, Blender 4.2.0+, the platform's wheel
   wheels/*.whl          (extensions only) embreex for Blender's Python 3.11, and numba with
-                        llvmlite (the compiled kernels, engine/kernel.py) where PyPI has them
+                        llvmlite (the compiled kernels, engine/integrator.py) where PyPI has them
                         for the platform, unmodified from PyPI; Blender installs them on
                         enable. numpy comes with Blender. Without numba (macOS x64: llvmlite
-                        0.50 has no wheel for it) the core renders with its numpy stages.
+                        0.50 has no wheel for it) the same kernel runs as plain Python (slow).
 
 Outputs:
   dist/specula-<version>-<platform>.zip   Blender 4.2 - 5.0 extensions, built and validated by

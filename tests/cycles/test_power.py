@@ -1,13 +1,12 @@
 """The comparison has power: deliberately wrong renders must disagree with Cycles.
 
-Each injected error is applied to the exported core scene, the render settings or (for
-one-sided emission) the integrator, on a variant where the error shows; the correct render
+Each injected error is applied to the exported core scene, the render settings or (one-sided
+emission, the old spot cone) a one-off kernel (tests/patching.py), on a variant where the error shows; the correct render
 of the same variant must agree (test_agreement.py checks it too) and the wrong one must not.
 """
 
 import dataclasses
 import math
-import threading
 import time
 from contextlib import contextmanager, nullcontext
 
@@ -56,39 +55,35 @@ def _one_bounce_fewer(scene, settings):
     return scene, dataclasses.replace(settings, max_bounces=settings.max_bounces - 1)
 
 
+def front_only_emission(i, row, x, sc, paths, mis):
+    """handle_emission for front faces only."""
+    if x.front:
+        original_handle_emission(i, row, x, sc, paths, mis)  # noqa: F821
+
+
+def front_only_triangle(e, px, py, pz, ua, ub, em):
+    """lights.sample_triangle carrying no radiance to points behind the triangle."""
+    wx, wy, wz, dist, q0, q1, q2, pdf = original_sample_triangle(  # noqa: F821
+        e, px, py, pz, ua, ub, em)
+    if em.normal[e, 0] * wx + em.normal[e, 1] * wy + em.normal[e, 2] * wz > 0.0:
+        q0 = q1 = q2 = 0.0  # the light faces away from p
+    return wx, wy, wz, dist, q0, q1, q2, pdf
+
+
 @contextmanager
 def _one_sided_emission():
     """Emitters light only the side their geometric normal faces: camera and BSDF rays see
-    no emission from a back face (wraps Integrator.handle_emission), and light samples on
-    an emissive triangle seen from behind carry no radiance (wraps LightSampler.sample)."""
+    no emission from a back face, and light samples on an emissive triangle seen from
+    behind carry no radiance (a one-off kernel with both stages swapped)."""
+    from tests.patching import module_with, one_off_kernels
+
     core = renderers.core()
-    Integrator, LightSampler = core.integrator.Integrator, core.lights.LightSampler
-    handle, sample = Integrator.handle_emission, LightSampler.sample
-
-    def front_only_emission(self, radiance, live, throughput, hits, *args, **kwargs):
-        add = np.zeros_like(radiance)
-        handle(self, add, live, throughput, hits, *args, **kwargs)
-        rows = live[hits.front]
-        radiance[rows] += add[rows]
-
-    def front_only_sample(self, p, u_select, u_point, *args, **kwargs):
-        wi, dist, value, *rest = sample(self, p, u_select, u_point, *args, **kwargs)
-        # Redo the (deterministic) choice of emitter to find the triangles among them.
-        k = self.distribution.sample(u_select)
-        on_tri = np.nonzero(k < self.num_triangles)[0]
-        c = self.corners[k[on_tri]]
-        normal = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
-        behind = np.einsum("ij,ij->i", normal, wi[on_tri]) > 0  # light faces away from p
-        value = value.copy()
-        value[on_tri[behind]] = 0.0
-        return (wi, dist, value, *rest)
-
-    Integrator.handle_emission = front_only_emission
-    LightSampler.sample = front_only_sample
-    try:
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, handle_emission=front_only_emission,
+                        original_handle_emission=core.integrator.handle_emission,
+                        lights=module_with(core.lights, sample_triangle=front_only_triangle,
+                                           original_sample_triangle=core.lights.sample_triangle))
         yield
-    finally:
-        Integrator.handle_emission, LightSampler.sample = handle, sample
 
 
 def _no_terminator_offset(scene, settings):
@@ -99,7 +94,7 @@ def _no_terminator_offset(scene, settings):
 @contextmanager
 def _glossy_compensation_white():
     """Issue 12's old Glossy: energy compensation with Fss = 1, the colour applied after
-    (bsdf.layer_fms is what both the numpy stages and the kernels' tables read)."""
+    (bsdf.layer_fms builds the kernel's tables, in Python)."""
     bsdf = renderers.core().bsdf
     layer_fms = bsdf.layer_fms
 
@@ -113,33 +108,33 @@ def _glossy_compensation_white():
         bsdf.layer_fms = layer_fms
 
 
+def cone_toward_centre(j, px, py, pz, ua, ub, L):
+    """lights._sample_point_light with the spot cone's smoothstep taken toward the light's
+    centre instead of along the sampled ray."""
+    wx, wy, wz, dist, v0, v1, v2, pdf = original_sample_point_light(  # noqa: F821
+        j, px, py, pz, ua, ub, L)
+    if L[j, _TYPE] == SPOT:  # noqa: F821
+        tx, ty, tz = L[j, _CENTRE] - px, L[j, _CENTRE + 1] - py, L[j, _CENTRE + 2] - pz  # noqa
+        n = max(math.sqrt(tx * tx + ty * ty + tz * tz), 1e-300)
+        along = spot_attenuation(j, -wx, -wy, -wz, L)  # noqa: F821
+        toward = spot_attenuation(j, -tx / n, -ty / n, -tz / n, L)  # noqa: F821
+        k = toward / along if along > 0 else 0.0
+        v0, v1, v2 = v0 * k, v1 * k, v2 * k
+    return wx, wy, wz, dist, v0, v1, v2, pdf
+
+
 @contextmanager
 def _spot_cone_toward_centre():
     """Issue 12's old spot light: next-event estimation took the cone's smoothstep toward
-    the light's centre instead of along the sampled ray (numpy stages; the render's threads
-    each keep their own centre directions)."""
-    core = renderers.core()
-    LightObjects = core.lights.LightObjects
-    sample_point, attenuation = LightObjects._sample_point, LightObjects.spot_attenuation
-    local = threading.local()
+    the light's centre instead of along the sampled ray (a one-off kernel)."""
+    from tests.patching import module_with, one_off_kernels
 
-    def toward_centre(self, j, p, *args, **kwargs):
-        to_c = self.centre[j] - p
-        local.w_c = to_c / np.maximum(np.linalg.norm(to_c, axis=1), 1e-300)[:, None]
-        try:
-            return sample_point(self, j, p, *args, **kwargs)
-        finally:
-            local.w_c = None
-
-    def cone(self, j, w_from_light):
-        w_c = getattr(local, "w_c", None)
-        return attenuation(self, j, w_from_light if w_c is None else -w_c)
-
-    LightObjects._sample_point, LightObjects.spot_attenuation = toward_centre, cone
-    try:
+    lights = renderers.core().lights
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, lights=module_with(
+            lights, _sample_point_light=cone_toward_centre,
+            original_sample_point_light=lights._sample_point_light))
         yield
-    finally:
-        LightObjects._sample_point, LightObjects.spot_attenuation = sample_point, attenuation
 
 
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
@@ -159,14 +154,8 @@ INJECTIONS = {
 }
 
 
-PORT_PENDING = ("one_sided_emission", "spot_cone_toward_centre")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("error", [
-    pytest.param(e, marks=pytest.mark.skip(reason="patches the removed numpy stages; needs "
-                                                  "a one-off kernel (issue 13 closing note)"))
-    if e in PORT_PENDING else e for e in INJECTIONS])
+@pytest.mark.parametrize("error", list(INJECTIONS))
 def test_comparison_rejects_injected_error(error):
     name, inject, patch = INJECTIONS[error]
     correct = harness.agreement(name)

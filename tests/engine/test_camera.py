@@ -18,7 +18,8 @@ def rays(cam, raster, width=400, height=300, u_lens=None):
         x, y = camera.raster_to_plane(rx, ry, c)
         if u_lens is not None and c.aperture > 0:
             lens = camera.lens_polygon if c.blades >= 3 else camera.lens_disk
-            ray = camera.thin_lens_ray(x, y, *lens(*u_lens[i], c), c)
+            ray = camera.thin_lens_ray(x, y, *lens(*u_lens[i], c), c.focus, c.clip_start,
+                                       c.clip_end, c.ortho)
         else:
             ray = camera.pinhole_ray(x, y, c)
         out.append(ray)

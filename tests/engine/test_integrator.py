@@ -75,23 +75,27 @@ def test_glass_sphere_in_uniform_environment_is_invisible(ior):
     assert np.abs(img - world).max() < 1e-6
 
 
-@pytest.mark.skip(reason="needs its patch ported to a one-off kernel (kernels.Kernel overrides); issue 13 closing note")
+def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact):
+    """bsdf.sample_dielectric with refracted radiance scaled by 1/eta^2."""
+    wx, wy, wz, f0, f1, f2, ok = original_sample_dielectric(  # noqa: F821
+        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact)
+    if wx * nx + wy * ny + wz * nz < 0.0:  # transmitted
+        k = 1.0 / (eta * eta)
+        f0, f1, f2 = f0 * k, f1 * k, f2 * k
+    return wx, wy, wz, f0, f1, f2, ok
+
+
 def test_glass_sphere_with_eta_squared_scaling_would_be_visible(monkeypatch):
     """Power for the test above: a renderer that scaled refracted radiance by 1/eta^2
     (the course's convention) would not pass it."""
     from engine import bsdf
+    from tests.patching import module_with, one_off_kernels
 
-    original = bsdf.sample_dielectric
-
-    def scaled(wo, n, eta, rt, tt, u, fresnel="exact"):
-        wi, w, pdf, transmitted = original(wo, n, eta, rt, tt, u, fresnel)
-        return wi, np.where(transmitted[:, None], w / (eta * eta)[:, None], w), pdf, transmitted
-
-    monkeypatch.setattr(bsdf, "sample_dielectric", scaled)
+    one_off_kernels(monkeypatch, bsdf=module_with(
+        bsdf, sample_dielectric=eta_squared_dielectric,
+        original_sample_dielectric=bsdf.sample_dielectric))
     world = np.array([0.5, 0.7, 0.9])
-    # The numpy integrator: its bsdf module is the one patched (the compiled kernels
-    # match it bit for bit, tests/engine/test_kernel.py).
-    r = sphere_in_environment(Material.glass("glass", (1, 1, 1), 1.5), world, kernel="numpy")
+    r = sphere_in_environment(Material.glass("glass", (1, 1, 1), 1.5), world)
     assert np.abs(r.combined[..., :3] - world).max() > 0.05
 
 
@@ -195,21 +199,19 @@ def test_same_image_at_any_scale_and_position(scale, offset):
     assert np.isfinite(other.combined).all()
 
 
-@pytest.mark.skip(reason="needs its patch ported to a one-off kernel (kernels.Kernel overrides); issue 13 closing note")
+def fixed_ray_offset(scale):
+    return 1e-6
+
+
 def test_scale_comparison_rejects_a_fixed_epsilon(monkeypatch):
     """Power: with a fixed absolute ray offset (1e-6) the 1e3-scaled scene self-intersects
     and the comparison above fails."""
-    from engine import bsdf, integrator
-
-    def fixed_offset(p, ng, wi, scale):
-        side = np.where(bsdf.dot(wi, ng) >= 0.0, 1.0, -1.0)
-        return p + (side * 1e-6)[:, None] * ng
+    from tests.patching import one_off_kernels
 
     st = RenderSettings(width=48, height=36, samples=16, max_bounces=6, seed=11)
     ref = render(scaled_cbspheres(1.0), st)
-    monkeypatch.setattr(integrator, "offset_ray_origin", fixed_offset)
-    other = render(scaled_cbspheres(1e3), RenderSettings(**{**st.__dict__, "seed": 12,
-                                                           "kernel": "numpy"}))
+    one_off_kernels(monkeypatch, ray_offset=fixed_ray_offset)
+    other = render(scaled_cbspheres(1e3), RenderSettings(**{**st.__dict__, "seed": 12}))
     z, critical = max_block_z(ref, other)
     assert z > critical
 

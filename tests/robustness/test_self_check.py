@@ -9,6 +9,7 @@ import pytest
 from engine import integrator, render
 from engine.film import Film
 from tests import scenes
+from tests.patching import one_off_kernels
 from tests.robustness.helpers import all_finite
 
 # The poisoned values raise numpy's "invalid value" warnings on their way; expected here.
@@ -20,40 +21,34 @@ def cbspheres():
     return scenes.cbspheres()
 
 
+def _poisoned_interaction(field, value):
+    """surface_interaction with `value` in the hit point (whose z-depth fills the Depth
+    pass) or the shading normal, for the first path of a batch on its camera hit only
+    (depth pass not yet written), so no other pixel is hit by chance."""
+    px = value if field == "depth" else 0.0
+    sx = value if field == "normal" else 0.0
+
+    def surface_interaction(i, f, tfar, bu, bv, sc, paths):
+        x = original_surface_interaction(i, f, tfar, bu, bv, sc, paths)  # noqa: F821
+        if i == 0 and paths.depth[paths.live[0]] == 1e10:
+            return Vertex(x.px + px, x.py, x.pz, x.nx, x.ny, x.nz, x.sx + sx,  # noqa: F821
+                          x.sy, x.sz, x.mx, x.my, x.mz, x.wox, x.woy, x.woz, x.front, x.f,
+                          x.u, x.v, x.mat, x.t, x.scale)
+        return x
+    return surface_interaction
+
+
 def poison_surface_interaction(monkeypatch, field, value):
-    """Make the surface interaction of camera rays (which fills the Depth and Normal
-    passes) produce `value` for one pixel, once per sample: the first call of each
-    trace_pixels only (later bounces stay clean, so no other pixel is hit by chance)."""
-    original = integrator.Integrator.surface_interaction
-    original_trace = integrator.Integrator.trace_pixels
-    state = {"camera_hits": False}
-
-    def trace(self, pixels, sample):
-        state["camera_hits"] = True
-        return original_trace(self, pixels, sample)
-
-    def poisoned(self, o, d, prim, t, bu, bv):
-        hits = original(self, o, d, prim, t, bu, bv)
-        if state["camera_hits"]:
-            state["camera_hits"] = False
-            if field == "depth":
-                hits.p[:1] = value  # z-depth of the first hit is computed from p
-            else:
-                hits.ns[:1] = value
-        return hits
-
-    monkeypatch.setattr(integrator.Integrator, "trace_pixels", trace)
-    monkeypatch.setattr(integrator.Integrator, "surface_interaction", poisoned)
+    one_off_kernels(monkeypatch, surface_interaction=_poisoned_interaction(field, value),
+                    original_surface_interaction=integrator.surface_interaction)
 
 
-@pytest.mark.skip(reason="needs its patch ported to a one-off kernel (kernels.Kernel overrides); issue 13 closing note")
 @pytest.mark.parametrize("field,value", [("depth", np.inf), ("depth", np.nan),
                                          ("normal", np.nan), ("normal", -np.inf)])
 def test_non_finite_depth_or_normal_is_left_out_and_named(cbspheres, monkeypatch, field,
                                                           value):
     poison_surface_interaction(monkeypatch, field, value)
-    r = render(cbspheres, scenes.settings(width=16, height=12, samples=2, threads=1,
-                                          kernel="numpy"))
+    r = render(cbspheres, scenes.settings(width=16, height=12, samples=2, threads=1))
     assert all_finite(r)
     # The first camera hit of each chunk (pixel 0) was poisoned, once per sample.
     assert r.warnings == ["stage 'surface interaction (depth/normal pass)' produced a "
@@ -61,12 +56,10 @@ def test_non_finite_depth_or_normal_is_left_out_and_named(cbspheres, monkeypatch
     assert r.samples == 2
 
 
-@pytest.mark.skip(reason="needs its patch ported to a one-off kernel (kernels.Kernel overrides); issue 13 closing note")
 def test_debug_mode_names_the_stage_at_once(cbspheres, monkeypatch):
     poison_surface_interaction(monkeypatch, "normal", np.nan)
     with pytest.raises(FloatingPointError, match=r"stage 'surface interaction .*pixel \(x=0"):
-        render(cbspheres, scenes.settings(width=16, height=12, samples=1, threads=1,
-                                          kernel="numpy"),
+        render(cbspheres, scenes.settings(width=16, height=12, samples=1, threads=1),
                debug=True)
 
 
