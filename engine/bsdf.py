@@ -22,7 +22,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .jit import INLINE, JIT, njit
+from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
 from .scene import GLOSSY, PRINCIPLED
 
@@ -245,7 +245,7 @@ def ggx_visible_normal(v0, v1, v2, alpha, ua, ub):
     return hx / norm, hy / norm, hz / norm
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
     """White-furnace integrands of the GGX lobe at view cosine mu for the stratified
     samples u (k, 2): f cos / pdf with F = 1, and with the lobe's Fresnel."""
@@ -264,7 +264,7 @@ def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
     return w, wf
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _fresnel_curve(m, eta):
     out = np.empty(len(m))
     for k in range(len(m)):
@@ -379,7 +379,7 @@ def layer_at(mat, mu, eta, lt):
                  1.0 + lt.fms[mat, 2] * missing, p_spec)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe,
                  sampled):
     """The layered lobe's f * cos_i per channel and its lobe-mixture pdf for shading normal
@@ -408,7 +408,7 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
             lobe.p_spec * pdf_s + (1.0 - lobe.p_spec) * cos_d / np.pi)
 
 
-@njit(**JIT)
+@njit(**INLINE)
 def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lobe, ua, ub):
     """Sample the layered lobe: pick the specular or the diffuse layer, then evaluate the
     mixture (one-sample MIS over the lobes). Returns (w, weight (3 values), pdf, ok)."""

@@ -248,8 +248,8 @@ def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, dep
 @njit(**JIT)
 def _statistics(count, mean, m2, m2_luminance, lum, error, variance):
     """Each pixel's standard error of its mean luminance into error (n,) and variance of its
-    mean into variance (n, 3) float32 (0 below 2 samples); returns the sums of squared errors and of mean luminances and the
-    largest sample count, for the relative error."""
+    mean into variance (n, 3) float32 (0 below 2 samples); returns the sums of squared
+    errors and of mean luminances and the largest sample count, for the relative error."""
     f32 = np.float32
     sum_e2 = 0.0
     sum_y = 0.0

@@ -544,9 +544,11 @@ def all_finite(radiance, depth, normal):
 
 
 # name -> (function, numba options): what a kernel compiles. Stages taking the scene's
-# structures are inlined into `shade` by numba; the entry points are compiled on their own.
+# structures are inlined into `shade` by numba; the entry points are compiled on their own
+# (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
-    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction, handle_emission,
+    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
+    handle_emission,
     russian_roulette, emitter_pmf, sample_emitter, shadow_origin, sample_light, sample_bsdf,
     spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (

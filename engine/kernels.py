@@ -42,7 +42,7 @@ def key_of(constants: dict) -> tuple:
 
 def tag_of(constants: dict) -> str:
     bits = "".join("1" if b else "0" for b in key_of(constants))
-    return f"p{int(bits, 2):x}_{specialise.source_hash()}"
+    return f"p{int(bits, 2):x}_{specialise.SOURCE_HASH}"
 
 
 class Kernel:

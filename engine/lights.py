@@ -340,7 +340,8 @@ def intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
             inside = abs(lu) <= 0.5 and abs(lv) <= 0.5
         if front and inside and t > 0 and t < tmax:
             th = t
-        f = f * spread_attenuation(-denom, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN], L[j, _SPREAD_NORM])
+        f = f * spread_attenuation(-denom, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
+                                   L[j, _SPREAD_NORM])
     else:
         r = L[j, _RADIUS]
         ocx, ocy, ocz = ox - c0, oy - c1, oz - c2

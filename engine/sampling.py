@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .jit import JIT, njit
+from .jit import ALLOCATING, JIT, njit
 
 ONE_MINUS_EPSILON = 1.0 - 2.0**-53  # largest double below 1
 
@@ -140,7 +140,7 @@ def sample_1d(pseed, rev_sample, dim):
                                                                   np.uint64(0x1B873593)))))
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def stream_2d(pixels, sample, seed, dim):
     """(n, 2) points of dimension pair `dim` for pixel ids (n,) at one sample index."""
     out = np.empty((len(pixels), 2))
@@ -150,7 +150,7 @@ def stream_2d(pixels, sample, seed, dim):
     return out
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def stream_1d(pixels, sample, seed, dim):
     """(n,) points of dimension `dim` for pixel ids (n,) at one sample index."""
     out = np.empty(len(pixels))

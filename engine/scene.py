@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .jit import JIT, njit
+from .jit import ALLOCATING, njit
 
 # BSDF kinds of the materials table (`Materials.kind`).
 NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
@@ -583,7 +583,7 @@ class SceneBuilder:
 # -------------------------------------------------------------------- builder passes
 # One compiled loop each: a pass over a million triangles with no temporaries.
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _triangle_checks(v, tri, finite_v):
     """(finite, nondegenerate) per triangle: all corners finite; the edge cross product
     above float64 noise, |e1 x e2| > 1e-24 scale^2 (scale: the largest corner coordinate)."""
@@ -610,7 +610,7 @@ def _triangle_checks(v, tri, finite_v):
     return finite, nondegenerate
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _normals_usable(normals):
     """(t,) whether all three corner normals are finite and non-zero."""
     ok = np.empty(len(normals), np.bool_)
@@ -624,7 +624,7 @@ def _normals_usable(normals):
     return ok
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _bounds(v, tri):
     """(lo, hi) (3,) of the vertices the triangles use."""
     lo = np.full(3, np.inf)
@@ -638,7 +638,7 @@ def _bounds(v, tri):
     return lo, hi
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _gather_corners(v, tri, origin, out):
     """out (t, 3, 3) = v[tri] - origin."""
     for i in range(len(tri)):
@@ -647,7 +647,7 @@ def _gather_corners(v, tri, origin, out):
                 out[i, k, j] = v[tri[i, k], j] - origin[j]
 
 
-@njit(**JIT)
+@njit(**ALLOCATING)
 def _unit_normals(normals, smooth, out):
     """out (t, 3, 3): the corner normals of smooth triangles scaled to unit length, zero
     elsewhere (unusable normals never reach the integrator)."""

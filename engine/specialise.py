@@ -21,13 +21,16 @@ from .jit import njit
 _SOURCES = sorted(glob.glob(os.path.join(os.path.dirname(os.path.abspath(__file__)), "*.py")))
 
 
-def source_hash() -> str:
-    """8 hex digits of the core's sources: a changed formula anywhere gets new kernels."""
+def _source_hash() -> str:
     h = hashlib.sha256()
     for path in _SOURCES:
         with open(path, "rb") as f:
             h.update(f.read())
     return h.hexdigest()[:8]
+
+
+# 8 hex digits of the core's sources as imported: a changed formula anywhere gets new kernels.
+SOURCE_HASH = _source_hash()
 
 
 def specialise(functions: dict, namespace: dict, constants: dict, tag: str,

@@ -119,7 +119,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, "kernels.json"), "w") as f:
         json.dump(rows, f, indent=1)
-    print("| scene | compile s | generic samples/s | specialised samples/s | speed-up | same image |")
+    print("| scene | compile s | generic samples/s | specialised samples/s | speed-up | "
+          "same image |")
     print("|---|---|---|---|---|---|")
     for r in rows[1:] if not args.no_compile else rows:
         print(f"| {r['scene']} | {r.get('compile_specialised_s', '')} | "

@@ -1,8 +1,9 @@
 """The comparison has power: deliberately wrong renders must disagree with Cycles.
 
 Each injected error is applied to the exported core scene, the render settings or (one-sided
-emission, the old spot cone) a one-off kernel (tests/patching.py), on a variant where the error shows; the correct render
-of the same variant must agree (test_agreement.py checks it too) and the wrong one must not.
+emission, the old spot cone) a one-off kernel (tests/patching.py), on a variant where the
+error shows; the correct render of the same variant must agree (test_agreement.py checks it
+too) and the wrong one must not.
 """
 
 import dataclasses
