@@ -22,8 +22,7 @@ import numpy as np
 
 from .jit import INLINE, JIT, njit
 from .sampling import Distribution1D, sample_cdf
-
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+from .scene import LUMINANCE
 
 # The map as the kernel reads it: image (H, W, 3) float32, texture_from_world and
 # world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution.

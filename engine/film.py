@@ -17,9 +17,8 @@ import numpy as np
 
 from .jit import INLINE, JIT, njit
 from .sampling import guided_interp, interp_guide
+from .scene import LUMINANCE
 
-# Rec.709 luminance weights, for the error estimate.
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 # Depth written where a camera ray escapes: finite, so no pass ever holds inf.
 BACKGROUND_DEPTH = 1e10
 _TABLE_SIZE = 1024

@@ -90,9 +90,12 @@ class Kernels:
             os.environ.get("SPECULA_KERNEL", "auto")
         own = kernels.ready_kernel(self.constants)
         if own is None and mode != "generic":
-            probe = kernels.Kernel(self.constants)
-            if probe.on_disk() or mode == "specialised" or \
-                    kernels.ready_kernel(generic) is None:
+            # The plan's kernel now if it only needs loading (or is asked for); else the
+            # generic one, loaded, while the plan's compiles, unless neither was ever
+            # compiled (then the plan's, which compiles in a third of the time).
+            if kernels.Kernel(self.constants).on_disk() or mode == "specialised" or (
+                    kernels.ready_kernel(generic) is None
+                    and not kernels.Kernel(generic).on_disk()):
                 own = kernels.build_now(self.constants, self._compile)
         if own is not None and mode != "generic":
             self.tracer = self.tracer_for(own)

@@ -28,6 +28,8 @@ DELTA_ROUGHNESS = 2e-10 ** 0.25
 
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
+# Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 KERNELS = ("auto", "generic", "specialised")
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 CAMERA_TYPES = ("PERSP", "ORTHO")

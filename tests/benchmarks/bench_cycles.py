@@ -35,7 +35,8 @@ if REPO not in sys.path:
 
 import bpy  # noqa: E402
 
-from tests.benchmarks import bench_core, imaging  # noqa: E402
+from addon import imaging  # noqa: E402
+from tests.benchmarks import bench_core  # noqa: E402
 from tests.cycles import renderers  # noqa: E402
 
 OUT = os.path.join(REPO, "out", "bench")
@@ -83,7 +84,8 @@ def render_specula(scene, samples=1 << 20, time_limit=0.0):
 
     t_render = time.perf_counter()
     with bench_core.profiled_render() as seen:
-        result = core.render(core_scene, core.RenderSettings(**kw), on_pass=on_pass)
+        seen["result"] = result = core.render(core_scene, core.RenderSettings(**kw),
+                                              on_pass=on_pass)
     wall = time.perf_counter() - t_render
     result.profile = bench_core.shares(seen, wall, renderers.THREADS)
     return result, time.perf_counter() - t0, first[0]
