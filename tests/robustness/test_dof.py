@@ -7,7 +7,7 @@ test_fstop_to_infinity_converges_to_the_pinhole_image.)"""
 import numpy as np
 import pytest
 
-from engine import World, render
+from engine import World, camera, render
 from engine.camera import CameraModel
 from engine.scene import Camera
 from tests import scenes
@@ -34,7 +34,9 @@ def test_lens_samples_pass_chi_square_at_extreme_settings(lens, rng):
     uniform over the disk (in (r^2, phi)) or over the polygon with Cycles' vertex angles."""
     cam = Camera(use_dof=True, **{"fstop": 2.8, **lens})
     model = CameraModel(cam, 8, 8, np.zeros(3))
-    p = model.sample_lens(rng.random((N, 2)))
+    data = model.data()
+    lens_point = camera.lens_polygon if model.blades else camera.lens_disk
+    p = np.array([lens_point(ua, ub, data) for ua, ub in rng.random((N, 2))])
     assert np.isfinite(p).all()
     q = p / model.aperture * np.array([cam.ratio, 1.0])
     if cam.blades >= 3:
