@@ -26,7 +26,7 @@ from .camera import CameraModel
 from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
                          SceneData, ShadowRays)
-from .jit import INLINE, NUMBA
+from .jit import INLINE
 from .lights import COLUMNS, Emitters
 from .environment import Environment
 from .sampling import cross_rows, reverse_bits
@@ -97,15 +97,6 @@ class Kernel:
                     pass
             except OSError:  # a read-only cache: the kernel still works, it just reloads
                 pass
-
-    def compiled(self) -> bool:
-        return not NUMBA or bool(self.shade.signatures)
-
-    def describe(self) -> str:
-        off = [n for n in PLAN_CONSTANTS if not self.constants[n]
-               and n not in ("PROFILE", "DEBUG", "EXACT_FRESNEL")]
-        return "generic kernel" if self.generic else \
-            "specialised kernel (without " + ", ".join(n[4:].lower() for n in off) + ")"
 
 
 def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -> None:

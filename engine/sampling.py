@@ -96,12 +96,6 @@ def laine_karras(x, seed):
 
 
 @njit(**JIT)
-def nested_uniform_scramble(x, seed):
-    """Owen-scramble the bits of x (most significant bit first)."""
-    return reverse_bits(laine_karras(reverse_bits(x), seed))
-
-
-@njit(**JIT)
 def _to_unit(x):
     return min(float(x) * 2.0**-32, ONE_MINUS_EPSILON)
 

@@ -87,13 +87,6 @@ def test_strength_1e6_gives_finite_pixels_and_the_right_mean():
     assert np.all(seen.combined[2:6, 2:6, :3] == 1e6) and all_finite(seen)
 
 
-class _ZeroStream:
-    """A sample stream whose every value is 0: every path with q > 0 survives roulette."""
-
-    def get_1d(self, dim, rows=None):
-        return np.zeros(len(rows))
-
-
 def test_russian_roulette_never_divides_by_a_tiny_survival_probability():
     """Throughputs down to the smallest subnormal, and 0: survivors are divided by
     q = min(sqrt(max channel), 1) >= their throughput, so the result is at most
