@@ -1,7 +1,7 @@
 """Do two renders of one scene agree? A block z-test with a Sidak-corrected threshold.
 
-Specula gives one image S with an estimate of each pixel's variance of the mean (its
-per-pixel sample variance / N). Cycles gives K >= 2 images C_1..C_K of the same scene with
+Specula gives one image S with an estimate of each pixel's variance of the mean (from the
+spread of its R replicates). Cycles gives K >= 2 images C_1..C_K of the same scene with
 independent seeds; their mean C has the variance s^2 / K per pixel, s^2 the sample variance
 over the K runs (K - 1 degrees of freedom per pixel).
 
@@ -13,8 +13,8 @@ For every block of pixels, of several shapes (BLOCK_SHAPES), and every colour ch
 
 Pixels are independent in both renderers, so V is the variance of D. Cycles' part of V has
 only (K - 1) x pixels degrees of freedom, so t is referred to Student's t with the
-Welch-Satterthwaite degrees of freedom (Specula's part counts as exact: it pools N - 1
-degrees of freedom per pixel). Small blocks find local, sign-changing differences (a
+Welch-Satterthwaite degrees of freedom (Specula's variance comes from its R replicates,
+R - 1 degrees of freedom per pixel). Small blocks find local, sign-changing differences (a
 defocus edge, a bokeh outline); large blocks find small, widespread ones (a few % of
 light). Every (scale, block, channel) is one test; the images agree when no test's
 two-sided p-value falls below the Sidak level for the whole family at `alpha`.
@@ -22,9 +22,9 @@ two-sided p-value falls below the Sidak level for the whole family at `alpha`.
 Where both engines are noise-free, a per-pixel tolerance of REL_TOLERANCE x value (as a
 standard deviation) stands in for the variance; see its comment.
 
-Specula's samples are Owen-scrambled Sobol points, so its sample variance overestimates the
-error of its mean: the test errs on the side of agreeing. Its power is checked by rendering
-deliberately wrong images (tests/cycles/test_power.py).
+Specula's variance is its replicate estimate, calibrated against its measured error
+(tests/benchmarks/calibration.py). The test's power is checked by rendering deliberately
+wrong images (tests/cycles/test_power.py).
 
 Used by `python -m addon compare` (addon/compare.py) and by the agreement tests
 (tests/cycles/compare.py re-exports it). Needs scipy (Student's t and the normal
@@ -34,6 +34,7 @@ import this module.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -113,11 +114,14 @@ def _normal_equivalent(p):
 
 
 def compare(specula: np.ndarray, specula_var: np.ndarray, cycles_runs: np.ndarray,
-            alpha: float = ALPHA, block_shapes=BLOCK_SHAPES) -> Comparison:
+            alpha: float = ALPHA, block_shapes=BLOCK_SHAPES,
+            specula_dof: float = math.inf) -> Comparison:
     """Compare Specula's image with K independent Cycles images of the same scene.
 
     specula : (H, W, 3) mean image; specula_var : (H, W, 3) variance of each pixel's mean
     cycles_runs : (K, H, W, 3) images from K >= 2 seeds
+    specula_dof : degrees of freedom of each pixel's variance (RenderResult.dof: its
+        replicates - 1); inf treats Specula's variance as known
     """
     s = np.asarray(specula, np.float64)[..., :3]
     vs = np.asarray(specula_var, np.float64)[..., :3]
@@ -139,8 +143,9 @@ def compare(specula: np.ndarray, specula_var: np.ndarray, cycles_runs: np.ndarra
         v_s, v_c = block_sums(vs, b), block_sums(vc, b)
         n_pix = block_sums(np.ones(s.shape[:2] + (1,)), b)
         var = v_s + v_c + block_sums(tol_var, b)
-        # Welch-Satterthwaite: Specula's variance counts as known exactly.
-        dof = var ** 2 / np.maximum(v_c ** 2 / (dof_c_pixel * n_pix), 1e-300)
+        # Welch-Satterthwaite over both engines' variance estimates.
+        specula_part = 0.0 if math.isinf(specula_dof) else v_s ** 2 / (specula_dof * n_pix)
+        dof = var ** 2 / np.maximum(v_c ** 2 / (dof_c_pixel * n_pix) + specula_part, 1e-300)
         dof = np.clip(dof, 1.0, 1e6)
         t = np.abs(d) / np.sqrt(np.maximum(var, 1e-300))
         t = np.where(var > 0, t, np.where(d == 0, 0.0, np.inf))

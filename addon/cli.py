@@ -8,6 +8,9 @@ codes: 0 success, 1 unreadable scene or a failed render, 2 bad arguments (argpar
 `compare` renders the scene with Specula and with Cycles and tests whether they agree
 (compare.py; exit 0 agree, 1 differ, 2 bad arguments or scipy missing, 3 no comparison).
 
+`merge A.exr B.exr -o C.exr` merges renders of disjoint replicate sets into the render of
+their union (merge.py; exit 0 merged, 1 files that cannot be merged).
+
 Both print warnings as one `warning: ...` line each on stderr, repeats grouped, Blender's
 own output on stderr too, and the JSON summary as the last line of stdout (console.py);
 `--json PATH` also writes it to a file.
@@ -55,6 +58,23 @@ def _resolution(text):
     return w, h
 
 
+def _replicates(text):
+    """`N` (all N replicates) or `A-B/N` (replicates A..B of N): (N, (A, B + 1) or None)."""
+    try:
+        if "/" not in text:
+            n, span = int(text), None
+        else:
+            ids, n = text.split("/")
+            first, _, last = ids.partition("-")
+            n, span = int(n), (int(first), int(last or first) + 1)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"replicates must be N or A-B/N, got {text!r}")
+    if not 1 <= n <= 64 or span is not None and not 0 <= span[0] < span[1] <= n:
+        raise argparse.ArgumentTypeError(
+            f"replicates must be N (1-64) or A-B/N with 0 <= A <= B < N, got {text!r}")
+    return n, span
+
+
 def _output(text):
     ext = os.path.splitext(text)[1].lower()
     if ext not in FORMATS:
@@ -87,7 +107,22 @@ def build_parser():
     r.add_argument("--output", type=_output, action="append",
                    help="image path, .exr (linear float) or .png (view transform); repeat to "
                    "save one render in several files; default out/<scene>.exr")
+    r.add_argument("--replicates", type=_replicates, metavar="N|A-B/N",
+                   help="N independent replicates (the error estimate), or replicates A to B "
+                   "of N only, to merge with renders of the others; .exr output then holds "
+                   "every replicate as a pass (multilayer EXR)")
+    r.add_argument("--plot", metavar="PATH", type=_png,
+                   help="write the estimated error against time as a log-log plot (PNG)")
     r.add_argument("--json", metavar="PATH", help="also write the JSON summary to PATH")
+
+    m = sub.add_parser(
+        "merge", help="merge renders of disjoint replicate sets into one",
+        description="Merge EXRs rendered with --replicates A-B/N over disjoint replicate sets "
+        "of the same scene, seed and size into the EXR of their union: the same image and "
+        "error, to the last bit, as one render of all of them.")
+    m.add_argument("inputs", nargs="+", help="the multilayer EXRs to merge")
+    m.add_argument("-o", "--output", required=True, help="the merged EXR")
+    m.add_argument("--json", metavar="PATH", help="also write the JSON summary to PATH")
 
     c = sub.add_parser(
         "compare", help="render a .blend with Specula and with Cycles and test if they agree",
@@ -121,6 +156,13 @@ def _configure_specula(scene, args):
         s.max_bounces = args.max_bounces
     if args.seed is not None:
         s.seed = args.seed
+    if args.replicates is not None:
+        s.replicates, span = args.replicates
+        s.use_replicate_subset = span is not None
+        if span is not None:
+            s.replicate_first, s.replicate_last = span[0], span[1] - 1
+        for layer in scene.view_layers:
+            layer.specula.use_pass_replicates = True
 
 
 def _configure_cycles(scene, args):
@@ -144,13 +186,17 @@ def _fail(message, code=1):
     return code
 
 
-def _save(bpy, scene, output):
+def _save(bpy, scene, output, multilayer=False):
     """Save the Render Result through Blender's image pipeline; returns an error or None.
 
-    EXR is written as linear 32-bit float; PNG gets the scene's view transform."""
+    EXR is written as linear 32-bit float (every pass, if `multilayer`); PNG gets the
+    scene's view transform."""
     image = scene.render.image_settings
     ext = os.path.splitext(output)[1].lower()
-    image.file_format = FORMATS[ext]
+    multilayer = multilayer and ext == ".exr"
+    if hasattr(image, "media_type"):  # Blender 5: multilayer is a media type first
+        image.media_type = "MULTI_LAYER_IMAGE" if multilayer else "IMAGE"
+    image.file_format = "OPEN_EXR_MULTILAYER" if multilayer else FORMATS[ext]
     image.color_mode = "RGBA"
     image.color_depth = "32" if ext == ".exr" else "8"
     os.makedirs(os.path.dirname(output), exist_ok=True)
@@ -183,8 +229,31 @@ def render(args):
     if error:
         return _fail(error)
     summary["warnings"] = log.lines()
+    if args.plot and summary.get("series"):
+        _plot(summary["series"], args.plot, os.path.basename(path))
+        summary["plot"] = os.path.abspath(args.plot)
     console.emit_json(summary, args.json)
     return 0
+
+
+def _plot(series, path, title):
+    """The estimated relative error against seconds, log-log, its 95% interval dashed, and
+    a 1/sqrt(t) line through the last point for reference."""
+    from . import imaging
+    pts = [p for p in series if p["relative_error"] > 0 and p["seconds"] > 0]
+    curves = {}
+    if pts:
+        t = [p["seconds"] for p in pts]
+        curves["estimated error"] = (t, [p["relative_error"] for p in pts])
+        curves["95% interval, low"] = (t, [p["interval"][0] for p in pts])
+        curves["95% interval, high"] = (t, [p["interval"][1] for p in pts])
+        t_end, e_end = t[-1], pts[-1]["relative_error"]
+        curves["1/sqrt(t)"] = (t, [e_end * (t_end / x) ** 0.5 for x in t])
+    img = imaging.loglog_plot(curves, f"{title}: estimated error against time", "seconds",
+                              "relative RMS error",
+                              dashed={"95% interval, low", "95% interval, high", "1/sqrt(t)"})
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    imaging.write_png(path, img)
 
 
 def _render(args, path, outputs):
@@ -221,8 +290,9 @@ def _render(args, path, outputs):
     else:
         summary = {"engine": "CYCLES", "samples": int(scene.cycles.samples),
                    "seconds": seconds, "relative_error": None, "plan": None}
+    multilayer = args.engine == "SPECULA" and args.replicates is not None
     for output in outputs:
-        error = _save(bpy, scene, output)
+        error = _save(bpy, scene, output, multilayer)
         if error:
             return None, error
     summary["output"] = outputs[0] if len(outputs) == 1 else outputs
@@ -236,6 +306,9 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     if args.command == "render":
         code = render(args)
+    elif args.command == "merge":
+        from . import merge
+        code = merge.run(args)
     else:
         from . import compare
         code = compare.run(args)

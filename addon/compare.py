@@ -219,7 +219,7 @@ def _compare(args, agreement, log) -> _Report:
         raise CompareError(f"the engines rendered different sizes: Specula "
                            f"{image.shape[1]}x{image.shape[0]}, Cycles "
                            f"{runs.shape[2]}x{runs.shape[1]}")
-    cmp = agreement.compare(image, result.variance, runs)
+    cmp = agreement.compare(image, result.variance, runs, specula_dof=result.dof)
     errors = error_against_time(curve, specula_runs, specula_seconds, runs, cycles_seconds)
     output = os.path.abspath(args.output or default_output(args.scene))
     os.makedirs(os.path.dirname(output), exist_ok=True)

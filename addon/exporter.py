@@ -465,7 +465,16 @@ def render_settings_kwargs(scene, width, height, samples=None):
                 time_limit=float(s.time_limit), target_error=float(s.target_error),
                 max_bounces=int(s.max_bounces), seed=int(s.seed), threads=int(s.threads),
                 fresnel=s.fresnel.lower(), filter_type=s.filter_type,
-                filter_width=float(s.filter_width))
+                filter_width=float(s.filter_width), replicates=int(s.replicates),
+                replicate_range=replicate_range(s))
+
+
+def replicate_range(s):
+    """(first, stop) of the scene's replicate subset, or None for all of them (checked
+    against the replicate count by RenderSettings.validate)."""
+    if not s.use_replicate_subset:
+        return None
+    return int(s.replicate_first), int(s.replicate_last) + 1
 
 
 def resolution(scene):

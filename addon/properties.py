@@ -48,6 +48,19 @@ class SpeculaSceneSettings(bpy.types.PropertyGroup):
     filter_width: FloatProperty(
         name="Filter Width", description="Pixel filter width in pixels", default=1.5,
         min=0.01, max=10.0, soft_max=3.0, subtype='PIXEL')
+    replicates: IntProperty(
+        name="Replicates", description="Independent replicates of the sample sequence: the "
+        "estimated error comes from how far they differ (more replicates: more to split "
+        "across machines, but each keeps less of the sequence's stratification, so more "
+        "noise at equal samples; 1: no estimate)", default=2, min=1, max=64)
+    use_replicate_subset: BoolProperty(
+        name="Replicate Subset", description="Render replicates First to Last only, to merge "
+        "with renders of the others (python -m addon merge): a still split across machines",
+        default=False)
+    replicate_first: IntProperty(
+        name="First", description="First replicate rendered", default=0, min=0, max=63)
+    replicate_last: IntProperty(
+        name="Last", description="Last replicate rendered", default=0, min=0, max=63)
 
 
 class SpeculaViewLayerSettings(bpy.types.PropertyGroup):
@@ -56,6 +69,10 @@ class SpeculaViewLayerSettings(bpy.types.PropertyGroup):
     use_pass_error: BoolProperty(
         name="Estimated Error", description="Write the 'Specula Error' pass: each pixel's "
         "estimated standard error of luminance", default=True)
+    use_pass_replicates: BoolProperty(
+        name="Replicates", description="Write each replicate's mean (RGB) and sample count "
+        "(A) as 'Specula Replicate N' passes, so that renders of disjoint replicates merge "
+        "exactly (python -m addon merge)", default=False)
 
 
 classes = (SpeculaSceneSettings, SpeculaViewLayerSettings)

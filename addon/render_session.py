@@ -7,6 +7,7 @@ escape into Blender's UI as a traceback: they end the render with `report({'ERRO
 
 from __future__ import annotations
 
+import json
 import time
 import traceback
 
@@ -15,6 +16,8 @@ import numpy as np
 from . import core, exporter
 
 ERROR_PASS = "Specula Error"
+REPLICATE_PASS = "Specula Replicate {}"
+SPREAD_PASS = "Specula Replicate {} Spread"
 # The summary of the most recent render, for the command line's JSON line.
 last_summary: dict = {}
 
@@ -24,9 +27,31 @@ def _unknown(rel):
     return rel is None or not np.isfinite(rel) or rel < 0
 
 
-def _stats(samples, total, seconds, rel):
+def _stats(samples, total, seconds, rel, interval=None):
     err = "-" if _unknown(rel) else f"{100.0 * rel:.2f}%"
+    if not _unknown(rel) and interval is not None and interval[0] >= 0:
+        err += f" (95%: {100.0 * interval[0]:.2f}-{100.0 * interval[1]:.2f}%)"
     return f"Sample {samples}/{total} | Time {seconds:.1f} s | Est. error {err}"
+
+
+def replicate_ids(scene):
+    """The replicates a render of `scene` traces (its Specula settings)."""
+    s = scene.specula
+    if s.use_replicate_subset:
+        return tuple(range(s.replicate_first, max(s.replicate_first, s.replicate_last) + 1))
+    return tuple(range(s.replicates))
+
+
+def error_metadata(out, settings) -> dict:
+    """What a render says about its error, as text fields (EXR header, JSON): the
+    estimate and its interval, the replicates and the error-against-time series."""
+    ids = out.replicate_ids
+    return {"Specula Relative Error": f"{out.relative_error:.6g}",
+            "Specula Error Interval": f"{out.error_interval[0]:.6g} {out.error_interval[1]:.6g}",
+            "Specula Replicates": f"{ids[0]}-{ids[-1]}/{settings.replicates}",
+            "Specula Seed": str(settings.seed), "Specula Samples": str(out.samples),
+            "Specula t95": f"{out.t95:.6g}",
+            "Specula Error Series": json.dumps(out.series, separators=(",", ":"))}
 
 
 # At most this share of a render's wall time goes to showing intermediate images.
@@ -64,6 +89,12 @@ class RenderSession:
         settings = getattr(view_layer, "specula", None)
         if settings is None or settings.use_pass_error:
             engine.register_pass(scene, view_layer, ERROR_PASS, 1, "X", 'VALUE')
+        if settings is not None and settings.use_pass_replicates:
+            for r in replicate_ids(scene):
+                engine.register_pass(scene, view_layer, REPLICATE_PASS.format(r), 4, "RGBA",
+                                     'COLOR')
+                engine.register_pass(scene, view_layer, SPREAD_PASS.format(r), 4, "RGBA",
+                                     'COLOR')
 
     def _write(self, layer, p):
         """Copy one core Pass into the result layer's passes (foreach_set, no lists)."""
@@ -78,6 +109,18 @@ class RenderSession:
         err = passes.get(ERROR_PASS)
         if err is not None:
             _set_rect(err, np.nan_to_num(p.error))
+        # The final result only: each replicate's mean and, in A, its sample counts; its
+        # samples' sums of squared deviations (R, G, B, luminance).
+        for j, r in enumerate(getattr(p, "replicate_ids", ())):
+            rep = passes.get(REPLICATE_PASS.format(r))
+            if rep is not None:
+                rgba = np.empty(p.replicate_mean.shape[:2] + (4,), np.float32)
+                rgba[..., :3] = p.replicate_mean[:, :, j]
+                rgba[..., 3] = p.replicate_count[:, :, j]
+                _set_rect(rep, rgba)
+            spread = passes.get(SPREAD_PASS.format(r))
+            if spread is not None:
+                _set_rect(spread, p.replicate_m2[:, :, j])
 
     def should_stop(self):
         """Esc in Blender (checked by the core between passes)."""
@@ -140,7 +183,7 @@ class RenderSession:
                 engine.update_result(result)
                 display["seconds"] += time.perf_counter() - t
             engine.update_progress(float(min(p.progress, 1.0)))
-            stats = _stats(p.samples, total, p.seconds, p.relative_error)
+            stats = _stats(p.samples, total, p.seconds, p.relative_error, p.error_interval)
             engine.update_stats("", f"Specula | {stats}")
 
         t0 = time.perf_counter()
@@ -154,6 +197,11 @@ class RenderSession:
             return
         self._write(layer, out)
         engine.end_result(result)
+        # Into the render's own result (what is saved), as Cycles stamps its metadata.
+        metadata = error_metadata(out, settings)
+        final = engine.get_result()
+        for key, value in metadata.items():
+            final.stamp_data_add_field(key, value)
         for warning in out.warnings or []:
             if warning not in builder_warnings:
                 engine.report({'WARNING'}, f"Specula: {warning}")
@@ -161,12 +209,17 @@ class RenderSession:
         last_summary = {
             "engine": "SPECULA", "samples": int(out.samples), "seconds": float(out.seconds),
             "relative_error": None if _unknown(out.relative_error) else float(out.relative_error),
+            "error_interval": None if _unknown(out.relative_error)
+            else [float(v) for v in out.error_interval],
+            "replicates": metadata["Specula Replicates"],
+            "t95": float(out.t95) if np.isfinite(out.t95) else None,
+            "series": out.series,
             "stop_reason": out.stop_reason, "cancelled": bool(out.cancelled),
             "plan": plan.as_dict() if hasattr(plan, "as_dict") else str(plan),
             "triangles": int(core_scene.num_triangles),
             "wall_seconds": time.perf_counter() - t0,
         }
-        stats = _stats(out.samples, total, out.seconds, out.relative_error)
+        stats = _stats(out.samples, total, out.seconds, out.relative_error, out.error_interval)
         engine.update_stats("", f"Specula | {stats} | {out.stop_reason}")
 
 

@@ -58,6 +58,13 @@ class SPECULA_RENDER_PT_sampling(SpeculaPanel, bpy.types.Panel):
         col.prop(s, "target_error")
         col.prop(s, "seed")
         col.prop(s, "threads")
+        col = layout.column(heading="Error Estimate")
+        col.prop(s, "replicates")
+        col.prop(s, "use_replicate_subset")
+        sub = col.column(align=True)
+        sub.active = s.use_replicate_subset
+        sub.prop(s, "replicate_first")
+        sub.prop(s, "replicate_last")
 
 
 class SPECULA_RENDER_PT_light_paths(SpeculaPanel, bpy.types.Panel):
@@ -94,6 +101,7 @@ class SPECULA_VIEWLAYER_PT_passes(SpeculaPanel, bpy.types.Panel):
         col.prop(view_layer, "use_pass_z")
         col.prop(view_layer, "use_pass_normal")
         col.prop(view_layer.specula, "use_pass_error")
+        col.prop(view_layer.specula, "use_pass_replicates")
 
 
 classes = (SPECULA_RENDER_PT_sampling, SPECULA_RENDER_PT_light_paths, SPECULA_RENDER_PT_film,

@@ -15,13 +15,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .jit import INLINE, JIT, njit
+from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import guided_interp, interp_guide
 from .scene import LUMINANCE
 
 # Depth written where a camera ray escapes: finite, so no pass ever holds inf.
 BACKGROUND_DEPTH = 1e10
 _TABLE_SIZE = 1024
+# The half-width in pixels of the neighbourhood a pixel's error is pooled over
+# (_pool_variance); 0 leaves every pixel its own estimate.
+POOL_RADIUS = 1
+# How many times its neighbourhood's mean independent-sample variance a pixel's must be for
+# the pixel to count as standing out (_pool_variance).
+STANDS_OUT = 2.0
 
 
 class PixelFilter:
@@ -110,6 +116,71 @@ def cycles_filter_table(f: PixelFilter) -> np.ndarray:
     return table
 
 
+# Two-sided 95% quantiles of Student's t for 1..30 degrees of freedom (t_{0.975, nu}).
+_T95 = (12.7062, 4.3027, 3.1824, 2.7764, 2.5706, 2.4469, 2.3646, 2.3060, 2.2622, 2.2281,
+        2.2010, 2.1788, 2.1604, 2.1448, 2.1314, 2.1199, 2.1098, 2.1009, 2.0930, 2.0860,
+        2.0796, 2.0739, 2.0687, 2.0639, 2.0595, 2.0555, 2.0518, 2.0484, 2.0452, 2.0423)
+_Z975 = 1.959963984540054
+
+
+def t95(dof: int) -> float:
+    """t_{0.975, dof}: the half-width of a 95% interval in standard errors, for a variance
+    estimated with `dof` degrees of freedom (inf for none)."""
+    if dof < 1:
+        return float("inf")
+    if dof <= len(_T95):
+        return _T95[dof - 1]
+    # Cornish-Fisher expansion of t around the normal quantile (Abramowitz & Stegun
+    # 26.7.5); within 1e-4 of the exact value from 31 degrees of freedom on.
+    z, v = _Z975, float(dof)
+    return (z + (z ** 3 + z) / (4 * v) + (5 * z ** 5 + 16 * z ** 3 + 3 * z) / (96 * v * v)
+            + (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / (384 * v ** 3))
+
+
+def _chi2_quantile(p_z: float, dof: float) -> float:
+    """The chi-square quantile with `dof` degrees of freedom at the normal quantile p_z
+    (Wilson-Hilferty: chi2/dof is nearly normal after a cube root)."""
+    c = 2.0 / (9.0 * dof)
+    return dof * max(1.0 - c + p_z * math.sqrt(c), 0.0) ** 3
+
+
+@dataclass
+class Estimate:
+    """The film's image and how far it may be from the image it converges to.
+
+    Samples come in R independent replicates (independently scrambled copies of the
+    sample sequence, see `Film`), so the spread of a pixel's R replicate means is an
+    unbiased estimate of the variance of their mean, with R - 1 degrees of freedom, whatever
+    the sequence's own convergence rate.
+
+    combined : (n, 3) float32 each pixel's value: the sample-count-weighted mean of its
+        replicate means
+    error : (n,) float32 estimated standard error of each pixel's luminance, pooled over
+        the pixel's neighbourhood (see _pool_variance): its 95% interval is value +- t95 x
+        error
+    variance : (n, 3) float32 estimated variance of each pixel's value, per channel, pooled
+        the same way
+    dof : degrees of freedom of each pixel's own variance (replicates with samples - 1, at
+        least in every pixel); t95 the 95% half-width in pooled standard errors
+    relative_error : estimated relative RMS error of the image: RMS standard error of the
+        luminance over the mean luminance (-1 until it can be estimated)
+    interval : (low, high) 95% interval of relative_error (normal theory, Satterthwaite's
+        degrees of freedom for the sum of the pixels' variances)
+    independent_relative_error : the same from the samples' own spread as if they were
+        independent, what Specula reported before replicates (it overstates the error of
+        stratified samples); kept for comparison
+    """
+
+    combined: np.ndarray
+    error: np.ndarray
+    variance: np.ndarray
+    dof: int
+    t95: float
+    relative_error: float
+    interval: tuple
+    independent_relative_error: float
+
+
 @dataclass
 class Pass:
     """What a caller sees after each pass of a render (and what `render` returns).
@@ -118,10 +189,15 @@ class Pass:
     depth : (H, W) float32 mean camera z-depth of the first hit (BACKGROUND_DEPTH where
         nothing is hit)
     normal : (H, W, 3) float32 mean world-space shading normal of the first hit
-    error : (H, W) float32 estimated standard error of each pixel's luminance
+    error : (H, W) float32 estimated standard error of each pixel's luminance; a pixel's
+        95% interval is its value +- t95 x error
     variance : (H, W, 3) float32 estimated variance of each pixel's mean, per channel
     samples : samples per pixel so far; seconds : wall time since the render began
-    relative_error : estimated relative RMS error of the image (see Film)
+    relative_error : estimated relative RMS error of the image (see Estimate); -1 when
+        it cannot be estimated yet (fewer than two replicates with samples)
+    error_interval : its 95% interval (low, high)
+    dof, t95 : degrees of freedom of the per-pixel variances, and the t quantile
+    independent_relative_error : the estimate before replicates (see Estimate)
     progress : fraction of the sample budget done
     """
 
@@ -134,90 +210,127 @@ class Pass:
     seconds: float
     relative_error: float
     progress: float
+    error_interval: tuple = (-1.0, -1.0)
+    dof: int = 0
+    t95: float = float("inf")
+    independent_relative_error: float = -1.0
 
 
 class Film:
-    """Per-pixel running mean and variance of radiance, plus Depth and Normal passes.
+    """Per-pixel, per-replicate running means of radiance, plus Depth and Normal passes.
 
+    replicates : the replicate ids this film holds (a render of replicates 4-7 of 8 holds
+        (4, 5, 6, 7)); a sample is folded into the slot of its replicate. Each slot keeps
+        its sample count, its mean (float32) and its samples' sums of squared deviations
+        (Welford; R, G, B and luminance, float32). These are all the image and its error
+        are made of, so films of disjoint replicate sets merge into exactly the film of
+        their union (`estimate` over the gathered slots; addon/merge.py).
     Pixels are indexed row-major from the bottom row (Blender's order): index = y * W + x.
-    `add` folds one sample per pixel of a chunk into the statistics.
     """
 
-    def __init__(self, width: int, height: int):
+    def __init__(self, width: int, height: int, replicates=(0,)):
         self.width, self.height = width, height
-        n = width * height
+        self.replicates = tuple(int(r) for r in replicates)
+        n, m = width * height, len(self.replicates)
         self.count = np.zeros(n, np.int32)
-        self.mean = np.zeros((n, 3), np.float64)
-        # Sums of squared deviations per channel (Welford); float32 keeps a 4K film small.
-        self.m2 = np.zeros((n, 3), np.float32)
-        self.m2_luminance = np.zeros(n, np.float64)
+        self.replicate_count = np.zeros((n, m), np.int32)
+        self.replicate_mean = np.zeros((n, m, 3), np.float32)
+        self.replicate_m2 = np.zeros((n, m, 4), np.float32)
         self.depth = np.zeros(n, np.float32)
         self.normal = np.zeros((n, 3), np.float32)
         self.rejected: list[str] = []
 
-    def add(self, pixels, radiance, depth, normal, rejected=None) -> None:
-        """Fold one sample for each pixel in `pixels` (n,) into the running statistics
-        (Welford): radiance (n, 3), first-hit depth (n,) and normal (n, 3). Updating per
-        chunk keeps temporaries the size of a chunk, not of the image. Samples with a
-        non-finite radiance, depth or normal are left out; the integrator names their stage
-        in `rejected`."""
+    def add(self, pixels, slot, radiance, depth, normal, rejected=None) -> None:
+        """Fold one sample for each pixel in `pixels` (n,), all of replicate slot `slot`,
+        into the running statistics: radiance (n, 3), first-hit depth (n,) and normal
+        (n, 3). Updating per chunk keeps temporaries the size of a chunk, not of the image.
+        Samples with a non-finite radiance, depth or normal are left out; the integrator
+        names their stage in `rejected`."""
         if rejected:
             self.rejected.extend(rejected)
-        _welford(pixels, radiance, depth, normal, self.count, self.mean, self.m2,
-                 self.m2_luminance, self.depth, self.normal, LUMINANCE)
+        _welford(pixels, slot, radiance, depth, normal, self.count, self.replicate_count,
+                 self.replicate_mean, self.replicate_m2, self.depth, self.normal, LUMINANCE)
 
     def check_finite(self, sample: int) -> None:
         """Raise if any pass holds NaN or inf, naming the first bad pixel."""
-        for name, arr in (("combined", self.mean), ("depth", self.depth),
-                          ("normal", self.normal), ("error", self.m2),
-                          ("error", self.m2_luminance)):
+        n = len(self.count)
+        for name, arr in (("combined", self.replicate_mean), ("depth", self.depth),
+                          ("normal", self.normal), ("error", self.replicate_m2)):
             # One compiled pass, no temporaries: this runs after every pass.
-            i = _first_nonfinite_row(arr.reshape(len(self.count), -1))
+            i = _first_nonfinite_row(arr.reshape(n, -1))
             if i >= 0:
                 raise FloatingPointError(
                     f"non-finite value in the {name} pass at pixel (x={i % self.width}, "
                     f"y={i // self.width}) after sample {sample}")
 
-    def relative_error(self) -> float:
-        """Estimated relative RMS error of the image: RMS standard error / mean luminance."""
-        return self.statistics()[2]
+    def estimate(self) -> Estimate:
+        """The image, each pixel's standard error and variance, and the image's relative
+        error with its interval: after every pass a caller reads, so compiled passes over
+        the film."""
+        return estimate(self.replicate_count, self.replicate_mean, self.replicate_m2,
+                        (self.height, self.width))
 
-    def statistics(self) -> tuple[np.ndarray, np.ndarray, float]:
-        """Each pixel's estimated standard error of its mean luminance (n,) and variance of
-        its mean per channel (n, 3), as float32, and the image's estimated relative RMS
-        error: after every pass of a progressive render, so one compiled pass over the
-        film (a 1920x1080 film: ~120 ms a pass in numpy)."""
-        n = len(self.count)
-        error, variance = np.empty(n, np.float32), np.empty((n, 3), np.float32)
-        sum_e2, sum_y, most = _statistics(self.count, self.mean, self.m2, self.m2_luminance,
-                                          LUMINANCE, error, variance)
-        rel = float("inf") if most < 2 else _relative(sum_e2 / n, sum_y / n)
-        return error, variance, rel
-
-    def snapshot(self, samples: int, seconds: float, progress: float, stats=None):
-        """The film as a Pass; `stats` from `statistics()` if the caller has them."""
-        error, variance, rel = stats if stats is not None else self.statistics()
+    def snapshot(self, samples: int, seconds: float, progress: float, est=None) -> Pass:
+        """The film as a Pass; `est` from `estimate()` if the caller has it."""
+        est = est if est is not None else self.estimate()
         h, w = self.height, self.width
         rgba = np.ones((h, w, 4), np.float32)
-        rgba[..., :3] = self.mean.reshape(h, w, 3)
+        rgba[..., :3] = est.combined.reshape(h, w, 3)
         return Pass(combined=rgba, depth=self.depth.reshape(h, w).copy(),
-                    normal=self.normal.reshape(h, w, 3).copy(), error=error.reshape(h, w),
-                    variance=variance.reshape(h, w, 3), samples=samples, seconds=seconds,
-                    relative_error=rel if np.isfinite(rel) else -1.0, progress=min(progress, 1.0))
+                    normal=self.normal.reshape(h, w, 3).copy(), error=est.error.reshape(h, w),
+                    variance=est.variance.reshape(h, w, 3), samples=samples, seconds=seconds,
+                    relative_error=est.relative_error, progress=min(progress, 1.0),
+                    error_interval=est.interval, dof=est.dof, t95=est.t95,
+                    independent_relative_error=est.independent_relative_error)
 
 
-def _relative(mean_error2: float, mean_luminance: float) -> float:
-    """RMS standard error over mean luminance (0 for a black image)."""
-    if mean_luminance <= 0:
-        return 0.0
-    return float(np.sqrt(mean_error2) / mean_luminance)
+def estimate(replicate_count, replicate_mean, replicate_m2, shape,
+             radius: int | None = None) -> Estimate:
+    """An Estimate from per-replicate counts (n, m), float32 means (n, m, 3) and sums of
+    squared deviations (n, m, 4) of an image of `shape` (H, W) (pixels row-major from the
+    bottom row). A function of those arrays alone, so a film and a merge of films holding
+    the same replicates give the same bits. `radius` overrides POOL_RADIUS (0: each
+    pixel's own replicate variance, unbiased; for measurements)."""
+    radius = POOL_RADIUS if radius is None else radius
+    n = len(replicate_count)
+    combined = np.empty((n, 3), np.float32)
+    # Each pixel's variance of its value: from its replicates' spread ("own") and from its
+    # samples' spread within the replicates as if they were independent ("independent");
+    # R, G, B and luminance.
+    own, independent = np.empty((4, n)), np.empty((4, n))
+    s_var, s_var2, s_lum, fewest, s_ind = _statistics(
+        replicate_count, replicate_mean, replicate_m2, LUMINANCE, combined, own, independent)
+    pooled = np.empty((4, n), np.float32)
+    for k in range(4):
+        _pool_variance(own[k].reshape(shape), independent[k].reshape(shape), radius,
+                       pooled[k].reshape(shape))
+    dof = max(fewest - 1, 0)
+    mean_lum = s_lum / max(n, 1)
+    rel, interval = -1.0, (-1.0, -1.0)
+    if fewest >= 2 and mean_lum > 0 and s_var > 0:
+        rel = math.sqrt(s_var / n) / mean_lum
+        # Satterthwaite: the sum of n variance estimates with dof_i each is nearly
+        # sum x chi2(nu) / nu, nu = sum^2 / sum(v_i^2 / dof_i).
+        nu = s_var * s_var / max(s_var2, 1e-300)
+        lo = rel * math.sqrt(nu / _chi2_quantile(_Z975, nu))
+        hi = rel * math.sqrt(nu / max(_chi2_quantile(-_Z975, nu), 1e-300))
+        interval = (lo, hi)
+    elif fewest >= 2:
+        rel, interval = 0.0, (0.0, 0.0)
+    ind = math.sqrt(s_ind / n) / mean_lum if mean_lum > 0 and s_ind >= 0 else -1.0
+    window = (2 * radius + 1) ** 2
+    return Estimate(combined=combined, error=np.sqrt(pooled[3]),
+                    variance=np.ascontiguousarray(pooled[:3].T), dof=dof,
+                    t95=t95(dof * window), relative_error=rel, interval=interval,
+                    independent_relative_error=ind)
 
 
 @njit(**JIT)
-def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, depth_acc,
+def _welford(pixels, slot, radiance, depth, normal, count, rcount, rmean, rm2, depth_acc,
              normal_acc, lum):
-    """Film.add: Welford's update per sample (float32 where the film stores float32);
-    releases the GIL, so worker threads fold their own chunks."""
+    """Film.add: each sample into its replicate's running mean and sums of squared
+    deviations (Welford; float32, each rounded once per update) and the depth and normal
+    means; releases the GIL, so worker threads fold their own chunks."""
     f32 = np.float32
     for i in range(len(pixels)):
         r0, r1, r2, z = radiance[i, 0], radiance[i, 1], radiance[i, 2], depth[i]
@@ -226,18 +339,22 @@ def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, dep
                 and np.isfinite(normal[i, 2])):
             continue
         p = pixels[i]
+        k = rcount[p, slot] + 1
+        rcount[p, slot] = k
+        y_old = 0.0
+        y_new = 0.0
+        for c in range(3):
+            x = radiance[i, c]
+            old = rmean[p, slot, c]
+            new = f32(old + (x - old) / k)
+            rmean[p, slot, c] = new
+            rm2[p, slot, c] = f32(rm2[p, slot, c] + (x - old) * (x - new))
+            y_old += lum[c] * old
+            y_new += lum[c] * new
+        y = r0 * lum[0] + r1 * lum[1] + r2 * lum[2]
+        rm2[p, slot, 3] = f32(rm2[p, slot, 3] + (y - y_old) * (y - y_new))
         n = count[p] + 1
         count[p] = n
-        d0, d1, d2 = r0 - mean[p, 0], r1 - mean[p, 1], r2 - mean[p, 2]
-        mean[p, 0] += d0 / n
-        mean[p, 1] += d1 / n
-        mean[p, 2] += d2 / n
-        a0, a1, a2 = r0 - mean[p, 0], r1 - mean[p, 1], r2 - mean[p, 2]
-        m2[p, 0] += f32(d0 * a0)
-        m2[p, 1] += f32(d1 * a1)
-        m2[p, 2] += f32(d2 * a2)
-        m2_luminance[p] += ((d0 * lum[0] + d1 * lum[1] + d2 * lum[2])
-                            * (a0 * lum[0] + a1 * lum[1] + a2 * lum[2]))
         w = f32(1.0 / n)
         depth_acc[p] += w * (f32(z) - depth_acc[p])
         for c in range(3):
@@ -245,34 +362,110 @@ def _welford(pixels, radiance, depth, normal, count, mean, m2, m2_luminance, dep
 
 
 @njit(**JIT)
-def _statistics(count, mean, m2, m2_luminance, lum, error, variance):
-    """Each pixel's standard error of its mean luminance into error (n,) and variance of its
-    mean into variance (n, 3) float32 (0 below 2 samples); returns the sums of squared
-    errors and of mean luminances and the largest sample count, for the relative error."""
+def _statistics(rcount, rmean, rm2, lum, combined, own, independent):
+    """Per pixel: the count-weighted mean of the replicate means into combined (n, 3); from
+    their spread the variance of that mean per channel and of its luminance into own
+    (4, n),
+
+        V = sum_r c_r (m_r - m)^2 / ((R - 1) sum_r c_r)
+
+    over the R replicates with samples (c_r samples, mean m_r; with equal counts the usual
+    sum_r (m_r - m)^2 / (R (R - 1))), 0 where R < 2; and from the samples' spread within
+    the replicates, as if independent, sum_r M2_r / ((N - R) N) into independent (4, n)
+    (0 where N <= R). Returns the sums over pixels of the own luminance variance, of its
+    square over its degrees of freedom, of the luminance and of the independent luminance
+    variance (-1 if some pixel has none), and the fewest replicates with samples."""
     f32 = np.float32
-    sum_e2 = 0.0
-    sum_y = 0.0
-    most = 0
-    for i in range(len(count)):
-        c = count[i]
-        most = max(most, c)
-        n = f32(c)
-        if n > 1:
-            d = max(n * (n - f32(1)), f32(1.0))
-            for j in range(3):
-                variance[i, j] = m2[i, j] / d
+    s_var, s_var2, s_lum, s_ind = 0.0, 0.0, 0.0, 0.0
+    fewest = rcount.shape[1]
+    for i in range(rcount.shape[0]):
+        total, filled = 0.0, 0
+        m0, m1, m2 = 0.0, 0.0, 0.0
+        for r in range(rcount.shape[1]):
+            c = float(rcount[i, r])
+            if c > 0:
+                filled += 1
+                total += c
+                m0 += c * rmean[i, r, 0]
+                m1 += c * rmean[i, r, 1]
+                m2 += c * rmean[i, r, 2]
+        fewest = min(fewest, filled)
+        if total > 0:
+            m0, m1, m2 = m0 / total, m1 / total, m2 / total
+        combined[i, 0], combined[i, 1], combined[i, 2] = f32(m0), f32(m1), f32(m2)
+        s_lum += m0 * lum[0] + m1 * lum[1] + m2 * lum[2]
+        for k in range(4):
+            own[k, i] = 0.0
+            independent[k, i] = 0.0
+        if filled >= 2:
+            for r in range(rcount.shape[1]):
+                c = float(rcount[i, r])
+                if c > 0:
+                    d0, d1, d2 = rmean[i, r, 0] - m0, rmean[i, r, 1] - m1, rmean[i, r, 2] - m2
+                    dy = d0 * lum[0] + d1 * lum[1] + d2 * lum[2]
+                    own[0, i] += c * d0 * d0
+                    own[1, i] += c * d1 * d1
+                    own[2, i] += c * d2 * d2
+                    own[3, i] += c * dy * dy
+            for k in range(4):
+                own[k, i] /= (filled - 1) * total
+            s_var += own[3, i]
+            s_var2 += own[3, i] * own[3, i] / (filled - 1)
+        if total > filled:
+            for k in range(4):
+                m2_sum = 0.0
+                for r in range(rcount.shape[1]):
+                    m2_sum += rm2[i, r, k]
+                independent[k, i] = max(m2_sum, 0.0) / ((total - filled) * total)
+            s_ind += independent[3, i]
         else:
-            for j in range(3):
-                variance[i, j] = f32(0.0)
-        v = 0.0
-        n64 = float(c)
-        if n64 > 1:
-            v = m2_luminance[i] / max(n64 * (n64 - 1), 1.0)
-        e = math.sqrt(max(v, 0.0))
-        error[i] = f32(e)
-        sum_e2 += e * e
-        sum_y += mean[i, 0] * lum[0] + mean[i, 1] * lum[1] + mean[i, 2] * lum[2]
-    return sum_e2, sum_y, most
+            s_ind = -1.0e300
+    return s_var, s_var2, s_lum, fewest, s_ind
+
+
+@njit(**ALLOCATING)
+def _pool_variance(own, independent, radius, out):
+    """Each pixel's variance for its interval, into out (float32): the larger of
+
+    * the mean of the own (replicate) variances over its (2 radius + 1)^2 neighbourhood
+      (the part inside the image), and
+    * its independent-sample variance times the neighbourhood's ratio of own to
+      independent variance.
+
+    Why pool: path-traced pixels are skewed. A pixel whose rare bright paths (a caustic, a
+    light seen through glass) fell in none of its replicates has replicates that agree, so
+    its own spread says its error is small exactly when its value is furthest below the
+    truth; its 95% interval then misses far more often than 5 % (54-86 % coverage at 16
+    samples, measured; README "Honest error"). Its neighbours see the same surfaces and
+    rare paths, and some of them caught one: their mean variance stands for the pixel's,
+    with many more degrees of freedom. Why the second term: a pixel can differ from its
+    neighbours for real (a silhouette, a highlight, a shadow or defocus edge crossing it).
+    Its samples' own spread sees that with N - R degrees of freedom, but overstates the
+    error of stratified samples by a factor that changes slowly across the image; the
+    neighbourhood's own/independent ratio measures that factor. The image's relative
+    error uses neither: the plain per-pixel estimates are unbiased, and so is their mean."""
+    h, w = own.shape
+    # Separable window sums: along rows, then down columns (zero stays exactly zero).
+    rows = np.empty((2, h, w))
+    for y in range(h):
+        for x in range(w):
+            a, b = 0.0, 0.0
+            for k in range(max(x - radius, 0), min(x + radius + 1, w)):
+                a += own[y, k]
+                b += independent[y, k]
+            rows[0, y, x], rows[1, y, x] = a, b
+    for y in range(h):
+        y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
+        for x in range(w):
+            a, b = 0.0, 0.0
+            for k in range(y0, y1):
+                a += rows[0, k, x]
+                b += rows[1, k, x]
+            count = (y1 - y0) * (min(x + radius + 1, w) - max(x - radius, 0))
+            v = a / count
+            if b > 0.0 and independent[y, x] > STANDS_OUT * b / count:
+                v = max(v, independent[y, x] * (a / b))
+            out[y, x] = v
 
 
 @njit(**JIT)

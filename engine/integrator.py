@@ -121,16 +121,17 @@ def _add(paths, row, t0, t1, t2, l0, l1, l2, w):
     paths.radiance[row, 2] += t2 * l2 * w
 
 
-def generate_camera_rays(pixels, sample, seed, sc, paths):
-    """Camera rays for pixel ids (n,): a filter offset by Cycles' table (the first sample
-    through its middle), a lens point with depth of field, the ray in world space."""
+def generate_camera_rays(pixels, sample, seed, centred, sc, paths):
+    """Camera rays for pixel ids (n,) at index `sample` of the sequence of `seed`: a filter
+    offset by Cycles' table (through the pixel's middle if `centred`, as Cycles' first
+    sample), a lens point with depth of field, the ray in world space."""
     rev_sample = reverse_bits(np.uint64(sample))
     cam = sc.camera
     m = cam.world_from_camera
     for i in range(len(pixels)):
         ps = pixel_seed(pixels[i], seed)
         paths.pseed[i] = ps
-        fx, fy = sample_2d(ps, rev_sample, DIM_FILTER) if sample != 0 else (0.5, 0.5)
+        fx, fy = (0.5, 0.5) if centred else sample_2d(ps, rev_sample, DIM_FILTER)
         rx = (pixels[i] % cam.width) + 0.5 + filter_offset(fx, sc.film_filter)
         ry = (pixels[i] // cam.width) + 0.5 + filter_offset(fy, sc.film_filter)
         x, y = camera.raster_to_plane(rx, ry, cam)

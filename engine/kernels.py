@@ -29,7 +29,7 @@ from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, P
 from .jit import INLINE
 from .lights import COLUMNS, Emitters
 from .environment import Environment
-from .sampling import cross_rows, reverse_bits
+from .sampling import cross_rows, replicate_seed, reverse_bits
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -225,9 +225,11 @@ class Tracer:
         self._count = count  # callable(stage, seconds)
         self.profile = bool(kernel.constants["PROFILE"])
 
-    def trace_pixels(self, pixels: np.ndarray, sample: int):
-        """One sample for each pixel id in `pixels` (n,): radiance (n, 3), depth (n,),
-        normal (n, 3) and, with a DEBUG kernel, the stage that first went non-finite (n,)."""
+    def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
+        """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):
+        radiance (n, 3), depth (n,), normal (n, 3) and, with a DEBUG kernel, the stage that
+        first went non-finite (n,). Replicate 0's first sample goes through the pixels'
+        middles, as Cycles' first sample."""
         k, s = self.kernel, self.settings
         n = len(pixels)
         paths = Paths(np.arange(n, dtype=np.int64), np.empty(n, np.uint64), np.empty((n, 3)),
@@ -235,7 +237,9 @@ class Tracer:
                       np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
                       np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32))
         t0 = time.perf_counter()
-        k.generate_camera_rays(np.asarray(pixels, np.int64), sample, s.seed, self.data, paths)
+        k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
+                               replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,
+                               self.data, paths)
         self._count("generate camera rays", time.perf_counter() - t0)
         rev_sample = reverse_bits(np.uint64(sample))
         # Shadow rays: at most one per path and bounce.
@@ -272,13 +276,13 @@ class Tracer:
         self._count("sample BSDF", seconds * bsdf)
         profile[:] = 0
 
-    def explain_nonfinite(self, pixels: np.ndarray, sample: int, width: int,
+    def explain_nonfinite(self, pixels: np.ndarray, sample: int, replicate: int, width: int,
                           debug_tracer: "Tracer") -> list[str]:
         """Messages naming the stage and pixel of non-finite samples: the bad samples are
         traced again (sampling is deterministic) by a DEBUG kernel that marks the stage."""
         msgs = []
         for p in pixels[:5]:
-            stage = int(debug_tracer.trace_pixels(np.array([p]), sample)[3][0])
+            stage = int(debug_tracer.trace_pixels(np.array([p]), sample, replicate)[3][0])
             where = f"pixel (x={p % width}, y={p // width})"
             msgs.append(f"stage '{STAGE_NAMES[stage]}' produced a non-finite value at {where}"
                         if stage else f"non-finite sample at {where}, stage unknown")

@@ -12,6 +12,7 @@ thread timing, so a render is deterministic for a given seed.
 from __future__ import annotations
 
 import logging
+import math
 import os
 import threading
 import time
@@ -43,6 +44,16 @@ class RenderResult(Pass):
     time_to_first_pass: float = 0.0
     # Seconds the render's threads spent per stage (intersect, shade, ...), summed.
     stage_seconds: dict | None = None
+    # Error against time: one record per series point (SeriesPoints), each
+    # {"seconds", "samples", "relative_error", "interval": [low, high]}.
+    series: list | None = None
+    # The film itself, for merging renders of disjoint replicates (film.estimate): the
+    # replicate ids, their sample counts (H, W, m), means (H, W, m, 3) and sums of squared
+    # deviations (H, W, m, 4: R, G, B, luminance), float32.
+    replicate_ids: tuple = ()
+    replicate_count: np.ndarray | None = None
+    replicate_mean: np.ndarray | None = None
+    replicate_m2: np.ndarray | None = None
 
 
 class _Gate:
@@ -139,10 +150,10 @@ class Kernels:
         self.tracer = self.tracer_for(kernels.build_now(
             dict(self.tracer.kernel.constants, DEBUG=True, PROFILE=False), self._compile))
 
-    def explain_nonfinite(self, pixels, sample) -> list[str]:
+    def explain_nonfinite(self, pixels, sample, replicate) -> list[str]:
         debug = kernels.build_now(dict(self.tracer.kernel.constants, DEBUG=True, PROFILE=False),
                                   self._compile)
-        return self.tracer.explain_nonfinite(pixels, sample, self.settings.width,
+        return self.tracer.explain_nonfinite(pixels, sample, replicate, self.settings.width,
                                              self.tracer_for(debug))
 
 
@@ -160,6 +171,7 @@ class _Worker:
     def __init__(self, settings, kernel, film, timers, debug):
         self.settings, self.kernel, self.film, self.timers = settings, kernel, film, timers
         self.debug = debug
+        self.replicates = settings.replicate_ids
 
     def frame_ids(self, local: np.ndarray) -> np.ndarray:
         """Full-frame ids of window pixels: sampling and camera rays use the full frame's
@@ -168,40 +180,71 @@ class _Worker:
         ly, lx = np.divmod(local, x1 - x0)
         return (ly + y0) * self.settings.width + lx + x0
 
-    def trace(self, pixels: np.ndarray, sample: int, tracer):
-        """One sample for each pixel, with messages for samples that came out non-finite
+    def slot(self, index: int) -> tuple[int, int, int]:
+        """(film slot, replicate, sample index within it) of pass `index`: passes cycle
+        through the render's replicates, so every pass boundary leaves them within one
+        sample of each other."""
+        slot, sample = index % len(self.replicates), index // len(self.replicates)
+        return slot, self.replicates[slot], sample
+
+    def trace(self, pixels: np.ndarray, index: int, tracer):
+        """Pass `index` for each pixel, with messages for samples that came out non-finite
         in any pass they feed (traced again by the DEBUG kernel to name the stage)."""
-        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample)
+        _, replicate, sample = self.slot(index)
+        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample, replicate)
         if tracer.kernel.all_finite(radiance, depth, normal):
             return radiance, depth, normal, []
         if self.debug:
             raise NonFiniteError(tracer.explain_nonfinite(pixels[stage > 0][:1], sample,
-                                                          self.settings.width, tracer)[0])
+                                                          replicate, self.settings.width,
+                                                          tracer)[0])
         bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
                 & np.all(np.isfinite(normal), axis=1))
-        return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample)
+        return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample,
+                                                                      replicate)
 
-    def trace_and_fold(self, local: np.ndarray, sample: int, gate: _Gate, tracer) -> None:
+    def trace_and_fold(self, local: np.ndarray, index: int, gate: _Gate, tracer) -> None:
         """One chunk's sample, folded into the film by the worker itself once the gate of
         its pass opens: the main thread opens it after it has finished with the previous
         pass, so each pixel gets its samples in order (the film does not depend on thread
         timing) and a pass is folded whole or, if the render stopped, not at all."""
         if gate.discard:
             return
-        radiance, depth, normal, rejected = self.trace(self.frame_ids(local), sample, tracer)
+        radiance, depth, normal, rejected = self.trace(self.frame_ids(local), index, tracer)
         gate.opened.wait()
         if gate.discard:
             return
         t1 = time.perf_counter()
-        self.film.add(local, radiance, depth, normal, rejected)
+        self.film.add(local, self.slot(index)[0], radiance, depth, normal, rejected)
         self.timers("film", time.perf_counter() - t1)
 
 
+class SeriesPoints:
+    """The passes whose error is recorded: about 10 % more samples each time (and the
+    last), so a curve over thousands of passes stays a few dozen points."""
+
+    def __init__(self):
+        self.next = 1
+
+    def due(self, sample: int) -> bool:
+        if sample < self.next:
+            return False
+        self.next = max(sample + 1, int(math.ceil(sample * 1.1)))
+        return True
+
+
+def _series_point(p: Pass) -> dict:
+    return {"seconds": round(p.seconds, 4), "samples": int(p.samples),
+            "relative_error": p.relative_error, "interval": list(p.error_interval)}
+
+
 def _stop_reason(settings, sample, elapsed, rel, should_stop) -> str:
-    """Why a render stops after this pass before its sample count ("" if it goes on)."""
+    """Why a render stops after this pass before its sample count ("" if it goes on). The
+    error is trusted once every replicate of the render has a sample."""
     if settings.time_limit and elapsed >= settings.time_limit:
         return "time limit"
-    if settings.target_error and sample >= 2 and rel <= settings.target_error:
+    if (settings.target_error and sample >= len(settings.replicate_ids)
+            and 0 <= rel <= settings.target_error):
         return "target error"
     if should_stop is not None and should_stop():
         return "cancelled"
@@ -220,7 +263,7 @@ def _prepare(scene, settings, debug):
     kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
     if debug:
         kernel.use_debug_kernel()
-    return plan, Film(x1 - x0, y1 - y0), timers, kernel
+    return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
 
 
 def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=None,
@@ -245,7 +288,8 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     starts = list(range(0, n_pixels, chunk))
     stop_reason, cancelled, first = "", False, 0.0
     sample = 0
-    snap = None  # the last pass handed to on_pass
+    snap = None  # the last pass handed to on_pass or recorded in the series
+    series, points = [], SeriesPoints()
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
@@ -272,12 +316,15 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 elapsed = time.perf_counter() - t0
                 if sample == 1:
                     first = elapsed
-                # The image-wide error costs a pass over the film: only when someone reads it.
-                needed = on_pass is not None or settings.target_error
-                stats = film.statistics() if needed else None
-                rel = stats[2] if needed else float("nan")
+                # The estimate costs a pass over the film: only when someone reads it.
+                due = points.due(sample)
+                rel = float("nan")
+                if due or on_pass is not None or settings.target_error:
+                    snap = film.snapshot(sample, elapsed, sample / settings.samples)
+                    rel = snap.relative_error
+                    if due:
+                        series.append(_series_point(snap))
                 if on_pass is not None:
-                    snap = film.snapshot(sample, elapsed, sample / settings.samples, stats)
                     on_pass(snap)
                 if sample >= settings.samples:
                     break
@@ -296,21 +343,26 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 ahead[0].opened.set()
                 for job in ahead[1]:
                     job.cancel()
-    return _result(scene, settings, plan, film, timers, kernel, snap, sample,
+    return _result(scene, settings, plan, film, timers, kernel, series, sample,
                    time.perf_counter() - t0, stop_reason or "samples", cancelled, first)
 
 
-def _result(scene, settings, plan, film, timers, kernel, snap, sample, elapsed, stop_reason,
+def _result(scene, settings, plan, film, timers, kernel, series, sample, elapsed, stop_reason,
             cancelled, first) -> RenderResult:
-    # The film is final now; the last pass's snapshot already shows it, if there was one.
-    if snap is None or snap.samples != sample:
-        snap = film.snapshot(sample, elapsed, sample / settings.samples)
+    est = film.estimate()
+    snap = film.snapshot(sample, elapsed, sample / settings.samples, est)
+    if not series or series[-1]["samples"] != sample:
+        series.append(_series_point(snap))
     name, note = kernel.describe()
-    return RenderResult(**{**snap.__dict__, "seconds": elapsed},
+    return RenderResult(**snap.__dict__,
                         plan=replace(plan, kernel=name, kernel_note=note),
                         stop_reason=stop_reason, cancelled=cancelled,
                         warnings=list(scene.warnings) + film.rejected, time_to_first_pass=first,
-                        stage_seconds=dict(timers.seconds))
+                        stage_seconds=dict(timers.seconds), series=series,
+                        replicate_ids=film.replicates,
+                        replicate_count=film.replicate_count.reshape(film.height, film.width, -1),
+                        replicate_mean=film.replicate_mean.reshape(film.height, film.width, -1, 3),
+                        replicate_m2=film.replicate_m2.reshape(film.height, film.width, -1, 4))
 
 
 def warm_up() -> None:

@@ -107,6 +107,16 @@ def pixel_seed(pixel, seed):
     return hash_combine(np.uint64(pixel) & _M32, (np.uint64(seed) & _M32) ^ np.uint64(0x5BD1E995))
 
 
+def replicate_seed(seed, replicate):
+    """The sequence seed of replicate `replicate` of a render with seed `seed`: an
+    independent scramble of every pixel's sequence per replicate (replicate 0 keeps the
+    render's seed, so a one-replicate render is the plain sequence)."""
+    if replicate == 0:
+        return int(seed) & 0xFFFFFFFF
+    return int(hash_combine(np.uint64(int(seed) & 0xFFFFFFFF),
+                            np.uint64(0x2545F491 + int(replicate))))
+
+
 @njit(**JIT)
 def sample_2d(pseed, rev_sample, dim):
     """A 2D point in [0, 1)^2 of dimension pair `dim` for a pixel's seed and the bit-reversed

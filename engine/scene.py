@@ -31,6 +31,11 @@ FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 KERNELS = ("auto", "generic", "specialised")
+# Independent replicates of the sample sequence per render (RenderSettings.replicates): the
+# error estimate's degrees of freedom against the stratification each replicate keeps; see
+# the README's "Honest error" for the measurements behind the default.
+DEFAULT_REPLICATES = 2
+MAX_REPLICATES = 64
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 CAMERA_TYPES = ("PERSP", "ORTHO")
 
@@ -358,6 +363,12 @@ class RenderSettings:
     region : optional (x0, y0, x1, y1) in full-frame pixels (row 0 at the bottom, x1 and
         y1 exclusive): render only that rectangle (Blender's render border). Pixels are
         sampled exactly as in a whole-frame render, so regions stitch into the same image.
+    replicates : R, the number of independent replicates of the sample sequence (see
+        film.Film): the error estimate has R - 1 degrees of freedom per pixel; 1 gives the
+        plain sequence and no error estimate.
+    replicate_range : optional (first, stop): render only replicates first..stop-1 of the
+        R, with `samples` spread over them; renders of disjoint ranges merge exactly into
+        the render of their union (`python -m addon merge`).
     """
 
     width: int = 480
@@ -374,6 +385,14 @@ class RenderSettings:
     chunk_pixels: int = 1 << 16
     kernel: str = "auto"
     region: tuple | None = None
+    replicates: int = DEFAULT_REPLICATES
+    replicate_range: tuple | None = None
+
+    @property
+    def replicate_ids(self) -> tuple[int, ...]:
+        """The replicates this render traces, in the order its passes cycle through them."""
+        first, stop = self.replicate_range or (0, self.replicates)
+        return tuple(range(int(first), int(stop)))
 
     def validate(self) -> None:
         for name in ("width", "height", "samples", "chunk_pixels"):
@@ -394,6 +413,18 @@ class RenderSettings:
         _positive(self.filter_width, "filter_width")
         if self.kernel not in KERNELS:
             raise ValueError(f"kernel must be one of {KERNELS}, got {self.kernel!r}")
+        if int(self.replicates) != self.replicates or not 1 <= self.replicates <= MAX_REPLICATES:
+            raise ValueError(f"replicates must be an integer from 1 to {MAX_REPLICATES}, got "
+                             f"{self.replicates!r}")
+        if self.replicate_range is not None:
+            first, stop = self.replicate_range
+            if not (int(first) == first and int(stop) == stop
+                    and 0 <= first < stop <= self.replicates):
+                raise ValueError(f"replicate_range must be (first, stop) with 0 <= first < "
+                                 f"stop <= replicates ({self.replicates}), got "
+                                 f"{self.replicate_range!r}")
+        if self.target_error and len(self.replicate_ids) < 2:
+            raise ValueError("target_error needs at least two replicates to estimate the error")
         if self.region is not None:
             x0, y0, x1, y1 = (int(v) for v in self.region)
             if not (0 <= x0 < x1 <= self.width and 0 <= y0 < y1 <= self.height):

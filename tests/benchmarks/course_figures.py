@@ -110,7 +110,7 @@ def measure(label, result, runs):
     c = runs.mean(axis=0)
     rms_c = float(np.sqrt(np.mean(c ** 2)))
     noise = float(np.sqrt(np.mean(result.variance + runs.var(axis=0, ddof=1) / len(runs))))
-    cmp = compare.compare(s, result.variance, runs)
+    cmp = compare.compare(s, result.variance, runs, specula_dof=result.dof)
     return dict(label=label, specula=s, cycles=c,
                 rel_rms_difference=float(np.sqrt(np.mean((s - c) ** 2))) / max(rms_c, 1e-12),
                 rel_rms_noise=noise / max(rms_c, 1e-12), max_z=cmp.max_z,

@@ -624,7 +624,8 @@ def compare_scene(params, samples=SAMPLES, inject=None):
     """(Comparison, Specula result, Cycles runs, timing) of one scene."""
     from . import compare
     result, runs, timing = render_both(params, samples, inject)
-    c = compare.compare(result.combined[..., :3], result.variance, runs)
+    c = compare.compare(result.combined[..., :3], result.variance, runs,
+                        specula_dof=result.dof)
     return c, result, runs, timing
 
 

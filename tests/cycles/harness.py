@@ -35,7 +35,8 @@ DIAGNOSTICS = os.path.join(references.HERE, "..", "..", "out", "cycles")
 def compare_render(name, result, kind="agreement", seconds=0.0) -> compare.Comparison:
     """Compare a Specula render with the variant's Cycles runs."""
     runs = references.get(VARIANTS[name])
-    c = compare.compare(result.combined[..., :3], result.variance, runs)
+    c = compare.compare(result.combined[..., :3], result.variance, runs,
+                        specula_dof=result.dof)
     RESULTS.append((kind, name, c, seconds))
     if not c.agree and kind == "agreement" or os.environ.get("SPECULA_CYCLES_DIAGNOSTICS"):
         save_diagnostics(f"{re.sub('[^a-z0-9_]+', '_', kind.lower())}_{name}", result, runs, c)

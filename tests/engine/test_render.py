@@ -64,7 +64,8 @@ def test_time_limit_and_target_error_stop_the_render(cbspheres):
     r = render(cbspheres, scenes.settings(width=24, height=18, samples=10_000, time_limit=0.5))
     assert r.stop_reason == "time limit" and r.samples < 10_000
     r = render(cbspheres, scenes.settings(width=24, height=18, samples=10_000, target_error=0.3))
-    assert r.stop_reason == "target error" and r.relative_error <= 0.3
+    assert r.stop_reason == "target error" and 0 < r.relative_error <= 0.3
+    assert r.samples >= len(r.replicate_ids)  # trusted once every replicate has a sample
 
 
 def test_output_layout_and_passes(cbspheres):
@@ -80,15 +81,39 @@ def test_output_layout_and_passes(cbspheres):
     assert np.median(np.linalg.norm(r.normal[r.depth < 1e9], axis=-1)) == pytest.approx(1.0)
 
 
-def test_film_welford_matches_numpy():
+def test_film_replicate_estimate_matches_numpy(monkeypatch):
+    """Each pixel is the mean of its samples, and its own variance the spread of its R
+    replicate means over R (R - 1); with unequal counts, the count-weighted forms."""
+    from engine import film as film_module
+    monkeypatch.setattr(film_module, "POOL_RADIUS", 0)  # each pixel's own estimate
     rng = np.random.default_rng(4)
-    film = Film(3, 2)
-    samples = rng.random((7, 6, 3))
-    for s in samples:
-        film.add(np.arange(6), s, np.ones(6), np.zeros((6, 3)))
-    assert np.allclose(film.mean, samples.mean(axis=0))
-    variance = film.statistics()[1]
-    assert np.allclose(variance, samples.var(axis=0, ddof=1) / 7, rtol=1e-5)
+    film = Film(3, 2, replicates=(0, 1, 2, 3))
+    samples = rng.random((4 * 5, 6, 3))
+    for i, s in enumerate(samples):
+        film.add(np.arange(6), i % 4, s, np.ones(6), np.zeros((6, 3)))
+    est = film.estimate()
+    assert np.allclose(est.combined, samples.mean(axis=0), rtol=1e-6)
+    reps = samples.reshape(5, 4, 6, 3).mean(axis=0)  # (replicate, pixel, channel)
+    assert np.allclose(est.variance, reps.var(axis=0, ddof=1) / 4, rtol=1e-5)
+    assert est.dof == 3
+    # The samples' spread within their replicates, as if independent: the pooled
+    # within-replicate variance (N - R degrees of freedom) over N.
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    y = samples.reshape(5, 4, 6, 3) @ lum
+    independent = ((y - y.mean(axis=0)) ** 2).sum(axis=(0, 1)) / (20 - 4) / 20
+    assert est.independent_relative_error == pytest.approx(
+        np.sqrt(independent.mean()) / y.mean(), rel=1e-4)
+    # One more sample for replicate 0 only: weights 6, 5, 5, 5.
+    extra = rng.random((6, 3))
+    film.add(np.arange(6), 0, extra, np.ones(6), np.zeros((6, 3)))
+    est = film.estimate()
+    counts = np.array([6, 5, 5, 5.0])
+    means = reps.copy()
+    means[0] = (reps[0] * 5 + extra) / 6
+    m = np.einsum("r,rpc->pc", counts, means) / counts.sum()
+    v = np.einsum("r,rpc->pc", counts, (means - m) ** 2) / (3 * counts.sum())
+    assert np.allclose(est.combined, m, rtol=1e-6)
+    assert np.allclose(est.variance, v, rtol=1e-4)
 
 
 def poisoned_handle_emission(i, row, x, sc, paths, mis):

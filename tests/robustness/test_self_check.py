@@ -68,9 +68,10 @@ def test_film_check_names_the_pass_and_pixel(name):
     """The last line of defence: a non-finite value that reached any film array stops the
     render with the pass and pixel named."""
     film = Film(16, 4)
-    film.add(np.arange(64), np.ones((64, 3)), np.ones(64), np.ones((64, 3)))
-    target = {"depth": film.depth, "normal": film.normal, "combined": film.mean,
-              "error": film.m2_luminance}[name]
+    film.add(np.arange(64), 0, np.ones((64, 3)), np.ones(64), np.ones((64, 3)))
+    target = {"depth": film.depth, "normal": film.normal,
+              "combined": film.replicate_mean.reshape(64, 3),
+              "error": film.replicate_m2.reshape(64, 4)}[name]
     target[2 * 16 + 5] = np.nan
     with pytest.raises(FloatingPointError, match=rf"{name} pass at pixel \(x=5, y=2\)"):
         film.check_finite(1)
