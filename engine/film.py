@@ -296,14 +296,18 @@ def estimate(replicate_count, replicate_mean, replicate_m2, shape,
     combined = np.empty((n, 3), np.float32)
     # Each pixel's variance of its value: from its replicates' spread ("own") and from its
     # samples' spread within the replicates as if they were independent ("independent");
-    # R, G, B and luminance.
-    own, independent = np.empty((4, n)), np.empty((4, n))
-    s_var, s_var2, s_lum, fewest, s_ind = _statistics(
-        replicate_count, replicate_mean, replicate_m2, LUMINANCE, combined, own, independent)
-    pooled = np.empty((4, n), np.float32)
+    # one channel at a time (R, G, B, then luminance), so a 4K film's temporaries stay
+    # a few hundred MB.
+    own, independent, pooled = np.empty(n), np.empty(n), np.empty(n, np.float32)
+    variance = np.empty((n, 3), np.float32)
     for k in range(4):
-        _pool_variance(own[k].reshape(shape), independent[k].reshape(shape), radius,
-                       pooled[k].reshape(shape))
+        s_var, s_var2, s_lum, fewest, s_ind = _statistics(
+            replicate_count, replicate_mean, replicate_m2, LUMINANCE, k, combined, own,
+            independent)
+        _pool_variance(own.reshape(shape), independent.reshape(shape), radius,
+                       pooled.reshape(shape))
+        if k < 3:
+            variance[:, k] = pooled
     dof = max(fewest - 1, 0)
     mean_lum = s_lum / max(n, 1)
     rel, interval = -1.0, (-1.0, -1.0)
@@ -319,10 +323,19 @@ def estimate(replicate_count, replicate_mean, replicate_m2, shape,
         rel, interval = 0.0, (0.0, 0.0)
     ind = math.sqrt(s_ind / n) / mean_lum if mean_lum > 0 and s_ind >= 0 else -1.0
     window = (2 * radius + 1) ** 2
-    return Estimate(combined=combined, error=np.sqrt(pooled[3]),
-                    variance=np.ascontiguousarray(pooled[:3].T), dof=dof,
+    return Estimate(combined=combined, error=np.sqrt(pooled), variance=variance, dof=dof,
                     t95=t95(dof * window), relative_error=rel, interval=interval,
                     independent_relative_error=ind)
+
+
+def estimate_of(result, radius: int | None = None) -> Estimate:
+    """`estimate` of a render's replicate arrays (a RenderResult's replicate_count,
+    replicate_mean and replicate_m2, (H, W, m, ...)); radius 0 gives each pixel's own,
+    unbiased replicate variance (for measurements against a reference)."""
+    h, w, m = result.replicate_count.shape
+    return estimate(result.replicate_count.reshape(h * w, m),
+                    result.replicate_mean.reshape(h * w, m, 3),
+                    result.replicate_m2.reshape(h * w, m, 4), (h, w), radius)
 
 
 @njit(**JIT)
@@ -362,20 +375,19 @@ def _welford(pixels, slot, radiance, depth, normal, count, rcount, rmean, rm2, d
 
 
 @njit(**JIT)
-def _statistics(rcount, rmean, rm2, lum, combined, own, independent):
-    """Per pixel: the count-weighted mean of the replicate means into combined (n, 3); from
-    their spread the variance of that mean per channel and of its luminance into own
-    (4, n),
+def _statistics(rcount, rmean, rm2, lum, k, combined, own, independent):
+    """Per pixel, for channel k (0-2: R, G, B; 3: luminance): the count-weighted mean of
+    the replicate means (R, G, B into combined (n, 3)); from their spread the variance of
+    that mean into own (n,),
 
         V = sum_r c_r (m_r - m)^2 / ((R - 1) sum_r c_r)
 
     over the R replicates with samples (c_r samples, mean m_r; with equal counts the usual
     sum_r (m_r - m)^2 / (R (R - 1))), 0 where R < 2; and from the samples' spread within
-    the replicates, as if independent, sum_r M2_r / ((N - R) N) into independent (4, n)
-    (0 where N <= R). Returns the sums over pixels of the own luminance variance, of its
-    square over its degrees of freedom, of the luminance and of the independent luminance
-    variance (-1 if some pixel has none), and the fewest replicates with samples."""
-    f32 = np.float32
+    the replicates, as if independent, sum_r M2_r / ((N - R) N) into independent (n,)
+    (0 where N <= R). Returns the sums over pixels of own, of its square over its degrees
+    of freedom, of the luminance and of independent (-1 if some pixel has none), and the
+    fewest replicates with samples in any pixel."""
     s_var, s_var2, s_lum, s_ind = 0.0, 0.0, 0.0, 0.0
     fewest = rcount.shape[1]
     for i in range(rcount.shape[0]):
@@ -392,32 +404,33 @@ def _statistics(rcount, rmean, rm2, lum, combined, own, independent):
         fewest = min(fewest, filled)
         if total > 0:
             m0, m1, m2 = m0 / total, m1 / total, m2 / total
-        combined[i, 0], combined[i, 1], combined[i, 2] = f32(m0), f32(m1), f32(m2)
-        s_lum += m0 * lum[0] + m1 * lum[1] + m2 * lum[2]
-        for k in range(4):
-            own[k, i] = 0.0
-            independent[k, i] = 0.0
+        y = m0 * lum[0] + m1 * lum[1] + m2 * lum[2]
+        s_lum += y
+        # The channel's weights on R, G, B (luminance: its coefficients) and its mean.
+        w0 = lum[0] if k == 3 else (1.0 if k == 0 else 0.0)
+        w1 = lum[1] if k == 3 else (1.0 if k == 1 else 0.0)
+        w2 = lum[2] if k == 3 else (1.0 if k == 2 else 0.0)
+        mk = m0 * w0 + m1 * w1 + m2 * w2
+        if k < 3:
+            combined[i, k] = np.float32(mk)
+        v = 0.0
         if filled >= 2:
             for r in range(rcount.shape[1]):
                 c = float(rcount[i, r])
                 if c > 0:
-                    d0, d1, d2 = rmean[i, r, 0] - m0, rmean[i, r, 1] - m1, rmean[i, r, 2] - m2
-                    dy = d0 * lum[0] + d1 * lum[1] + d2 * lum[2]
-                    own[0, i] += c * d0 * d0
-                    own[1, i] += c * d1 * d1
-                    own[2, i] += c * d2 * d2
-                    own[3, i] += c * dy * dy
-            for k in range(4):
-                own[k, i] /= (filled - 1) * total
-            s_var += own[3, i]
-            s_var2 += own[3, i] * own[3, i] / (filled - 1)
+                    d = (rmean[i, r, 0] * w0 + rmean[i, r, 1] * w1 + rmean[i, r, 2] * w2) - mk
+                    v += c * d * d
+            v /= (filled - 1) * total
+            s_var2 += v * v / (filled - 1)
+        own[i] = v
+        s_var += v
+        independent[i] = 0.0
         if total > filled:
-            for k in range(4):
-                m2_sum = 0.0
-                for r in range(rcount.shape[1]):
-                    m2_sum += rm2[i, r, k]
-                independent[k, i] = max(m2_sum, 0.0) / ((total - filled) * total)
-            s_ind += independent[3, i]
+            m2_sum = 0.0
+            for r in range(rcount.shape[1]):
+                m2_sum += rm2[i, r, k]
+            independent[i] = max(m2_sum, 0.0) / ((total - filled) * total)
+            s_ind += independent[i]
         else:
             s_ind = -1.0e300
     return s_var, s_var2, s_lum, fewest, s_ind

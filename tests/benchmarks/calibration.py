@@ -50,12 +50,9 @@ def _luminance(image):
 
 def own_variance(result):
     """Each pixel's own (unpooled, unbiased) replicate variance of its luminance."""
-    from engine import film
-    h, w, m = result.replicate_count.shape
-    est = film.estimate(result.replicate_count.reshape(h * w, m),
-                        result.replicate_mean.reshape(h * w, m, 3),
-                        result.replicate_m2.reshape(h * w, m, 4), (h, w), radius=0)
-    return est.error.reshape(h, w).astype(np.float64) ** 2
+    from engine.film import estimate_of
+    h, w = result.replicate_count.shape[:2]
+    return estimate_of(result, radius=0).error.reshape(h, w).astype(np.float64) ** 2
 
 
 def measure(core_scene, settings, render, levels, replicate_counts, seeds, ref_samples):

@@ -47,11 +47,7 @@ def calibration():
 
 def _own_variance(r):
     """Each pixel's own (unpooled, unbiased) replicate variance of its luminance."""
-    h, w, m = r.replicate_count.shape
-    est = film.estimate(r.replicate_count.reshape(h * w, m),
-                        r.replicate_mean.reshape(h * w, m, 3),
-                        r.replicate_m2.reshape(h * w, m, 4), (h, w), radius=0)
-    return est.error.reshape(h, w).astype(np.float64) ** 2
+    return film.estimate_of(r, radius=0).error.reshape(r.error.shape).astype(np.float64) ** 2
 
 
 def _calibration(ref, passes, error_of):
