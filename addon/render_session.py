@@ -35,11 +35,10 @@ def _stats(samples, total, seconds, rel, interval=None):
 
 
 def replicate_ids(scene):
-    """The replicates a render of `scene` traces (its Specula settings)."""
-    s = scene.specula
-    if s.use_replicate_subset:
-        return tuple(range(s.replicate_first, max(s.replicate_first, s.replicate_last) + 1))
-    return tuple(range(s.replicates))
+    """The replicates a render of `scene` traces (its Specula settings), read the way the
+    exporter hands them to the core."""
+    first, stop = exporter.replicate_range(scene.specula) or (0, scene.specula.replicates)
+    return tuple(range(first, max(first + 1, stop)))
 
 
 def error_metadata(out, settings) -> dict:
