@@ -466,7 +466,8 @@ def render_settings_kwargs(scene, width, height, samples=None):
                 max_bounces=int(s.max_bounces), seed=int(s.seed), threads=int(s.threads),
                 fresnel=s.fresnel.lower(), filter_type=s.filter_type,
                 filter_width=float(s.filter_width), replicates=int(s.replicates),
-                replicate_range=replicate_range(s))
+                replicate_range=replicate_range(s),
+                light_tracing=bool(s.use_light_tracing))
 
 
 def replicate_range(s):

@@ -39,6 +39,11 @@ class SpeculaSceneSettings(bpy.types.PropertyGroup):
     threads: IntProperty(
         name="Threads", description="Worker threads (0 uses every core)", default=0, min=0,
         max=1024, soft_max=64)
+    use_light_tracing: BoolProperty(
+        name="Caustics", description="Trace paths from emissive meshes through glass, mirrors "
+        "and metal to the diffuse surfaces they light, and weigh them against path tracing: "
+        "caustics from small lights converge instead of sparkling (only where the scene can "
+        "have them; same image, less noise)", default=True)
     fresnel: EnumProperty(
         name="Fresnel", description="Fresnel model for glass", items=FRESNEL_ITEMS,
         default="EXACT")

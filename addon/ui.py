@@ -76,6 +76,7 @@ class SPECULA_RENDER_PT_light_paths(SpeculaPanel, bpy.types.Panel):
         s = context.scene.specula
         layout.prop(s, "max_bounces")
         layout.prop(s, "fresnel")
+        layout.prop(s, "use_light_tracing")
 
 
 class SPECULA_RENDER_PT_film(SpeculaPanel, bpy.types.Panel):

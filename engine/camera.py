@@ -135,6 +135,52 @@ def thin_lens_ray(x, y, lx, ly, focus, clip_start, clip_end, ortho):
 
 
 @njit(**INLINE)
+def raster_per_steradian(dz, cam):
+    """Raster area (pixels^2) per steradian about a ray leaving a lens point with camera-space
+    direction z component dz: the viewplane point moves as (d_x / d_z, d_y / d_z), whose
+    Jacobian is 1 / d_z^3, and the raster scales it by width / (2 half_x) x height / (2 half_y).
+    A light path connected to the camera turns this into the path tracer's density."""
+    return cam.width * cam.height / (4.0 * cam.half_x * cam.half_y * dz * dz * dz)
+
+
+@njit(**INLINE)
+def project(px, py, pz, lx, ly, cam):
+    """Where a world point reaches the raster through lens point (lx, ly) (0, 0 for a
+    pinhole): the inverse of raster_to_plane and thin_lens_ray. Returns (rx, ry, dz, dist,
+    near, visible): the raster position, the camera-space z of the unit direction from the
+    lens point, the distance from the lens point, the distance at which the camera ray
+    starts (its clip start), and whether a camera ray could reach the point (in front, and
+    within the clip range the camera ray has). Perspective cameras only."""
+    m = cam.world_from_camera
+    wx, wy, wz = px - cam.position[0], py - cam.position[1], pz - cam.position[2]
+    vx = wx * m[0, 0] + wy * m[1, 0] + wz * m[2, 0] - lx
+    vy = wx * m[0, 1] + wy * m[1, 1] + wz * m[2, 1] - ly
+    vz = wx * m[0, 2] + wy * m[1, 2] + wz * m[2, 2]
+    if not vz > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, False
+    # The ray from the lens point meets the focus plane where the pinhole ray through
+    # viewplane point (x, y) does: x = lx / focus + vx / vz (lx = 0 without a lens).
+    x = lx / cam.focus + vx / vz
+    y = ly / cam.focus + vy / vz
+    rx = ((x - cam.shift_x * 2 * cam.fit_half) / cam.half_x + 1.0) * 0.5 * cam.width
+    ry = ((y - cam.shift_y * 2 * cam.fit_half) / cam.half_y + 1.0) * 0.5 * cam.height
+    dist = math.sqrt(vx * vx + vy * vy + vz * vz)
+    z_inv = math.sqrt(x * x + y * y + 1.0)  # 1 / the pinhole ray's z (its clip distances)
+    near = cam.clip_start * z_inv
+    visible = near <= dist <= cam.clip_end * z_inv
+    return rx, ry, vz / dist, dist, near, visible
+
+
+@njit(**INLINE)
+def lens_to_world(lx, ly, cam):
+    """A lens point (camera space, z = 0) in world space."""
+    m = cam.world_from_camera
+    return (cam.position[0] + lx * m[0, 0] + ly * m[0, 1],
+            cam.position[1] + lx * m[1, 0] + ly * m[1, 1],
+            cam.position[2] + lx * m[2, 0] + ly * m[2, 1])
+
+
+@njit(**INLINE)
 def z_depth(px, py, pz, cam):
     """Distance of a world point from the camera along the view axis (the depth pass)."""
     return ((px - cam.position[0]) * cam.forward[0] + (py - cam.position[1]) * cam.forward[1]

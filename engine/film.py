@@ -77,6 +77,32 @@ def filter_offset(u, table):
     return guided_interp(u, table.u, table.x, table.guide)
 
 
+@njit(**INLINE)
+def filter_density(d, table):
+    """The density with which `filter_offset` draws raster offset d (one axis): exactly the
+    table's, so a contribution splatted with it (light tracing) lands in each pixel as a
+    camera sample would. The table is linear between knots u = k / (n - 1), so a segment
+    between x_k and x_k+1 has density 1 / ((n - 1) (x_k+1 - x_k)); the last segment runs
+    backwards (Cycles' unwritten last entry) over [x_n-1, x_n-2]."""
+    xs = table.x
+    n = len(xs)
+    step = 1.0 / (n - 1)
+    out = 0.0
+    if xs[0] <= d < xs[n - 2]:
+        lo, hi = 0, n - 2  # xs[lo] <= d < xs[hi]
+        while hi - lo > 1:
+            mid = (lo + hi) >> 1
+            if xs[mid] <= d:
+                lo = mid
+            else:
+                hi = mid
+        out = step / (xs[hi] - xs[lo])
+    a, b = min(xs[n - 2], xs[n - 1]), max(xs[n - 2], xs[n - 1])
+    if a <= d <= b and b > a:
+        out += step / (b - a)
+    return out
+
+
 def cycles_filter_table(f: PixelFilter) -> np.ndarray:
     """Cycles' 1024-entry filter table for f: raster offsets + 0.5 at u = k / 1023.
 

@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, camera, environment, lights, terminator
+from . import bsdf, camera, caustics, environment, lights, terminator
 from .bsdf import DELTA_PDF
 from .film import filter_offset
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
@@ -52,11 +52,12 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
-                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_LIGHT_TRACING", "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
 HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
 HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
+HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -76,12 +77,19 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # the rough materials' bsdf.LayerTables (None without rough materials).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers")
-SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter")
+# caustics: caustics.CausticData (n_light 0 without light tracing).
+SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
+                                    "caustics")
 # One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
 # current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
-# last BSDF sample (inf: delta or camera), the passes, and the queued shadow rays.
+# last BSDF sample (inf: delta or camera), the passes, and, for the weight against light
+# tracing (caustics.py): the camera ray's raster area per steradian until the first hit,
+# then camera_side_density at the path's diffuse first vertex while every vertex after it
+# is specular (0 otherwise), the chain's product of relative IORs, and the distance from
+# the lens point to where the camera ray starts (per row).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
-                            "radiance depth normal nonfinite")
+                            "radiance depth normal nonfinite caustic_q caustic_eta "
+                            "camera_near")
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side), the specular lobes' normal m, wo, front face, triangle, barycentrics,
@@ -145,7 +153,11 @@ def generate_camera_rays(pixels, sample, seed, centred, sc, paths):
             px, py, pz, dx, dy, dz, tmax = camera.thin_lens_ray(
                 x, y, lx, ly, cam.focus, cam.clip_start, cam.clip_end, cam.ortho)
         else:
+            lx = ly = 0.0
             px, py, pz, dx, dy, dz, tmax = camera.pinhole_ray(x, y, cam)
+        if HAS_LIGHT_TRACING:
+            paths.caustic_q[i] = camera.raster_per_steradian(dz, cam)
+            paths.camera_near[i] = math.sqrt((px - lx) ** 2 + (py - ly) ** 2 + pz * pz)
         for j in range(3):
             paths.o64[i, j] = px * m[j, 0] + py * m[j, 1] + pz * m[j, 2] + cam.position[j]
             paths.origin32[i, j] = paths.o64[i, j]
@@ -262,9 +274,10 @@ def surface_interaction(i, f, tfar, bu, bv, sc, paths):
                   v, mat, np.float64(tfar), scale)
 
 
-def handle_emission(i, row, x, sc, paths, mis):
+def handle_emission(i, row, depth, x, sc, paths, mis):
     """Emission of the hit triangle (two-sided), MIS-weighted against light sampling after
-    soft bounces."""
+    soft bounces, and against light tracing at the end of a diffuse -> specular chain
+    from the camera (caustics.py)."""
     e = sc.materials.emission
     le0, le1, le2 = e[x.mat, 0], e[x.mat, 1], e[x.mat, 2]
     if not max(le0, max(le1, le2)) > 0:
@@ -280,6 +293,13 @@ def handle_emission(i, row, x, sc, paths, mis):
                              em)
         pdf_l = pm / em.area_by_triangle[x.f] * x.t * x.t / max(cos_l, 1e-300)
         w = power_heuristic(paths.prev_pdf[i], pdf_l)
+    elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
+        entry = sc.emitters.entry_of_triangle[x.f]
+        ca = sc.caustics
+        if 0 <= entry < len(ca.pdf_area):
+            eta = paths.caustic_eta[i]
+            w = caustics.path_tracing_weight(ca.n_light, ca.pdf_area[entry], 1.0 / (eta * eta),
+                                             paths.caustic_q[i])
     _add(paths, row, paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2],
          le0, le1, le2, w)
     if DEBUG:
@@ -440,6 +460,40 @@ def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
 
 
+def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
+    """The light-tracing weight's state for the continuing path (Paths.caustic_q,
+    caustic_eta): begun at a Lambertian first vertex with the camera's and the BSDF's
+    densities, kept through specular vertices (the IOR product through refractions) and
+    Lambertian ones (their shading_ratio), ended (0) at any other."""
+    if depth == 0 and k == DIFFUSE:
+        cos_camera = abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)
+        dist = paths.camera_near[row] + x.t
+        raster_per_area = paths.caustic_q[i] * cos_camera / (dist * dist)
+        cos_chain = abs(x.nx * wx + x.ny * wy + x.nz * wz)
+        return caustics.camera_side_density(raster_per_area, pdf, cos_chain), 1.0
+    q = paths.caustic_q[i]
+    eta = paths.caustic_eta[i]
+    if depth == 0 or not q > 0.0:
+        return 0.0, 1.0
+    if k == DIFFUSE:  # a Lambertian vertex inside the path
+        cos_s_camera = x.sx * x.wox + x.sy * x.woy + x.sz * x.woz
+        if not cos_s_camera > 0.0:  # no light path samples this direction
+            return 0.0, 1.0
+        return q * caustics.shading_ratio(
+            pdf * math.pi, abs(x.nx * wx + x.ny * wy + x.nz * wz), cos_s_camera,
+            abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)), eta
+    if not (k == MIRROR or k == METAL or k == GLASS):
+        return 0.0, 1.0
+    if k == GLASS and (wx * x.nx + wy * x.ny + wz * x.nz) < 0.0:  # refracted
+        eta *= sc.materials.ior[x.mat] if x.front else 1.0 / sc.materials.ior[x.mat]
+    # The lobe's normal m need not be the geometric one (a smooth mesh): the chain's
+    # Jacobians then differ by the same ratio as a Lambertian vertex's (caustics.py).
+    return q * caustics.shading_ratio(
+        abs(x.mx * wx + x.my * wy + x.mz * wz), abs(x.nx * wx + x.ny * wy + x.nz * wz),
+        abs(x.mx * x.wox + x.my * x.woy + x.mz * x.woz),
+        abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)), eta
+
+
 def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
     """Continue the path as row `out` of the compacted batch: leave the surface toward the
     side of the new direction, into embree's buffers."""
@@ -484,7 +538,7 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             if DEBUG:
                 _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
         if HAS_EMISSION:
-            handle_emission(i, row, x, sc, paths, mis)
+            handle_emission(i, row, depth, x, sc, paths, mis)
         # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
         k = sc.materials.kind[x.mat]
         if depth > max_bounces or k == NONE:
@@ -513,6 +567,9 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         if DEBUG:
             _debug_mark(paths, row, 7, t0 + wx, t1 + wy, t2 + wz)
         if ok and max(t0, max(t1, t2)) > 0:
+            if HAS_LIGHT_TRACING:
+                cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
+                paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
             spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths)
             out += 1
         if PROFILE:
@@ -551,6 +608,6 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
     handle_emission,
     russian_roulette, emitter_pmf, sample_emitter, shadow_origin, sample_light, sample_bsdf,
-    spawn)}
+    caustic_state, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

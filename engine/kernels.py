@@ -20,8 +20,9 @@ import types
 
 import numpy as np
 
-from . import integrator, specialise
+from . import integrator, light_tracing, specialise
 from .bsdf import layer_tables
+from .caustics import CausticData
 from .camera import CameraModel
 from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
@@ -57,7 +58,10 @@ class Kernel:
         self.generic = all(self.constants[n] for n in PLAN_CONSTANTS
                            if n not in ("EXACT_FRESNEL", "PROFILE", "DEBUG"))
         self.tag = tag_of(self.constants) + ("" if cache else f"_once{id(self):x}")
-        namespace, stages = dict(vars(integrator)), dict(integrator.STAGES)
+        namespace = dict(vars(integrator))
+        namespace.update(vars(light_tracing))
+        stages = dict(integrator.STAGES)
+        stages.update(light_tracing.STAGES)
         for name, replacement in (overrides or {}).items():
             if name in stages:  # a stage swapped for another
                 stages[name] = (replacement, stages[name][1])
@@ -70,6 +74,9 @@ class Kernel:
         self.shade = f["shade"]
         self.accumulate_unoccluded = f["accumulate_unoccluded"]
         self.all_finite = f["all_finite"]
+        self.start_light_paths = f["start_light_paths"]
+        self.light_bounce = f["light_bounce"]
+        self.splat = f["splat"]
         self.compile_seconds = 0.0
 
     def covers(self, constants: dict) -> bool:
@@ -103,8 +110,10 @@ def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -
     """Compile every entry point of `kernel` by tracing one pixel of the scene with it
     (numba compiles for the argument types it is called with)."""
     data = scene_data(scene, settings, plan, emitters, camera, kernel.generic)
-    Tracer(kernel, data, accel, settings, lambda stage, seconds: None).trace_pixels(
-        np.zeros(1, np.int64), 0)
+    tracer = Tracer(kernel, data, accel, settings, lambda stage, seconds: None)
+    tracer.trace_pixels(np.zeros(1, np.int64), 0)
+    if kernel.constants["HAS_LIGHT_TRACING"]:
+        tracer.trace_light(0, 1, 0)
     kernel.all_finite(np.zeros((1, 3)), np.zeros(1), np.zeros((1, 3)))
 
 
@@ -193,8 +202,16 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
+    caustics = None
+    if plan.light_tracing:
+        x0, y0, x1, y1 = settings.window
+        caustics = CausticData(float((x1 - x0) * (y1 - y0)), emitters.triangle_distribution.cdf,
+                               emitters.triangle_pdf_area)
+    elif generic:
+        caustics = CausticData(0.0, np.zeros(0), np.zeros(0))
     return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
-                     cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table())
+                     cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table(),
+                     caustics)
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:
@@ -235,7 +252,8 @@ class Tracer:
         paths = Paths(np.arange(n, dtype=np.int64), np.empty(n, np.uint64), np.empty((n, 3)),
                       np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
                       np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
-                      np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32))
+                      np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
+                      np.zeros(n), np.ones(n), np.zeros(n))
         t0 = time.perf_counter()
         k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
                                replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,
@@ -265,6 +283,50 @@ class Tracer:
                 k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)
                 self._count("trace shadow rays", time.perf_counter() - t0)
         return paths.radiance, paths.depth, paths.normal, paths.nonfinite
+
+    def trace_light(self, first: int, count: int, sample: int, replicate: int = 0):
+        """Light paths first..first+count-1 of sample `sample` of replicate `replicate`
+        (light_tracing.py), connected to the camera: (window-local pixel ids (k,), values
+        (k, 3)) to add to the pass, each already divided by the paths per pass."""
+        k, s = self.kernel, self.settings
+        n = count
+        lp = light_tracing.LightPaths(
+            np.empty(n, np.int64), np.empty(n, np.uint64), np.empty((n, 3)), np.empty((n, 3)),
+            np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32), np.empty((n, 3)),
+            np.empty(n), np.empty(n), np.empty(n))
+        conn = light_tracing.Connections(np.empty((n, 3), F32), np.empty((n, 3), F32),
+                                         np.empty(n, F32), np.empty((n, 2)), np.empty((n, 3)))
+        t0 = time.perf_counter()
+        seed = light_tracing.light_path_seed(replicate_seed(s.seed, replicate))
+        m = k.start_light_paths(np.arange(first, first + count, dtype=np.int64), sample, seed,
+                                self.data, lp)
+        rev_sample = reverse_bits(np.uint64(sample))
+        self._count("light paths", time.perf_counter() - t0)
+        n_conn = 0
+        for depth in range(s.max_bounces + 1):
+            if m == 0:
+                break
+            t0 = time.perf_counter()
+            prim, tfar, bu, bv = self.accel.intersect_raw(lp.origin32[:m], lp.dir32[:m],
+                                                          lp.tmax32[:m])
+            self._count("intersect", time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            m, n_conn = k.light_bounce(depth, rev_sample, s.max_bounces, self.data, prim, tfar,
+                                       bu, bv, m, lp, conn, n_conn)
+            self._count("light paths", time.perf_counter() - t0)
+        if n_conn == 0:
+            return np.zeros(0, np.int64), np.zeros((0, 3))
+        t0 = time.perf_counter()
+        blocked = self.accel.occluded_raw(conn.origin[:n_conn], conn.direction[:n_conn],
+                                          conn.tmax[:n_conn])
+        table = self.data.film_filter
+        span = int(np.ceil(table.x.max() - table.x.min())) + 2
+        pixels = np.empty(n_conn * span * span, np.int64)
+        values = np.empty((n_conn * span * span, 3))
+        x0, y0, x1, y1 = s.window
+        n_splat = k.splat(conn, blocked, n_conn, x0, y0, x1, y1, table, pixels, values)
+        self._count("splat", time.perf_counter() - t0)
+        return pixels[:n_splat], values[:n_splat]
 
     def _count_shade(self, seconds: float, profile: np.ndarray) -> None:
         if len(profile) == 0 or profile[0] == 0:

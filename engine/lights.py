@@ -418,6 +418,10 @@ class LightSampler:
         weights = np.concatenate([tri_power[self.index], self.objects.selection_power(),
                                   env_power])
         self.distribution = Distribution1D(weights)
+        # The light tracer's choice among the triangles alone, by the same power, and its
+        # density of a point: p_sel p_A = pmf / area (caustics.py).
+        self.triangle_distribution = Distribution1D(tri_power[self.index])
+        self.triangle_pdf_area = self.triangle_distribution.pmf / np.maximum(self.area, 1e-300)
         k = len(self.index)
         self.num_triangles = k
         self.num_entries = len(weights)

@@ -55,6 +55,8 @@ class Plan:
     kernel_note: str = ""
     # Some smooth triangle's object has a shadow terminator geometry offset > 0.
     terminator: bool = False
+    # Light paths from emissive triangles through specular chains to the camera (caustics.py).
+    light_tracing: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -82,6 +84,8 @@ class Plan:
                                 ("metal", self.metal), ("glass", self.glass)) if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
+        if self.light_tracing:
+            s.append("trace light paths through specular chains to the camera")
         return s
 
     def kernel_constants(self, light_grid: bool) -> dict:
@@ -97,6 +101,7 @@ class Plan:
             HAS_ENVIRONMENT=self.environment,
             HAS_WORLD_COLOUR=self.world_light and not self.environment,
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
+            HAS_LIGHT_TRACING=self.light_tracing,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -128,6 +133,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     sun_discs = any(light.type == "SUN" and light.angle > 0 for light in lights)
     cam = scene.camera
     dof = cam.aperture_radius > 0
+    specular = bool(kinds & {MIRROR, METAL, GLASS})
     assert all(k in KIND_NAMES for k in kinds)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
@@ -141,5 +147,11 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         environment=environment, fresnel=settings.fresnel,
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
-        max_bounces=int(settings.max_bounces), triangles=scene.num_triangles)
+        max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
+        # Caustic paths need an emissive triangle, a specular surface to reach a Lambertian
+        # one and a perspective camera to see it; the light tracer's specular chains must
+        # be the path tracer's read backwards, which exact Fresnel is (Schlick is not).
+        light_tracing=bool(settings.light_tracing and num_emitters > 0 and specular
+                           and DIFFUSE in kinds and cam.type != "ORTHO"
+                           and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

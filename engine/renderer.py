@@ -57,11 +57,55 @@ class RenderResult(Pass):
 
 
 class _Gate:
-    """Opens when a pass may be folded into the film; `discard` drops it instead."""
+    """Opens when a pass may be folded into the film; `discard` drops it instead. `light`:
+    the pass's light paths (_LightPass), if the plan traces them."""
 
     def __init__(self):
         self.opened = threading.Event()
         self.discard = False
+        self.light = None
+
+
+class _LightPass:
+    """One pass's light paths (caustics.py): jobs that each trace a share of them and return
+    their splats, gathered once, in job order, into per-pixel sums the chunks of the pass
+    add to their own samples. Sums in a fixed order: the film stays independent of thread
+    timing."""
+
+    def __init__(self, jobs):
+        self.jobs = jobs
+        self._lock = threading.Lock()
+        self._pixels = None
+        self._values = None
+        self.rejected: list[str] = []
+
+    def _gather(self):
+        with self._lock:
+            if self._pixels is None:
+                parts = [job.result() for job in self.jobs]
+                pixels = np.concatenate([p for p, _ in parts])
+                values = np.concatenate([v for _, v in parts])
+                finite = np.all(np.isfinite(values), axis=1)
+                if not finite.all():
+                    self.rejected.append(f"{int((~finite).sum())} light-path splats were not "
+                                         "finite and were left out")
+                    pixels, values = pixels[finite], values[finite]
+                order = np.argsort(pixels, kind="stable")
+                self._values = values[order]
+                self._pixels = pixels[order]
+        return self._pixels, self._values
+
+    def for_chunk(self, start: int, stop: int) -> np.ndarray:
+        """(stop - start, 3) sums of the splats on window pixels start..stop-1."""
+        pixels, values = self._gather()
+        a, b = np.searchsorted(pixels, [start, stop])
+        local = pixels[a:b] - start
+        return np.stack([np.bincount(local, weights=values[a:b, c], minlength=stop - start)
+                         for c in range(3)], axis=1)
+
+    def cancel(self):
+        for job in self.jobs:
+            job.cancel()
 
 
 class StageTimers:
@@ -203,6 +247,11 @@ class _Worker:
         return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample,
                                                                       replicate)
 
+    def trace_light(self, first: int, count: int, index: int, tracer):
+        """Light paths first..first+count-1 of pass `index` (their splats)."""
+        _, replicate, sample = self.slot(index)
+        return tracer.trace_light(first, count, sample, replicate)
+
     def trace_and_fold(self, local: np.ndarray, index: int, gate: _Gate, tracer) -> None:
         """One chunk's sample, folded into the film by the worker itself once the gate of
         its pass opens: the main thread opens it after it has finished with the previous
@@ -215,6 +264,10 @@ class _Worker:
         if gate.discard:
             return
         t1 = time.perf_counter()
+        if gate.light is not None:
+            radiance = radiance + gate.light.for_chunk(int(local[0]), int(local[-1]) + 1)
+            if local[0] == 0:  # said once per pass
+                rejected = rejected + gate.light.rejected
         self.film.add(local, self.slot(index)[0], radiance, depth, normal, rejected)
         self.timers("film", time.perf_counter() - t1)
 
@@ -266,6 +319,17 @@ def _prepare(scene, settings, debug):
     return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
 
 
+def _launch(pool, worker, tracer, index, chunks, light_tracing):
+    """Queue pass `index`: its light paths first (as many as pixels, in the chunks' sizes),
+    then one sample per pixel, chunk by chunk over the pool. The chunks wait for the light
+    paths, which are queued ahead of them, so never behind a waiting chunk."""
+    gate = _Gate()
+    if light_tracing:
+        gate.light = _LightPass([pool.submit(worker.trace_light, int(c[0]), len(c), index,
+                                             tracer) for c in chunks])
+    return gate, [pool.submit(worker.trace_and_fold, c, index, gate, tracer) for c in chunks]
+
+
 def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=None,
            debug: bool = False) -> RenderResult:
     """Render `scene` progressively.
@@ -294,10 +358,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
         def launch(index):
-            """Queue pass `index`: one sample per pixel, chunk by chunk over the pool."""
-            gate = _Gate()
-            return gate, [pool.submit(worker.trace_and_fold, c, index, gate, kernel.tracer)
-                          for c in chunks]
+            return _launch(pool, worker, kernel.tracer, index, chunks, plan.light_tracing)
 
         gate, jobs = launch(0)
         gate.opened.set()
@@ -343,6 +404,8 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 ahead[0].opened.set()
                 for job in ahead[1]:
                     job.cancel()
+                if ahead[0].light is not None:
+                    ahead[0].light.cancel()
     return _result(scene, settings, plan, film, timers, kernel, series, sample,
                    time.perf_counter() - t0, stop_reason or "samples", cancelled, first)
 

@@ -369,6 +369,8 @@ class RenderSettings:
     replicate_range : optional (first, stop): render only replicates first..stop-1 of the
         R, with `samples` spread over them; renders of disjoint ranges merge exactly into
         the render of their union (`python -m addon merge`).
+    light_tracing : trace light paths for caustics where the plan finds they can occur
+        (caustics.py); False leaves path tracing alone.
     """
 
     width: int = 480
@@ -387,6 +389,7 @@ class RenderSettings:
     region: tuple | None = None
     replicates: int = DEFAULT_REPLICATES
     replicate_range: tuple | None = None
+    light_tracing: bool = True
 
     @property
     def replicate_ids(self) -> tuple[int, ...]:

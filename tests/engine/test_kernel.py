@@ -309,7 +309,7 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
-           "HAS_LIGHT_GRID": "voxel"}
+           "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_TRACING": "path_tracing_weight"}
 
 
 def _ir(kernel):

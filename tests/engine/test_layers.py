@@ -8,7 +8,8 @@ ENGINE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.ab
     __file__)))), "engine")
 # Bottom to top: a module may import only modules listed before it.
 LAYERS = ["jit", "specialise", "sampling", "scene", "bsdf", "terminator", "environment",
-          "camera", "film", "accel", "lights", "plan", "integrator", "kernels", "renderer",
+          "camera", "film", "accel", "lights", "caustics", "plan", "integrator", "light_tracing",
+          "kernels", "renderer",
           "__init__"]
 MAX_FUNCTION_LINES = 80
 

@@ -1,0 +1,172 @@
+"""Caustics by light tracing (engine/caustics.py, engine/light_tracing.py).
+
+The light tracer and the path tracer's weight against it must leave the image what path
+tracing alone converges to: the combined render is compared with independent plain
+path-traced renders by the agreement test (addon/agreement.py). Power: the same test fails
+when the light paths' contribution is dropped or their glass bends light with the wrong
+IOR. Then the formulas the connection rests on: the camera projection and its raster
+density, and the pixel filter's density.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from engine import caustics, render
+from engine.camera import CameraModel, project, raster_per_steradian, raster_to_plane, \
+    thin_lens_ray
+from engine.film import PixelFilter, filter_density, filter_offset
+from engine.plan import make_plan
+from tests import scenes
+from tests.cycles.compare import compare
+from tests.patching import module_with, one_off_kernels
+
+SIZE = dict(width=48, height=36)
+
+
+@pytest.fixture(scope="module")
+def box():
+    # A 0.4 x 0.4 light: small enough that light paths carry the caustics, large enough
+    # that 4 x 1024 path-traced samples have found them (with a 0.1 x 0.1 light they
+    # have not: in a corner lit through the mirror sphere, path tracing reads 0.210 at
+    # 1024 samples, 0.227-0.232 at 65536, and light tracing 0.236).
+    return scenes.caustic_box(light_half=0.2)
+
+
+@pytest.fixture(scope="module")
+def path_traced(box):
+    """Four plain path-traced renders (light tracing off), independent seeds."""
+    return np.stack([render(box, scenes.settings(**SIZE, samples=1024, seed=100 + k,
+                                                 light_tracing=False)).combined[..., :3]
+                     for k in range(4)])
+
+
+def combined(box, seed=7):
+    r = render(box, scenes.settings(**SIZE, samples=1024, seed=seed, replicates=4))
+    assert r.plan.light_tracing
+    return r
+
+
+def agrees(result, runs):
+    return compare(result.combined, result.variance, runs, specula_dof=result.dof)
+
+
+def test_plan_traces_light_only_where_caustics_can_occur(box):
+    st = scenes.settings(**SIZE)
+    assert make_plan(box, st).light_tracing
+    assert not make_plan(box, scenes.settings(**SIZE, light_tracing=False)).light_tracing
+    diffuse_only = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(),
+                                                           scenes.World((0, 0, 0)))
+    assert not make_plan(diffuse_only, st).light_tracing
+    assert not make_plan(box, scenes.settings(**SIZE, fresnel="schlick")).light_tracing
+    assert "trace light paths" in make_plan(box, st).describe()
+
+
+@pytest.mark.slow
+def test_light_tracing_with_mis_agrees_with_path_tracing(box, path_traced):
+    r = combined(box)
+    c = agrees(r, path_traced)
+    assert c.agree, c
+    # And it is the better estimate of the two at equal samples: the light paths find the
+    # caustics the camera paths hit by chance.
+    assert r.relative_error < 0.75 * render(box, scenes.settings(
+        **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
+
+
+@pytest.mark.slow
+def test_dropping_the_light_paths_contribution_fails(box, path_traced, monkeypatch):
+    one_off_kernels(monkeypatch, caustics=module_with(
+        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
+    c = agrees(combined(box), path_traced)
+    assert not c.agree, c
+
+
+@pytest.mark.slow
+def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
+    from engine import bsdf, integrator
+    from engine.bsdf import DELTA_PDF
+    from engine.sampling import LOBE, bounce_dim, sample_1d
+
+    def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
+        """Light paths (LightPaths has 11 fields, Paths more) see glass of IOR x 1.15."""
+        mt = sc.materials
+        if len(paths) == 11 and mt.kind[x.mat] == integrator.GLASS:
+            ior = mt.ior[x.mat] * 1.15
+            eta = ior if x.front else 1.0 / ior
+            u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, LOBE))
+            wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
+                x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
+                mt.transmission_tint[x.mat], u, True)
+            return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
+        return original_sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample)  # noqa: F821
+
+    one_off_kernels(monkeypatch, sample_bsdf=sample_bsdf,
+                    original_sample_bsdf=integrator.sample_bsdf)
+    c = agrees(combined(box), path_traced)
+    assert not c.agree, c
+
+
+# ------------------------------------------------------------------ formulas
+@pytest.mark.parametrize("dof", [False, True])
+def test_project_inverts_the_camera_ray_and_its_raster_density(dof):
+    model = CameraModel(scenes.cornell_camera(use_dof=dof, fstop=0.4, focus_distance=2.5),
+                        64, 48, np.zeros(3))
+    cam = model.data()
+    aperture = cam.aperture
+    rng = np.random.default_rng(3)
+    m = cam.world_from_camera
+    for _ in range(20):
+        rx, ry = rng.uniform(0, 64), rng.uniform(0, 48)
+        lx, ly = rng.uniform(-1, 1, 2) * aperture * 0.7
+        x, y = raster_to_plane(rx, ry, cam)
+        ox, oy, oz, dx, dy, dz, _ = thin_lens_ray(x, y, lx, ly, cam.focus, cam.clip_start,
+                                                  cam.clip_end, False)
+        t = rng.uniform(1.0, 4.0)
+        p = m @ np.array([ox + t * dx, oy + t * dy, oz + t * dz]) + cam.position
+        qx, qy, qdz, dist, near, visible = project(*p, lx, ly, cam)
+        assert visible
+        assert qx == pytest.approx(rx, abs=1e-7) and qy == pytest.approx(ry, abs=1e-7)
+        assert qdz == pytest.approx(dz, rel=1e-9)
+        assert dist == pytest.approx(t + near, rel=1e-9)
+        # Raster area per steradian: push the direction by small angles, project again.
+        h = 1e-6
+        e1 = np.cross([dx, dy, dz], [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross([dx, dy, dz], e1)
+        pts = []
+        for a, b in ((h, 0.0), (0.0, h)):
+            d2 = np.array([dx, dy, dz]) + a * e1 + b * e2
+            d2 /= np.linalg.norm(d2)
+            q = m @ (np.array([lx, ly, 0.0]) + 3.0 * d2) + cam.position
+            pts.append(np.array(project(*q, lx, ly, cam)[:2]))
+        jac = abs(np.cross(pts[0] - [qx, qy], pts[1] - [qx, qy])) / (h * h)
+        assert jac == pytest.approx(raster_per_steradian(dz, cam), rel=1e-4)
+
+
+@pytest.mark.parametrize("kind,width", [("BLACKMAN_HARRIS", 1.5), ("BOX", 1.0),
+                                        ("GAUSSIAN", 1.5)])
+def test_filter_density_is_the_density_camera_samples_have(kind, width):
+    table = PixelFilter(kind, width).table()
+    d = np.linspace(-3.5, 3.5, 70001)
+    dens = np.array([filter_density(v, table) for v in d])
+    assert dens.sum() * (d[1] - d[0]) == pytest.approx(1.0, abs=1e-4)
+    rng = np.random.default_rng(5)
+    offsets = np.array([filter_offset(u, table) for u in rng.random(200_000)])
+    hist, edges = np.histogram(offsets, bins=35, range=(-3.5, 3.5))
+    mid = (np.arange(200) + 0.5) / 200  # midpoints: a bin edge on the support's edge is 0
+    expected = np.array([np.mean([filter_density(a + (b - a) * t, table) for t in mid])
+                         for a, b in zip(edges[:-1], edges[1:])]) * 0.2 * len(offsets)
+    # Poisson counts: within 5 sigma in every bin.
+    assert np.all(np.abs(hist - expected) <= 5 * np.sqrt(expected + 1.0))
+
+
+def test_weights_sum_to_one_and_go_to_each_side_where_it_samples_better():
+    for r_parts in [(1e4, 1e-3, 1.0, 0.5), (10.0, 2.0, 2.25, 1e-4), (0.0, 1.0, 1.0, 1.0)]:
+        n_light, pdf_area, eta2, q = r_parts
+        w_pt = caustics.path_tracing_weight(n_light, pdf_area, eta2, q)
+        w_lt = caustics.light_tracing_weight(n_light, pdf_area, eta2, q) if n_light else 0.0
+        assert w_pt + w_lt == pytest.approx(1.0)
+    # A tiny emitter (large p_A) seen through glass: the light tracer takes nearly all.
+    assert caustics.light_tracing_weight(1e4, 1e3, 1.0, 1.0) > 0.999
+    assert math.isinf(caustics.light_tracing_ratio(1.0, 1.0, 1.0, 0.0))
