@@ -637,6 +637,17 @@ def terminator_area():
     _terminator_balls((0.0, 0.5), "AREA", energy=40.0, shape="SQUARE", size=0.3)
 
 
+def caustic_quad():
+    """CBspheres lit by a 0.4 x 0.4 quad at height 1.2 instead of its ceiling light (the
+    same power): the caustics under the glass sphere and from the mirror sphere are lit
+    through specular chains from a light path tracing hits rarely; Specula traces light
+    paths for them (engine/caustics.py). The quad is large enough for Cycles' unbiased
+    path tracing to converge on them at the reference's samples."""
+    _open("cbspheres.blend")
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    _emitter_quad("SmallEmitter", (0.0, 0.0, 1.2), 0.4, 10.0 * 0.48 / 0.16, rotation=(0, 0, 0))
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -689,6 +700,9 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
                spot_scaled, spot_seen_glass_mirror, spot_through_ceiling, glossy_colours,
                glossy_roughness):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
+# Caustics from a small light: rare paths for path tracing, more samples for Cycles.
+_add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,
+             files=(BLEND["cbspheres.blend"],)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):
