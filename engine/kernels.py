@@ -204,9 +204,10 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         em = _generic_emitters(em, t)
     caustics = None
     if plan.light_tracing:
-        x0, y0, x1, y1 = settings.window
-        caustics = CausticData(float((x1 - x0) * (y1 - y0)), emitters.triangle_distribution.cdf,
-                               emitters.triangle_pdf_area)
+        # As many light paths as the whole frame has pixels, even for a region: a region's
+        # pixels are then the whole frame's, bit for bit (RenderSettings.region).
+        caustics = CausticData(float(settings.width * settings.height),
+                               emitters.triangle_distribution.cdf, emitters.triangle_pdf_area)
     elif generic:
         caustics = CausticData(0.0, np.zeros(0), np.zeros(0))
     return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
@@ -320,7 +321,7 @@ class Tracer:
         blocked = self.accel.occluded_raw(conn.origin[:n_conn], conn.direction[:n_conn],
                                           conn.tmax[:n_conn])
         table = self.data.film_filter
-        span = int(np.ceil(table.x.max() - table.x.min())) + 2
+        span = int(np.ceil(table.x.max() - table.x.min())) + 1  # pixels a splat reaches, per axis
         pixels = np.empty(n_conn * span * span, np.int64)
         values = np.empty((n_conn * span * span, 3))
         x0, y0, x1, y1 = s.window

@@ -29,7 +29,7 @@ from . import camera, caustics
 from .film import filter_density
 from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roulette,
                          sample_bsdf, surface_interaction)
-from .jit import INLINE, JIT
+from .jit import ALLOCATING, INLINE, JIT
 from .bsdf import Layer
 from .sampling import (LIGHT_POINT, LIGHT_SELECT, bounce_dim, build_frame, cosine_hemisphere,
                        hash_combine, pixel_seed, reverse_bits, sample_1d, sample_2d, sample_cdf,
@@ -224,6 +224,7 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
     lo, hi = table.x[0], table.x[0]
     for k in range(len(table.x)):
         lo, hi = min(lo, table.x[k]), max(hi, table.x[k])
+    fx = np.empty(int(math.ceil(hi - lo)) + 2)
     for j in range(count):
         if occluded_prim[j] >= 0:
             continue
@@ -233,12 +234,15 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
                                                               x1 - 1)
         ay, by = max(int(math.ceil(ry - 0.5 - hi)), y0), min(int(math.floor(ry - 0.5 - lo)),
                                                               y1 - 1)
+        # The filter is separable: each column's and row's density once.
+        for px in range(ax, bx + 1):
+            fx[px - ax] = filter_density(rx - (px + 0.5), table)
         for py in range(ay, by + 1):
             fy = filter_density(ry - (py + 0.5), table)
             if fy == 0.0:
                 continue
             for px in range(ax, bx + 1):
-                f = fy * filter_density(rx - (px + 0.5), table)
+                f = fy * fx[px - ax]
                 if f == 0.0:
                     continue
                 pixels[n] = (py - y0) * (x1 - x0) + (px - x0)
@@ -251,5 +255,6 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
 
 # name -> (function, numba options), compiled with integrator.STAGES (kernels.Kernel).
 STAGES = {connect_camera.__name__: (connect_camera, INLINE)}
-STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce, splat)})
+STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce)})
+STAGES["splat"] = (splat, ALLOCATING)  # one small scratch row per call
 HAS_DOF = HAS_POLYGON_APERTURE = True  # the plan's values replace these (specialise.py)

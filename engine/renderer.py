@@ -67,43 +67,62 @@ class _Gate:
 
 
 class _LightPass:
-    """One pass's light paths (caustics.py): jobs that each trace a share of them and return
-    their splats, gathered once, in job order, into per-pixel sums the chunks of the pass
-    add to their own samples. Sums in a fixed order: the film stays independent of thread
-    timing."""
+    """One pass's light paths (caustics.py): jobs that each trace a share of them and add
+    their splats, in job order (so the sums do not depend on thread timing), into per-pixel
+    sums the chunks of the pass add to their own samples. Each job's splats are folded as
+    it ends, so memory holds one (pixels, 3) array per pass in flight, not every splat."""
 
-    def __init__(self, jobs):
-        self.jobs = jobs
-        self._lock = threading.Lock()
-        self._pixels = None
-        self._values = None
+    def __init__(self, n_pixels: int):
+        self.n_pixels = n_pixels
+        self.jobs = []
         self.rejected: list[str] = []
+        self._sums = None
+        self._turn = 0
+        self._discarded = False
+        self._cond = threading.Condition()
 
-    def _gather(self):
-        with self._lock:
-            if self._pixels is None:
-                parts = [job.result() for job in self.jobs]
-                pixels = np.concatenate([p for p, _ in parts])
-                values = np.concatenate([v for _, v in parts])
-                finite = np.all(np.isfinite(values), axis=1)
-                if not finite.all():
-                    self.rejected.append(f"{int((~finite).sum())} light-path splats were not "
-                                         "finite and were left out")
-                    pixels, values = pixels[finite], values[finite]
-                order = np.argsort(pixels, kind="stable")
-                self._values = values[order]
-                self._pixels = pixels[order]
-        return self._pixels, self._values
+    def _wait_turn(self, k: int) -> bool:
+        self._cond.wait_for(lambda: self._turn == k or self._discarded)
+        return not self._discarded
+
+    def add(self, k: int, pixels: np.ndarray, values: np.ndarray) -> None:
+        """Job k's splats (window pixel ids, values), after those of jobs 0..k-1."""
+        finite = np.all(np.isfinite(values), axis=1)
+        pixels, values = pixels[finite], values[finite]
+        ids, inverse = np.unique(pixels, return_inverse=True)
+        sums = np.stack([np.bincount(inverse, weights=values[:, c], minlength=len(ids))
+                         for c in range(3)], axis=1)
+        with self._cond:
+            if not self._wait_turn(k):
+                return
+            if not finite.all():
+                self.rejected.append(f"{int((~finite).sum())} light-path splats were not "
+                                     "finite and were left out")
+            if self._sums is None:  # float32: a 4K frame's sums are 100 MB
+                self._sums = np.zeros((self.n_pixels, 3), np.float32)
+            self._sums[ids] += sums
+            self._turn += 1
+            self._cond.notify_all()
+
+    def skip(self, k: int) -> None:
+        """Job k failed: let the jobs after it go on (the failure is raised by its future)."""
+        with self._cond:
+            if self._wait_turn(k):
+                self._turn += 1
+                self._cond.notify_all()
 
     def for_chunk(self, start: int, stop: int) -> np.ndarray:
         """(stop - start, 3) sums of the splats on window pixels start..stop-1."""
-        pixels, values = self._gather()
-        a, b = np.searchsorted(pixels, [start, stop])
-        local = pixels[a:b] - start
-        return np.stack([np.bincount(local, weights=values[a:b, c], minlength=stop - start)
-                         for c in range(3)], axis=1)
+        for job in self.jobs:
+            job.result()
+        if self._sums is None:
+            return np.zeros((stop - start, 3))
+        return self._sums[start:stop]
 
     def cancel(self):
+        with self._cond:
+            self._discarded = True
+            self._cond.notify_all()
         for job in self.jobs:
             job.cancel()
 
@@ -247,10 +266,16 @@ class _Worker:
         return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample,
                                                                       replicate)
 
-    def trace_light(self, first: int, count: int, index: int, tracer):
-        """Light paths first..first+count-1 of pass `index` (their splats)."""
+    def trace_light(self, light: _LightPass, k: int, first: int, count: int, index: int,
+                    tracer) -> None:
+        """Light paths first..first+count-1 of pass `index`, job k of `light`."""
         _, replicate, sample = self.slot(index)
-        return tracer.trace_light(first, count, sample, replicate)
+        try:
+            pixels, values = tracer.trace_light(first, count, sample, replicate)
+        except BaseException:
+            light.skip(k)
+            raise
+        light.add(k, pixels, values)
 
     def trace_and_fold(self, local: np.ndarray, index: int, gate: _Gate, tracer) -> None:
         """One chunk's sample, folded into the film by the worker itself once the gate of
@@ -319,14 +344,15 @@ def _prepare(scene, settings, debug):
     return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
 
 
-def _launch(pool, worker, tracer, index, chunks, light_tracing):
-    """Queue pass `index`: its light paths first (as many as pixels, in the chunks' sizes),
+def _launch(pool, worker, tracer, index, chunks, light_paths):
+    """Queue pass `index`: its light paths first (`light_paths`, (first, count) per job),
     then one sample per pixel, chunk by chunk over the pool. The chunks wait for the light
     paths, which are queued ahead of them, so never behind a waiting chunk."""
     gate = _Gate()
-    if light_tracing:
-        gate.light = _LightPass([pool.submit(worker.trace_light, int(c[0]), len(c), index,
-                                             tracer) for c in chunks])
+    if light_paths:
+        gate.light = light = _LightPass(worker.film.width * worker.film.height)
+        light.jobs = [pool.submit(worker.trace_light, light, k, first, count, index, tracer)
+                      for k, (first, count) in enumerate(light_paths)]
     return gate, [pool.submit(worker.trace_and_fold, c, index, gate, tracer) for c in chunks]
 
 
@@ -355,10 +381,14 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     snap = None  # the last pass handed to on_pass or recorded in the series
     series, points = [], SeriesPoints()
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
+    # One light path per pixel of the whole frame, even for a region (kernels.scene_data).
+    frame = settings.width * settings.height
+    light_paths = [(s, min(chunk, frame - s)) for s in range(0, frame, chunk)] \
+        if plan.light_tracing else []
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
         def launch(index):
-            return _launch(pool, worker, kernel.tracer, index, chunks, plan.light_tracing)
+            return _launch(pool, worker, kernel.tracer, index, chunks, light_paths)
 
         gate, jobs = launch(0)
         gate.opened.set()
@@ -372,6 +402,8 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 ahead = launch(sample + 1) if sample + 1 < settings.samples else None
                 for job in jobs:
                     job.result()
+                if gate.light is not None:
+                    gate.light = None  # its sums are folded: free them before the next pass
                 sample += 1
                 film.check_finite(sample)
                 elapsed = time.perf_counter() - t0

@@ -7,12 +7,12 @@ Scenes (tests/scenes.py `caustic_box`): CBspheres lit by a 0.1 x 0.1 emissive qu
 usual light's power, at height 1.2 ("quad") and 1 cm under the ceiling ("quad_ceiling",
 where the quad's back face makes a hot spot on the ceiling that lights the room as a second
 small source), and CBspheres as committed in tests/scenes.py (its usual large light: the
-scene where light tracing has least to do). For each: a reference (light tracing on, `--reference-seconds`, its own
-seed), then renders stopped by the time limit at each budget with path tracing alone and
-with light tracing, each measured against the reference (relative RMS luminance error,
-the reference's own estimated variance taken out) beside its own estimate. The scene's
-kernels are compiled before timing. Writes out/bench/caustics.json. A benchmark: it
-reports, never asserts.
+scene where light tracing has least to do). For each: a reference (light tracing on,
+`--reference-seconds`, its own seed), then renders stopped by the time limit at each
+budget with path tracing alone and with light tracing, each measured against the
+reference (relative RMS luminance error, the reference's own estimated variance taken
+out) beside its own estimate. The scene's kernels are compiled before timing. Writes
+out/bench/caustics.json (or --out). A benchmark: it reports, never asserts.
 """
 
 from __future__ import annotations

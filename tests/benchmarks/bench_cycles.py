@@ -37,9 +37,13 @@ import bpy  # noqa: E402
 
 from addon import imaging  # noqa: E402
 from tests.benchmarks import bench_core  # noqa: E402
-from tests.cycles import renderers  # noqa: E402
+from tests.cycles import renderers, variants  # noqa: E402
 
 OUT = os.path.join(REPO, "out", "bench")
+# Set by --guiding and --without-light-tracing: rows for Cycles with path guiding and for
+# Specula with light tracing off, beside the usual two.
+GUIDING = False
+WITHOUT_LIGHT_TRACING = False
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 RELMSE_EPS = 0.01
 
@@ -47,10 +51,24 @@ RELMSE_EPS = 0.01
 # "<scene>_dof": the committed scene with a thin lens focused this far along the view axis
 # (CBspheres: on the glass sphere) and this lens radius (scene units).
 DOF = {"cbspheres_dof": (2.75, 0.1)}
+# "<scene>_small_quad[_ceiling]": the committed scene with its ceiling emitter replaced by a
+# 0.1 x 0.1 quad of the same power at height 1.2 (or where the emitter was, 1 cm under the
+# ceiling): caustics lit through specular chains from a light paths hit rarely.
+SMALL_QUAD = {"cbspheres_small_quad": 1.2, "cbspheres_small_quad_ceiling": 1.49}
+
+
+def _small_quad(height):
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    variants._emitter_quad("SmallEmitter", (0.0, 0.0, height), 0.1, 10.0 * 0.48 / 0.01,
+                           rotation=(0.0, 0.0, 0.0))
 
 
 def open_scene(name, resolution, max_bounces):
-    scene = renderers.open_blend_scene(name.removesuffix("_dof"), resolution)
+    base = name.removesuffix("_dof").removesuffix("_small_quad_ceiling").removesuffix(
+        "_small_quad")
+    scene = renderers.open_blend_scene(base, resolution)
+    if name in SMALL_QUAD:
+        _small_quad(SMALL_QUAD[name])
     if name in DOF:
         focus, radius = DOF[name]
         cam = scene.camera.data
@@ -91,9 +109,11 @@ def render_specula(scene, samples=1 << 20, time_limit=0.0):
     return result, time.perf_counter() - t0, first[0]
 
 
-def render_cycles(scene, samples, seed=0, time_limit=0.0):
-    """(image (H, W, 3), wall seconds, samples Cycles reports it took)."""
+def render_cycles(scene, samples, seed=0, time_limit=0.0, guiding=False):
+    """(image (H, W, 3), wall seconds); guiding: with Cycles' path guiding (surface and
+    volume, its defaults otherwise), the setting Cycles offers for hard indirect light."""
     renderers.configure_cycles(scene, samples, seed, scene.specula.max_bounces, time_limit)
+    scene.cycles.use_guiding = guiding
     rgba, seconds = renderers.render_cycles_image(scene)
     scene.render.engine = "SPECULA"
     return rgba[..., :3].astype(np.float64), seconds
@@ -142,6 +162,19 @@ def bench_scene(name, budgets, resolution, ref_samples, max_bounces):
         rmse_s, rel_s, lum_s = errors(img_s, ref, noise)
         img_c, wall_c = render_cycles(scene, 1 << 24, seed=7, time_limit=budget)
         rmse_c, rel_c, _ = errors(img_c, ref, noise)
+        extra = {}
+        if GUIDING:
+            img_g, wall_g = render_cycles(scene, 1 << 24, seed=7, time_limit=budget,
+                                          guiding=True)
+            extra.update(cycles_guided_seconds=wall_g,
+                         cycles_guided_rmse=errors(img_g, ref, noise)[0])
+        if WITHOUT_LIGHT_TRACING and scene.specula.use_light_tracing:
+            scene.specula.use_light_tracing = False
+            res_p, wall_p, _ = render_specula(scene, time_limit=budget)
+            scene.specula.use_light_tracing = True
+            extra.update(specula_plain_seconds=wall_p, specula_plain_samples=res_p.samples,
+                         specula_plain_rmse=errors(res_p.combined[..., :3].astype(np.float64),
+                                                   ref, noise)[0])
         row = dict(scene=name, budget=budget, specula_seconds=wall_s, specula_samples=res.samples,
                    specula_rmse=rmse_s, specula_relmse=rel_s, specula_rel_measured=lum_s,
                    specula_rel_estimated=float(res.relative_error),
@@ -149,7 +182,8 @@ def bench_scene(name, budgets, resolution, ref_samples, max_bounces):
                    specula_fraction_in_embree=res.profile[0],
                    specula_share_per_stage=res.profile[1],
                    cycles_seconds=wall_c, cycles_rmse=rmse_c, cycles_relmse=rel_c,
-                   equal_time_mse_ratio=(rmse_s / rmse_c) ** 2 if rmse_c > 0 else float("nan"))
+                   equal_time_mse_ratio=(rmse_s / rmse_c) ** 2 if rmse_c > 0 else float("nan"),
+                   **extra)
         rows.append(row)
         print(json.dumps(row), flush=True)
     return rows, dict(scene=name, specula_first_pixels=first_s, cycles_first_pixels=first_c,
@@ -190,6 +224,20 @@ def report(all_rows, info, args):
                      f"{r['specula_relmse']:.5f} | {r['cycles_relmse']:.5f} | "
                      f"{r['equal_time_mse_ratio']:.1f} | {r['specula_rel_estimated']:.4f} / "
                      f"{r['specula_rel_measured']:.4f} |")
+    extra = [r for r in all_rows if "cycles_guided_rmse" in r or "specula_plain_rmse" in r]
+    if extra:
+        lines += ["", "RMSE at each budget beside Specula without light tracing and Cycles with "
+                  "path guiding (--without-light-tracing, --guiding; '-' where not run):", "",
+                  "| scene | budget s | Specula | Specula, light tracing off (spp) | Cycles | "
+                  "Cycles, path guiding | best Cycles / Specula |", "|---|---|---|---|---|---|---|"]
+        for r in extra:
+            plain = (f"{r['specula_plain_rmse']:.4f} ({r['specula_plain_samples']})"
+                     if "specula_plain_rmse" in r else "-")
+            guided = f"{r['cycles_guided_rmse']:.4f}" if "cycles_guided_rmse" in r else "-"
+            best = min(r["cycles_rmse"], r.get("cycles_guided_rmse", float("inf")))
+            lines.append(f"| {r['scene']} | {r['budget']:g} | {r['specula_rmse']:.4f} | {plain} "
+                         f"| {r['cycles_rmse']:.4f} | {guided} | "
+                         f"{best / max(r['specula_rmse'], 1e-12):.2f} |")
     lines += ["", "Specula's share of the two threads' time inside embreex, and per stage "
               "(from the core's stage timers; 'intersect' and 'trace shadow rays' include their "
               "embreex calls, 'other' is the bounce loop's glue and waiting at pass ends):", "",
@@ -221,7 +269,15 @@ def main(argv=None):
                         help="Cycles reference samples, split over two seeds (default 16384)")
     parser.add_argument("--max-bounces", type=int, default=None,
                         help="bounce limit for both engines (default: the scene's)")
+    parser.add_argument("--guiding", action="store_true",
+                        help="also render Cycles with path guiding at each budget")
+    parser.add_argument("--without-light-tracing", action="store_true",
+                        help="also render Specula with light tracing (caustics) off")
+    parser.add_argument("--out-name", default="report",
+                        help="report file stem in out/bench/ (default report)")
     args = parser.parse_args(argv)
+    global GUIDING, WITHOUT_LIGHT_TRACING
+    GUIDING, WITHOUT_LIGHT_TRACING = args.guiding, args.without_light_tracing
     budgets = [float(b) for b in args.budgets.split(",")]
     w, h = (int(v) for v in args.resolution.lower().split("x"))
     os.makedirs(OUT, exist_ok=True)
@@ -233,10 +289,12 @@ def main(argv=None):
         all_rows += rows
         info.append(meta)
         plot(name, rows, os.path.join(OUT, f"{name}_error.png"))
-    with open(os.path.join(OUT, "results.json"), "w") as f:
+    stem = args.out_name
+    with open(os.path.join(OUT, "results.json" if stem == "report" else f"{stem}.json"),
+              "w") as f:
         json.dump(dict(rows=all_rows, first_pixels=info), f, indent=1)
     text = report(all_rows, info, argv)
-    with open(os.path.join(OUT, "report.md"), "w") as f:
+    with open(os.path.join(OUT, f"{stem}.md"), "w") as f:
         f.write(text)
     print(text)
     return 0

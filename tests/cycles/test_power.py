@@ -56,10 +56,10 @@ def _one_bounce_fewer(scene, settings):
     return scene, dataclasses.replace(settings, max_bounces=settings.max_bounces - 1)
 
 
-def front_only_emission(i, row, x, sc, paths, mis):
+def front_only_emission(i, row, depth, x, sc, paths, mis):
     """handle_emission for front faces only."""
     if x.front:
-        original_handle_emission(i, row, x, sc, paths, mis)  # noqa: F821
+        original_handle_emission(i, row, depth, x, sc, paths, mis)  # noqa: F821
 
 
 def front_only_triangle(e, px, py, pz, ua, ub, em):

@@ -9,6 +9,7 @@ density, and the pixel filter's density.
 """
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -105,6 +106,24 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
                     original_sample_bsdf=integrator.sample_bsdf)
     c = agrees(combined(box), path_traced)
     assert not c.agree, c
+
+
+def test_a_region_renders_the_whole_frames_pixels_with_light_paths(box):
+    st = scenes.settings(width=16, height=12, samples=3, seed=2)
+    full = render(box, st)
+    part = render(box, replace(st, region=(4, 3, 12, 9)))
+    assert full.plan.light_tracing and part.plan.light_tracing
+    np.testing.assert_array_equal(part.combined, full.combined[3:9, 4:12])
+
+
+def test_replicate_subsets_merge_into_the_whole_render_with_light_paths(box):
+    st = scenes.settings(width=16, height=12, samples=4, seed=2, replicates=2)
+    whole = render(box, st)
+    first = render(box, replace(st, samples=2, replicate_range=(0, 1)))
+    second = render(box, replace(st, samples=2, replicate_range=(1, 2)))
+    np.testing.assert_array_equal(whole.replicate_mean[:, :, :1], first.replicate_mean)
+    np.testing.assert_array_equal(whole.replicate_mean[:, :, 1:], second.replicate_mean)
+    np.testing.assert_array_equal(whole.replicate_m2[:, :, 1:], second.replicate_m2)
 
 
 # ------------------------------------------------------------------ formulas
