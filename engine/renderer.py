@@ -344,6 +344,15 @@ def _prepare(scene, settings, debug):
     return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
 
 
+def _light_path_jobs(settings, plan, chunk: int) -> list[tuple[int, int]]:
+    """(first, count) of each light-path job of a pass: one path per pixel of the whole
+    frame, even for a region (kernels.scene_data), in jobs of the chunks' size."""
+    if not plan.light_tracing:
+        return []
+    frame = settings.width * settings.height
+    return [(s, min(chunk, frame - s)) for s in range(0, frame, chunk)]
+
+
 def _launch(pool, worker, tracer, index, chunks, light_paths):
     """Queue pass `index`: its light paths first (`light_paths`, (first, count) per job),
     then one sample per pixel, chunk by chunk over the pool. The chunks wait for the light
@@ -381,10 +390,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     snap = None  # the last pass handed to on_pass or recorded in the series
     series, points = [], SeriesPoints()
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
-    # One light path per pixel of the whole frame, even for a region (kernels.scene_data).
-    frame = settings.width * settings.height
-    light_paths = [(s, min(chunk, frame - s)) for s in range(0, frame, chunk)] \
-        if plan.light_tracing else []
+    light_paths = _light_path_jobs(settings, plan, chunk)
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
         def launch(index):
@@ -402,8 +408,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 ahead = launch(sample + 1) if sample + 1 < settings.samples else None
                 for job in jobs:
                     job.result()
-                if gate.light is not None:
-                    gate.light = None  # its sums are folded: free them before the next pass
+                gate.light = None  # the light paths' sums are folded: free them
                 sample += 1
                 film.check_finite(sample)
                 elapsed = time.perf_counter() - t0
