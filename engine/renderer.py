@@ -344,13 +344,18 @@ def _prepare(scene, settings, debug):
     return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
 
 
-def _light_path_jobs(settings, plan, chunk: int) -> list[tuple[int, int]]:
+# Light paths per job. Fixed, not the chunks' size: the jobs' sums are added in job order,
+# so the same partition for any thread count, chunk size or region keeps the image's bits.
+LIGHT_PATHS_PER_JOB = 1 << 14
+
+
+def _light_path_jobs(settings, plan) -> list[tuple[int, int]]:
     """(first, count) of each light-path job of a pass: one path per pixel of the whole
-    frame, even for a region (kernels.scene_data), in jobs of the chunks' size."""
+    frame, even for a region (kernels.scene_data)."""
     if not plan.light_tracing:
         return []
-    frame = settings.width * settings.height
-    return [(s, min(chunk, frame - s)) for s in range(0, frame, chunk)]
+    frame, size = settings.width * settings.height, LIGHT_PATHS_PER_JOB
+    return [(s, min(size, frame - s)) for s in range(0, frame, size)]
 
 
 def _launch(pool, worker, tracer, index, chunks, light_paths):
@@ -390,7 +395,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
     snap = None  # the last pass handed to on_pass or recorded in the series
     series, points = [], SeriesPoints()
     chunks = [np.arange(s, min(s + chunk, n_pixels)) for s in starts]
-    light_paths = _light_path_jobs(settings, plan, chunk)
+    light_paths = _light_path_jobs(settings, plan)
     with ThreadPoolExecutor(max_workers=threads) as pool:
 
         def launch(index):
