@@ -65,7 +65,8 @@ def main(argv=None) -> int:
         for lt in (False, True):  # compile (or load) both kernels first
             render(box, scenes.settings(width=w, height=h, samples=2, light_tracing=lt,
                                         kernel="specialised"))
-        ref = render(box, settings(seed=99, time_limit=args.reference_seconds))
+        ref = render(box, settings(seed=99, time_limit=args.reference_seconds,
+                                   light_tracing=True))
         rows = {"reference": {"samples": int(ref.samples), "seconds": ref.seconds,
                               "estimated": ref.relative_error}}
         for budget in args.budgets:

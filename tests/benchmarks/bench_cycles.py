@@ -61,6 +61,7 @@ def _small_quad(height):
     bpy.data.objects.remove(bpy.data.objects["Emitter"])
     variants._emitter_quad("SmallEmitter", (0.0, 0.0, height), 0.1, 10.0 * 0.48 / 0.01,
                            rotation=(0.0, 0.0, 0.0))
+    bpy.context.scene.specula.use_light_tracing = True
 
 
 def open_scene(name, resolution, max_bounces):

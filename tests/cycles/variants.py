@@ -646,6 +646,7 @@ def caustic_quad():
     _open("cbspheres.blend")
     bpy.data.objects.remove(bpy.data.objects["Emitter"])
     _emitter_quad("SmallEmitter", (0.0, 0.0, 1.2), 0.4, 10.0 * 0.48 / 0.16, rotation=(0, 0, 0))
+    bpy.context.scene.specula.use_light_tracing = True
 
 
 def _bounces(n):

@@ -44,7 +44,8 @@ def path_traced(box):
 
 
 def combined(box, seed=7):
-    r = render(box, scenes.settings(**SIZE, samples=1024, seed=seed, replicates=4))
+    r = render(box, scenes.settings(**SIZE, samples=1024, seed=seed, replicates=4,
+                                    light_tracing=True))
     assert r.plan.light_tracing
     return r
 
@@ -54,13 +55,15 @@ def agrees(result, runs):
 
 
 def test_plan_traces_light_only_where_caustics_can_occur(box):
-    st = scenes.settings(**SIZE)
+    st = scenes.settings(**SIZE, light_tracing=True)
     assert make_plan(box, st).light_tracing
+    assert not make_plan(box, scenes.settings(**SIZE)).light_tracing  # off by default
     assert not make_plan(box, scenes.settings(**SIZE, light_tracing=False)).light_tracing
     diffuse_only = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(),
                                                            scenes.World((0, 0, 0)))
     assert not make_plan(diffuse_only, st).light_tracing
-    assert not make_plan(box, scenes.settings(**SIZE, fresnel="schlick")).light_tracing
+    assert not make_plan(box, scenes.settings(**SIZE, fresnel="schlick",
+                                              light_tracing=True)).light_tracing
     assert "trace light paths" in make_plan(box, st).describe()
 
 
@@ -109,7 +112,7 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
 
 
 def test_a_region_renders_the_whole_frames_pixels_with_light_paths(box):
-    st = scenes.settings(width=16, height=12, samples=3, seed=2)
+    st = scenes.settings(width=16, height=12, samples=3, seed=2, light_tracing=True)
     full = render(box, st)
     part = render(box, replace(st, region=(4, 3, 12, 9)))
     assert full.plan.light_tracing and part.plan.light_tracing
@@ -117,7 +120,8 @@ def test_a_region_renders_the_whole_frames_pixels_with_light_paths(box):
 
 
 def test_replicate_subsets_merge_into_the_whole_render_with_light_paths(box):
-    st = scenes.settings(width=16, height=12, samples=4, seed=2, replicates=2)
+    st = scenes.settings(width=16, height=12, samples=4, seed=2, replicates=2,
+                         light_tracing=True)
     whole = render(box, st)
     first = render(box, replace(st, samples=2, replicate_range=(0, 1)))
     second = render(box, replace(st, samples=2, replicate_range=(1, 2)))
