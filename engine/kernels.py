@@ -269,10 +269,7 @@ class Tracer:
         for depth in range(s.max_bounces + 2):
             if m == 0:
                 break
-            t0 = time.perf_counter()
-            prim, tfar, bu, bv = self.accel.intersect_raw(paths.origin32[:m], paths.dir32[:m],
-                                                          paths.tmax32[:m])
-            self._count("intersect", time.perf_counter() - t0)
+            prim, tfar, bu, bv = self._closest_hits(paths, m)
             t0 = time.perf_counter()
             m, count = k.shade(depth, rev_sample, s.max_bounces, self.data, prim, tfar, bu, bv,
                                m, paths, shadow, profile)
@@ -285,6 +282,14 @@ class Tracer:
                 self._count("trace shadow rays", time.perf_counter() - t0)
         return paths.radiance, paths.depth, paths.normal, paths.nonfinite
 
+    def _closest_hits(self, rays, m: int):
+        """Embree's closest hits of the first m rays of a wavefront (camera or light
+        paths: their float32 origin32, dir32, tmax32)."""
+        t0 = time.perf_counter()
+        hits = self.accel.intersect_raw(rays.origin32[:m], rays.dir32[:m], rays.tmax32[:m])
+        self._count("intersect", time.perf_counter() - t0)
+        return hits
+
     def trace_light(self, first: int, count: int, sample: int, replicate: int = 0):
         """Light paths first..first+count-1 of sample `sample` of replicate `replicate`
         (light_tracing.py), connected to the camera: (window-local pixel ids (k,), values
@@ -294,7 +299,7 @@ class Tracer:
         lp = light_tracing.LightPaths(
             np.empty(n, np.int64), np.empty(n, np.uint64), np.empty((n, 3)), np.empty((n, 3)),
             np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32), np.empty((n, 3)),
-            np.empty(n), np.empty(n), np.empty(n))
+            np.empty(n), np.empty(n), np.empty(n), np.empty(n))
         conn = light_tracing.Connections(np.empty((n, 3), F32), np.empty((n, 3), F32),
                                          np.empty(n, F32), np.empty((n, 2)), np.empty((n, 3)))
         t0 = time.perf_counter()
@@ -307,10 +312,7 @@ class Tracer:
         for depth in range(s.max_bounces + 1):
             if m == 0:
                 break
-            t0 = time.perf_counter()
-            prim, tfar, bu, bv = self.accel.intersect_raw(lp.origin32[:m], lp.dir32[:m],
-                                                          lp.tmax32[:m])
-            self._count("intersect", time.perf_counter() - t0)
+            prim, tfar, bu, bv = self._closest_hits(lp, m)
             t0 = time.perf_counter()
             m, n_conn = k.light_bounce(depth, rev_sample, s.max_bounces, self.data, prim, tfar,
                                        bu, bv, m, lp, conn, n_conn)

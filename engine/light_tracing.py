@@ -46,10 +46,11 @@ def light_path_seed(seed):
 
 # One batch of light paths: live rows, sequence seeds, the ray (float64 and embree's
 # float32), the weight beta (caustics.light_tracing_contribution), prev_pdf (unused, for
-# integrator.spawn's sake), the chain's IOR product n_x / n_y so far, and p_sel p_A of the
-# path's emitter point over the shading_ratio of its Lambertian vertices so far.
+# integrator.spawn's sake), the chain's IOR product n_x / n_y so far, p_sel p_A of the
+# path's emitter point over the shading_ratio of its Lambertian vertices so far, and the
+# largest channel of the starting weight (Russian roulette reads beta relative to it).
 LightPaths = namedtuple("LightPaths", "live pseed o64 d64 origin32 dir32 tmax32 throughput "
-                                      "prev_pdf eta pdf_area")
+                                      "prev_pdf eta pdf_area start")
 # Camera connections: shadow ray (float32), raster position (n, 2) and the contribution per
 # unit raster area, MIS weight and 1 / N_L included.
 Connections = namedtuple("Connections", "origin direction tmax raster contrib")
@@ -98,6 +99,7 @@ def start_light_paths(ids, sample, seed, sc, lp):
         lp.prev_pdf[i] = np.inf
         lp.eta[i] = 1.0
         lp.pdf_area[i] = ca.pdf_area[e]
+        lp.start[i] = max(lp.throughput[i, 0], max(lp.throughput[i, 1], lp.throughput[i, 2]))
     return len(ids)
 
 
@@ -170,10 +172,15 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
             continue
         if depth + 1 > max_bounces:
             continue
-        alive, t0, t1, t2 = russian_roulette(depth, lp.throughput[i, 0], lp.throughput[i, 1],
-                                             lp.throughput[i, 2], lp.pseed[row], rev_sample)
+        # beta carries the emitter's power (it scales with the scene's area): the roulette
+        # reads it relative to the start, as a camera path's throughput starts at 1.
+        b0 = lp.start[i]
+        alive, t0, t1, t2 = russian_roulette(depth, lp.throughput[i, 0] / b0,
+                                             lp.throughput[i, 1] / b0,
+                                             lp.throughput[i, 2] / b0, lp.pseed[row], rev_sample)
         if not alive:
             continue
+        t0, t1, t2 = t0 * b0, t1 * b0, t2 * b0
         wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, no_lobe, sc, lp,
                                                       rev_sample)
         t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
@@ -210,6 +217,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         lp.throughput[out, 0], lp.throughput[out, 1], lp.throughput[out, 2] = t0, t1, t2
         lp.eta[out] = eta
         lp.pdf_area[out] = pdf_area
+        lp.start[out] = b0
         lp.live[out] = row
         out += 1
     return out, n_conn

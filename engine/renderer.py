@@ -421,7 +421,7 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                     first = elapsed
                 # The estimate costs a pass over the film: only when someone reads it.
                 due = points.due(sample)
-                rel = float("nan")
+                rel, snap = float("nan"), None  # free the last pass before this one
                 if due or on_pass is not None or settings.target_error:
                     snap = film.snapshot(sample, elapsed, sample / settings.samples)
                     rel = snap.relative_error
@@ -449,13 +449,17 @@ def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=Non
                 if ahead[0].light is not None:
                     ahead[0].light.cancel()
     return _result(scene, settings, plan, film, timers, kernel, series, sample,
-                   time.perf_counter() - t0, stop_reason or "samples", cancelled, first)
+                   time.perf_counter() - t0, stop_reason or "samples", cancelled, first, snap)
 
 
 def _result(scene, settings, plan, film, timers, kernel, series, sample, elapsed, stop_reason,
-            cancelled, first) -> RenderResult:
-    est = film.estimate()
-    snap = film.snapshot(sample, elapsed, sample / settings.samples, est)
+            cancelled, first, snap) -> RenderResult:
+    # The loop's last pass is the final one when it was made at this sample: reuse it
+    # rather than hold two full-frame copies (the 4K render's peak memory).
+    if snap is None or snap.samples != sample:
+        snap = film.snapshot(sample, elapsed, sample / settings.samples)
+    else:
+        snap = replace(snap, seconds=elapsed)
     if not series or series[-1]["samples"] != sample:
         series.append(_series_point(snap))
     name, note = kernel.describe()

@@ -1,0 +1,162 @@
+"""Light choice among unequal lights: equal-sample variance against Cycles' light tree.
+
+    .venv/bin/python -m tests.benchmarks.bench_light_choice [--scenes unequal many]
+        [--samples 16] [--seeds 4] [--reference-samples 2048] [--resolution 64x48]
+
+Scenes, built through Blender (the same .blend state for both engines):
+- "unequal": a room-sized floor with two boxes, a 1000 W point light 4 m up at one end and
+  a 25 W 0.5 m square area light 0.6 m above the floor at the other, where it outshines
+  the point light (issue 16, point 5);
+- "unequal_area": the same without the point light (each light alone, for scale);
+- "unequal_point": the same without the area light;
+- "many": tests/addon/test_many_lights.py's 1,000 emissive triangles and 100 point lights.
+
+For each: a high-sample Cycles reference (its own seed), then Cycles and Specula at
+`--samples`, `--seeds` seeds each; the mean squared error against the reference, minus the
+reference's own variance (estimated from two half-sample references), per engine, and the
+ratio Specula / Cycles ("variance per sample" ratio: equal samples). Writes
+out/bench/light_choice.json. A benchmark: it reports, never asserts.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+for p in (REPO, os.path.join(REPO, "tests", "addon")):
+    if p not in sys.path:
+        sys.path.insert(0, p)
+
+OUT = os.path.join(REPO, "out", "bench")
+
+
+def _box(bpy, name, centre, size, mat):
+    cx, cy, cz = centre
+    sx, sy, sz = (0.5 * s for s in size)
+    v = [(cx + x * sx, cy + y * sy, cz + z * sz) for x in (-1, 1) for y in (-1, 1)
+         for z in (-1, 1)]
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(v, [], faces)
+    me.materials.append(mat)
+    bpy.context.scene.collection.objects.link(bpy.data.objects.new(name, me))
+
+
+def build_unequal(point=True, area=True):
+    import bpy
+    from addon_helpers import node_material
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    cam = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    cam.location, cam.rotation_euler, cam.data.lens = (0, -9, 5), (math.radians(62), 0, 0), 28
+    grey = node_material("grey", "ShaderNodeBsdfDiffuse", Color=(0.6, 0.6, 0.6, 1))[0]
+    _box(bpy, "floor", (0, 0, -0.05), (12, 10, 0.1), grey)
+    _box(bpy, "wall", (0, 4, 1.5), (12, 0.2, 3), grey)
+    _box(bpy, "block_a", (-2.5, 0, 0.5), (1, 1, 1), grey)
+    _box(bpy, "block_b", (2.8, 0.8, 0.35), (0.7, 0.7, 0.7), grey)
+    if point:
+        light = bpy.data.lights.new("Sun-like point", "POINT")
+        light.energy, light.shadow_soft_size = 1000.0, 0.1
+        obj = bpy.data.objects.new("Point 1000 W", light)
+        obj.location = (-4.5, -1, 4)
+        scene.collection.objects.link(obj)
+    if area:
+        light = bpy.data.lights.new("Panel", "AREA")
+        light.energy, light.size = 25.0, 0.5
+        obj = bpy.data.objects.new("Area 25 W", light)
+        obj.location = (3.5, -0.5, 0.6)
+        scene.collection.objects.link(obj)
+    scene.world = bpy.data.worlds.new("W")
+    scene.world.color = (0, 0, 0)
+    return scene
+
+
+def build_many():
+    from test_many_lights import build_scene
+
+    return build_scene()
+
+
+SCENES = {"unequal": build_unequal,
+          "unequal_area": lambda: build_unequal(point=False),
+          "unequal_point": lambda: build_unequal(area=False),
+          "many": build_many}
+
+
+def render(build, engine, samples, seed, resolution, path):
+    import bpy
+
+    from addon import cli
+
+    scene = build()
+    scene.render.resolution_x, scene.render.resolution_y = resolution
+    scene.render.resolution_percentage = 100
+    scene.render.engine = engine
+    args = type("Args", (), dict(samples=samples, time_limit=None, seed=seed, max_bounces=2))
+    if engine == "CYCLES":
+        cli._configure_cycles(scene, args)
+    else:
+        scene.specula.samples, scene.specula.seed, scene.specula.max_bounces = samples, seed, 2
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.image_settings.color_depth = "32"
+    scene.render.filepath, scene.render.use_file_extension = path, False
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    px = np.zeros(resolution[0] * resolution[1] * 4, np.float32)
+    image.pixels.foreach_get(px)
+    bpy.data.images.remove(image)
+    return px.reshape(resolution[1], resolution[0], 4)[..., :3].astype(np.float64)
+
+
+def main(argv=None) -> int:
+    import tempfile
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--scenes", nargs="*", default=list(SCENES))
+    ap.add_argument("--samples", type=int, default=16)
+    ap.add_argument("--seeds", type=int, default=4)
+    ap.add_argument("--reference-samples", type=int, default=2048)
+    ap.add_argument("--resolution", default="64x48")
+    ap.add_argument("--out", default="light_choice.json")
+    args = ap.parse_args(argv)
+    res = tuple(int(v) for v in args.resolution.split("x"))
+    tmp = tempfile.mkdtemp(prefix="light_choice_")
+    report = {}
+    for name in args.scenes:
+        build = SCENES[name]
+        half = args.reference_samples // 2
+        r1 = render(build, "CYCLES", half, 1001, res, os.path.join(tmp, "r1.exr"))
+        r2 = render(build, "CYCLES", half, 1002, res, os.path.join(tmp, "r2.exr"))
+        ref = 0.5 * (r1 + r2)
+        # Each half's error variance is twice the mean's: the mean's own variance per pixel
+        # is mean((r1 - r2)^2) / 4.
+        ref_var = float(np.mean((r1 - r2) ** 2)) / 4.0
+        row = {}
+        for engine in ("CYCLES", "SPECULA"):
+            mse = [float(np.mean((render(build, engine, args.samples, s + 1, res,
+                                         os.path.join(tmp, f"{engine}{s}.exr")) - ref) ** 2))
+                   - ref_var for s in range(args.seeds)]
+            row[engine.lower()] = float(np.mean(mse))
+        row["ratio"] = row["specula"] / row["cycles"]
+        row["reference_variance"] = ref_var
+        report[name] = row
+        print(f"{name:14s} {args.samples} spp  MSE Specula {row['specula']:.4g}  "
+              f"Cycles {row['cycles']:.4g}  ratio {row['ratio']:.2f}  "
+              f"(reference's own {ref_var:.2g})", flush=True)
+    os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(OUT, args.out), "w") as f:
+        json.dump(dict(args=vars(args), scenes=report), f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
