@@ -52,11 +52,13 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
+                  "HAS_LIGHT_IMPORTANCE",
                   "HAS_LIGHT_TRACING", "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
 HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
 HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
+HAS_LIGHT_IMPORTANCE = True
 HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
@@ -89,7 +91,7 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # the lens point to where the camera ray starts (per row).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
-                            "camera_near")
+                            "camera_near prev_normal")
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side), the specular lobes' normal m, wo, front face, triangle, barycentrics,
@@ -190,7 +192,8 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                 continue
             w = 1.0
             if mis:
-                pdf_l = emitter_pmf(ox, oy, oz, num_tri + j, em) * lights.object_pdf(
+                pdf_l = emitter_pmf(ox, oy, oz, paths.prev_normal[i], num_tri + j,
+                                    em) * lights.object_pdf(
                     j, ox, oy, oz, dx, dy, dz, th, L)
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
             _add(paths, row, t0, t1, t2, l0, l1, l2, w)
@@ -203,7 +206,7 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                 continue
             w = 1.0
             if mis:
-                pdf_l = emitter_pmf(ox, oy, oz, num_tri + j, em) / (
+                pdf_l = emitter_pmf(ox, oy, oz, paths.prev_normal[i], num_tri + j, em) / (
                     2.0 * np.pi * (1.0 - cos_half))
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
             sr = L[j, _SUN_RADIANCE]
@@ -226,8 +229,8 @@ def handle_escaped(i, row, sc, paths, mis):
         w = 1.0
         if mis:
             pdf_l = emitter_pmf(paths.o64[i, 0], paths.o64[i, 1], paths.o64[i, 2],
-                                sc.emitters.env_entry, sc.emitters) * environment.pdf(u_e, v_e,
-                                                                                      env)
+                                paths.prev_normal[i], sc.emitters.env_entry,
+                                sc.emitters) * environment.pdf(u_e, v_e, env)
             w = power_heuristic(paths.prev_pdf[i], pdf_l)
         _add(paths, row, t0, t1, t2, l0, l1, l2, w)
     elif HAS_WORLD_COLOUR:
@@ -289,8 +292,8 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
         entry = em.entry_of_triangle[x.f]
         pm = 0.0
         if entry >= 0:
-            pm = emitter_pmf(x.px + x.wox * x.t, x.py + x.woy * x.t, x.pz + x.woz * x.t, entry,
-                             em)
+            pm = emitter_pmf(x.px + x.wox * x.t, x.py + x.woy * x.t, x.pz + x.woz * x.t,
+                             paths.prev_normal[i], entry, em)
         pdf_l = pm / em.area_by_triangle[x.f] * x.t * x.t / max(cos_l, 1e-300)
         w = power_heuristic(paths.prev_pdf[i], pdf_l)
     elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
@@ -319,11 +322,16 @@ def russian_roulette(depth, t0, t1, t2, pseed, rev_sample):
     return True, t0 / q, t1 / q, t2 / q
 
 
-def emitter_pmf(px, py, pz, entry, em):
-    """lights.entry_pmf on the Emitters: the global distribution alone without a grid."""
-    if HAS_LIGHT_GRID:
+def emitter_pmf(px, py, pz, normal, entry, em):
+    """The probability of choosing emitter `entry` from point p whose shading normal (on
+    the side it reflects to; zeros: any side) is `normal`: the many-lights grid's, the few
+    lights' importance, or the global distribution alone."""
+    if HAS_LIGHT_GRID and em.grid > 0:
         return lights.entry_pmf(px, py, pz, entry, em.pmf, em.grid, em.lo, em.cell,
                                 em.local_pmf, em.has_mass)
+    if HAS_LIGHT_IMPORTANCE and len(em.bounds) > 0:
+        return lights.importance_pmf(px, py, pz, normal[0], normal[1], normal[2], entry,
+                                     em.pmf, em.bounds)
     return em.pmf[entry]
 
 
@@ -333,9 +341,12 @@ def sample_emitter(x, u_sel, ua, ub, em):
     pdf), combined pdf, length scale at the light for the shadow ray's offset)."""
     if len(em.pmf) == 0:  # the generic kernel on a scene without emitters
         return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if HAS_LIGHT_GRID:
+    if HAS_LIGHT_GRID and em.grid > 0:
         e, p_sel = lights.choose(x.px, x.py, x.pz, u_sel, em.pmf, em.cdf, em.grid, em.lo,
                                  em.cell, em.local_pmf, em.local_cdf_flat, em.has_mass)
+    elif HAS_LIGHT_IMPORTANCE and len(em.bounds) > 0:
+        e, p_sel = lights.choose_by_importance(x.px, x.py, x.pz, x.sx, x.sy, x.sz, u_sel,
+                                               em.pmf, em.cdf, em.bounds)
     else:
         e = lights.sample_cdf(em.cdf, u_sel)
         p_sel = em.pmf[e]
@@ -509,6 +520,10 @@ def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
     paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
     paths.throughput[out, 0], paths.throughput[out, 1], paths.throughput[out, 2] = t0, t1, t2
     paths.prev_pdf[out] = pdf
+    # Light choice by importance weighs emitters by the cosine at this vertex's shading
+    # normal (on wo's side: the NEE vertices only reflect); MIS at the next hit re-weighs.
+    paths.prev_normal[out, 0], paths.prev_normal[out, 1], paths.prev_normal[out, 2] = (
+        x.sx, x.sy, x.sz)
     paths.live[out] = row
 
 

@@ -28,7 +28,7 @@ from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
                          SceneData, ShadowRays)
 from .jit import INLINE
-from .lights import COLUMNS, Emitters
+from .lights import BOUND_COLUMNS, COLUMNS, Emitters
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
 
@@ -224,7 +224,8 @@ def _generic_emitters(em, num_triangles: int) -> Emitters:
         return Emitters(z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z,
                         np.zeros(1, np.bool_), np.full(num_triangles, -1, np.int64),
                         np.ones(num_triangles), z3, z3, z3, z3, z, z3, z,
-                        np.zeros((0, COLUMNS)), stand_in_env, -1)
+                        np.zeros((0, COLUMNS)), stand_in_env, -1,
+                        np.zeros((0, BOUND_COLUMNS)))
     if em.environment is None:
         em = em._replace(environment=stand_in_env)
     return em
@@ -254,7 +255,7 @@ class Tracer:
                       np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
                       np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
                       np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
-                      np.zeros(n), np.ones(n), np.zeros(n))
+                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)))
         t0 = time.perf_counter()
         k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
                                replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,

@@ -34,8 +34,10 @@ import numpy as np
 from . import environment
 from .environment import EnvironmentMap
 from .jit import INLINE, JIT, njit
-from .sampling import (Distribution1D, build_frame, concentric_disk, cross_rows, sample_cdf,
-                       uniform_cone, uniform_cone_pdf, uniform_triangle)
+from .sampling import (MIN_SOLID_ANGLE, Distribution1D, build_frame, concentric_disk,
+                       cross_rows, sample_cdf, spherical_rectangle,
+                       spherical_rectangle_solid_angle, uniform_cone, uniform_cone_pdf,
+                       uniform_triangle)
 from .scene import Scene
 
 POINT, SPOT, SUN, AREA = 0, 1, 2, 3
@@ -44,6 +46,16 @@ ELLIPTIC_SHAPES = ("DISK", "ELLIPSE")
 
 
 LOCAL_WEIGHT = 0.75  # the chance of the local distribution where a voxel has one
+# With few emitters, the chance of choosing by each one's importance at the shading point
+# itself (the rest by power: never 0 where the bound's heuristics are wrong).
+IMPORTANCE_WEIGHT = 0.99
+
+# Per-entry bounds for that choice (LightSampler.bounds): a bounding sphere (centre,
+# radius), the importance weight (flux over 4 pi, or a distant light's irradiance), the
+# emission axis, the emission kind, and a spot's cos(half cone).
+(_B_CENTRE, _B_RADIUS, _B_WEIGHT, _B_AXIS, _B_KIND, _B_COS_SPOT, BOUND_COLUMNS) = (
+    0, 3, 4, 5, 8, 9, 10)
+OMNI, ONE_SIDED, TWO_SIDED, CONE, DISTANT = 0, 1, 2, 3, 4
 
 # The emitters as the kernel reads them (LightSampler.data()):
 #   pmf, cdf (k,): the global choice by power; grid (voxels per axis, 0: none), grid_lo (3,),
@@ -51,9 +63,10 @@ LOCAL_WEIGHT = 0.75  # the chance of the local distribution where a voxel has on
 #   entry_of_triangle, area_by_triangle (t,); per emissive triangle v0, e1, e2, normal (k, 3),
 #   area (k,), radiance (k, 3), scale (k,); objects (j, COLUMNS); environment (None or
 #   environment.Environment) and its entry (-1: none).
+#   bounds (k, BOUND_COLUMNS) or (0, BOUND_COLUMNS): the choice by importance at the point.
 Emitters = namedtuple("Emitters", "pmf cdf grid lo cell local_pmf local_cdf_flat has_mass "
                                   "entry_of_triangle area_by_triangle v0 e1 e2 normal area "
-                                  "radiance scale objects environment env_entry")
+                                  "radiance scale objects environment env_entry bounds")
 
 (_TYPE, _POWER, _CENTRE, _AXIS_U, _AXIS_V, _DIRECTION, _LOCAL, _RADIUS, _SOFT, _COS_SPOT,
  _SPOT_SMOOTH, _COS_ANGLE, _SUN_RADIANCE, _LEN_U, _LEN_V, _ELLIPTIC, _AREA_SIZE, _SPREAD_ON,
@@ -261,7 +274,6 @@ def sample_object(j, px, py, pz, ua, ub, L):
     radiance / solid-angle pdf per channel, pdf (inf for delta lights))."""
     typ = L[j, _TYPE]
     p0, p1, p2 = L[j, _POWER], L[j, _POWER + 1], L[j, _POWER + 2]
-    v0 = v1 = v2 = 0.0
     if typ == POINT or typ == SPOT:
         return _sample_point_light(j, px, py, pz, ua, ub, L)
     if typ == SUN:
@@ -272,7 +284,16 @@ def sample_object(j, px, py, pz, ua, ub, L):
             k = L[j, _SUN_RADIANCE] / pdf
             return wx, wy, wz, np.inf, p0 * k, p1 * k, p2 * k, pdf
         return ax, ay, az, np.inf, p0, p1, p2, np.inf
-    # Area light: a uniform point on the rectangle or ellipse.
+    solid = _rectangle_solid_angle(j, px, py, pz, L)
+    if solid > 0.0:
+        # A rectangle seen from its front: uniform in the solid angle it subtends, as Cycles
+        # samples it (the 1 / d^2 of area sampling is most of the noise near the light).
+        yx, yy, yz, _ = spherical_rectangle(
+            px, py, pz, L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2], L[j, _AXIS_U],
+            L[j, _AXIS_U + 1], L[j, _AXIS_U + 2], L[j, _AXIS_V], L[j, _AXIS_V + 1],
+            L[j, _AXIS_V + 2], L[j, _LEN_U], L[j, _LEN_V], ua, ub)
+        return _area_light_toward(j, px, py, pz, yx, yy, yz, 1.0 / solid, L)
+    # Otherwise a uniform point on the rectangle or ellipse.
     if L[j, _ELLIPTIC] != 0:
         la, lb = concentric_disk(ua, ub)
         la, lb = la * 0.5, lb * 0.5
@@ -282,19 +303,46 @@ def sample_object(j, px, py, pz, ua, ub, L):
     yx = L[j, _CENTRE] + ka * L[j, _AXIS_U] + kb * L[j, _AXIS_V]
     yy = L[j, _CENTRE + 1] + ka * L[j, _AXIS_U + 1] + kb * L[j, _AXIS_V + 1]
     yz = L[j, _CENTRE + 2] + ka * L[j, _AXIS_U + 2] + kb * L[j, _AXIS_V + 2]
+    return _area_light_toward(j, px, py, pz, yx, yy, yz, -1.0, L)
+
+
+@njit(**INLINE)
+def _area_light_toward(j, px, py, pz, yx, yy, yz, pdf_solid, L):
+    """Area light j's sample at point y seen from p: (wi, distance, radiance / pdf, pdf),
+    with the solid-angle pdf given, or (pdf_solid < 0) that of uniform area sampling."""
     tx, ty, tz = yx - px, yy - py, yz - pz
     d = math.sqrt(tx * tx + ty * ty + tz * tz)
     dn = d if d > 0 else 1.0
     wx, wy, wz = tx / dn, ty / dn, tz / dn
     cos_l = -(wx * L[j, _DIRECTION] + wy * L[j, _DIRECTION + 1] + wz * L[j, _DIRECTION + 2])
-    pdf = 0.0
+    v0 = v1 = v2 = pdf = 0.0
     area = L[j, _AREA_SIZE]
     if cos_l > 0 and d > 0 and area > 0:
-        pdf = d * d / max(area * cos_l, 1e-300)
+        pdf = pdf_solid if pdf_solid >= 0.0 else d * d / max(area * cos_l, 1e-300)
         f = L[j, _FACTOR] * spread_attenuation(cos_l, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
-                                    L[j, _SPREAD_NORM])
-        v0, v1, v2 = p0 * f / pdf, p1 * f / pdf, p2 * f / pdf
+                                    L[j, _SPREAD_NORM]) / pdf
+        v0, v1, v2 = L[j, _POWER] * f, L[j, _POWER + 1] * f, L[j, _POWER + 2] * f
     return wx, wy, wz, d, v0, v1, v2, pdf
+
+
+@njit(**INLINE)
+def _rectangle_solid_angle(j, ox, oy, oz, L):
+    """The solid angle area light j subtends at o, when it is sampled that way (a
+    rectangle with square axes, o in front of it, not too small); 0 otherwise."""
+    if L[j, _ELLIPTIC] != 0:
+        return 0.0
+    if abs(L[j, _AXIS_U] * L[j, _AXIS_V] + L[j, _AXIS_U + 1] * L[j, _AXIS_V + 1]
+           + L[j, _AXIS_U + 2] * L[j, _AXIS_V + 2]) > 1e-9:
+        return 0.0  # sheared: not a rectangle
+    front = ((ox - L[j, _CENTRE]) * L[j, _DIRECTION] + (oy - L[j, _CENTRE + 1])
+             * L[j, _DIRECTION + 1] + (oz - L[j, _CENTRE + 2]) * L[j, _DIRECTION + 2])
+    if not (front > 0.0 and L[j, _LEN_U] > 0.0 and L[j, _LEN_V] > 0.0):
+        return 0.0
+    solid = spherical_rectangle_solid_angle(
+        ox, oy, oz, L[j, _CENTRE], L[j, _CENTRE + 1], L[j, _CENTRE + 2], L[j, _AXIS_U],
+        L[j, _AXIS_U + 1], L[j, _AXIS_U + 2], L[j, _AXIS_V], L[j, _AXIS_V + 1],
+        L[j, _AXIS_V + 2], L[j, _LEN_U], L[j, _LEN_V])
+    return solid if solid > MIN_SOLID_ANGLE else 0.0
 
 
 @njit(**INLINE)
@@ -303,6 +351,9 @@ def object_pdf(j, ox, oy, oz, dx, dy, dz, t, L):
     intersectable light j, hit at distance t."""
     typ = L[j, _TYPE]
     if typ == AREA:
+        solid = _rectangle_solid_angle(j, ox, oy, oz, L)
+        if solid > 0.0:
+            return 1.0 / solid
         cos_a = -(dx * L[j, _DIRECTION] + dy * L[j, _DIRECTION + 1] + dz * L[j, _DIRECTION + 2])
         return t * t / max(L[j, _AREA_SIZE] * cos_a, 1e-300)
     tx, ty, tz = L[j, _CENTRE] - ox, L[j, _CENTRE + 1] - oy, L[j, _CENTRE + 2] - oz
@@ -379,16 +430,20 @@ class LightSampler:
     """All emitters of a scene, chosen by a mixture of two distributions.
 
     Entries 0..k-1 are emissive triangles, then light objects, then the environment.
-    With few emitters the choice is by power alone. With many, a voxel grid over the
-    scene holds, per voxel, a distribution by power / distance^2 from the voxel (so a
-    point picks the lights that matter to it); a point samples that local distribution
-    with probability LOCAL_WEIGHT and the global power distribution otherwise. Both are
-    known at any point, so `pmf(points, entries)` is exact for MIS.
+    With few emitters (2 to MIN_ENTRIES - 1), each shading point weighs every one by its
+    importance there (`importance`: intensity toward the point over d^2, bounded cosines
+    at both ends, as the leaves of Cycles' light tree), with probability
+    IMPORTANCE_WEIGHT, and by power otherwise. With many, a voxel grid over the scene
+    holds, per voxel, a distribution by power / distance^2 from the voxel (so a point
+    picks the lights that matter to it); a point samples that local distribution with
+    probability LOCAL_WEIGHT and the global power distribution otherwise. Each choice's
+    probability is known at any point (and normal), so MIS is exact.
     """
 
     LOCAL_WEIGHT = LOCAL_WEIGHT
     GRID = 8  # voxels per axis
     MIN_ENTRIES, MAX_ENTRIES = 8, 20_000  # the grid is (GRID^3, entries) floats
+    IMPORTANCE = True  # fewer entries: chosen by their importance at each point (bounds)
 
     def __init__(self, scene: Scene):
         emission = scene.materials.emission[scene.material_index]
@@ -437,6 +492,37 @@ class LightSampler:
         self.scene_radius = radius
         if self.MIN_ENTRIES <= self.num_entries <= self.MAX_ENTRIES and len(v):
             self._build_grid(v.reshape(-1, 3), weights, centres, distant)
+        elif self.IMPORTANCE and 2 <= self.num_entries < self.MIN_ENTRIES:
+            self.bounds = self._bounds(weights, centres, distant)
+
+    def _bounds(self, weights, centres, distant):
+        """The few emitters' bounds for the choice by importance at each point (as a light
+        tree's leaves weigh their lights, Cycles' kernel/light/tree.h): the intensity on
+        the emitter's axis over d^2, d no less than the bound's radius, times its cosine
+        toward the point bounded over its sphere (0 behind a one-sided area light, outside
+        a spot's cone)."""
+        k, o = self.num_triangles, self.objects
+        b = np.zeros((self.num_entries, BOUND_COLUMNS))
+        b[:, _B_CENTRE:_B_CENTRE + 3] = centres
+        if k:
+            b[:k, _B_RADIUS] = np.linalg.norm(self.corners - centres[:k, None], axis=2).max(1)
+            b[:k, _B_AXIS:_B_AXIS + 3] = self.normal
+            b[:k, _B_KIND] = TWO_SIDED
+        j = slice(k, k + o.count)
+        b[j, _B_AXIS:_B_AXIS + 3] = o.direction
+        b[j, _B_COS_SPOT] = o.cos_half_spot
+        b[j, _B_RADIUS] = np.where(o.type == AREA, 0.5 * np.hypot(o.len_u, o.len_v), o.radius)
+        b[j, _B_KIND] = np.select([o.type == SUN, o.type == AREA, o.type == SPOT],
+                                  [DISTANT, ONE_SIDED, CONE], OMNI)
+        b[distant, _B_KIND] = DISTANT
+        # The weight is the intensity toward the emitter's axis: flux / 4 pi for a point or
+        # spot, / pi for a one-sided cosine emitter, / 2 pi for a two-sided one; distant
+        # emitters weigh their irradiance.
+        per_sr = np.select([b[:, _B_KIND] == ONE_SIDED, b[:, _B_KIND] == TWO_SIDED],
+                           [np.pi, 2.0 * np.pi], 4.0 * np.pi)
+        b[:, _B_WEIGHT] = weights / per_sr
+        b[distant, _B_WEIGHT] = weights[distant] / (np.pi * self.scene_radius**2)
+        return b
 
     def _build_grid(self, points, weights, centres, distant):
         lo, hi = points.min(axis=0), points.max(axis=0)
@@ -473,10 +559,99 @@ class LightSampler:
             grid = (0, np.zeros(3), np.ones(3), np.zeros((1, self.num_entries)), np.zeros(0),
                     np.zeros(1, np.bool_))
         env = self.environment.data() if self.environment is not None else None
+        bounds = getattr(self, "bounds", np.zeros((0, BOUND_COLUMNS)))
         return Emitters(self.distribution.pmf, self.distribution.cdf, *grid,
                         self.entry_of_triangle, self.area_by_triangle, self.v0, self.e1, self.e2,
                         self.normal, self.area, self.radiance, self.scale,
-                        self.objects.table(), env, int(self.environment_index))
+                        self.objects.table(), env, int(self.environment_index), bounds)
+
+
+@njit(**INLINE)
+def _cos_less(cos_t, cos_a, sin_a):
+    """cos(max(theta - alpha, 0)) from cos theta and alpha's cosine and sine."""
+    if cos_t >= cos_a:
+        return 1.0
+    return cos_t * cos_a + math.sqrt(max(1.0 - cos_t * cos_t, 0.0)) * sin_a
+
+
+@njit(**INLINE)
+def importance(px, py, pz, nx, ny, nz, e, bounds):
+    """Entry e's importance at point p with shading normal n (zeros: no side; see
+    LightSampler._bounds): an estimate of the irradiance it can bring, up to a common
+    factor, 0 only where it brings none."""
+    kind = bounds[e, _B_KIND]
+    w = bounds[e, _B_WEIGHT]
+    if kind == DISTANT:
+        return w
+    dx, dy, dz = px - bounds[e, 0], py - bounds[e, 1], pz - bounds[e, 2]
+    r = bounds[e, _B_RADIUS]
+    d2 = dx * dx + dy * dy + dz * dz
+    if d2 <= r * r:  # inside the bound: every direction may matter
+        return w / max(r * r, 1e-300)
+    d = math.sqrt(d2)
+    sin_a = r / d  # the bound's angular radius alpha, seen from p
+    cos_a = math.sqrt(max(1.0 - sin_a * sin_a, 0.0))
+    # The receiver's cosine toward the bound, at its most favourable point.
+    if nx != 0.0 or ny != 0.0 or nz != 0.0:
+        cos_i = _cos_less(-(dx * nx + dy * ny + dz * nz) / d, cos_a, sin_a)
+        if cos_i <= 0.0:
+            return 0.0
+        w *= cos_i
+    if kind != OMNI:
+        # The emitter's: between its axis and p seen from the centre, less alpha.
+        cos_t = (dx * bounds[e, 5] + dy * bounds[e, 6] + dz * bounds[e, 7]) / d
+        if kind == TWO_SIDED:
+            cos_t = abs(cos_t)
+        cos_min = _cos_less(cos_t, cos_a, sin_a)
+        if kind == CONE:
+            if cos_min < bounds[e, _B_COS_SPOT]:
+                return 0.0
+        elif cos_min <= 0.0:
+            return 0.0
+        else:
+            w *= cos_min
+    return w / max(d2, 1e-300)
+
+
+@njit(**JIT)
+def importance_pmf(px, py, pz, nx, ny, nz, entry, pmf, bounds):
+    """The probability of choosing `entry` from p (shading normal n) among few emitters:
+    by importance at p with probability IMPORTANCE_WEIGHT, by power otherwise."""
+    total = 0.0
+    for e in range(len(pmf)):
+        total += importance(px, py, pz, nx, ny, nz, e, bounds)
+    if not total > 0.0:
+        return pmf[entry]
+    a = IMPORTANCE_WEIGHT
+    return a * importance(px, py, pz, nx, ny, nz, entry, bounds) / total + (1.0 - a) * pmf[
+        entry]
+
+
+@njit(**JIT)
+def choose_by_importance(px, py, pz, nx, ny, nz, u, pmf, cdf, bounds):
+    """An emitter chosen with u among few from point p, shading normal n: (entry,
+    probability)."""
+    total = 0.0
+    for e in range(len(pmf)):
+        total += importance(px, py, pz, nx, ny, nz, e, bounds)
+    a = IMPORTANCE_WEIGHT if total > 0.0 else 0.0
+    if u < a:
+        target = (u / a) * total
+        acc, k = 0.0, len(pmf) - 1
+        for e in range(len(pmf)):
+            acc += importance(px, py, pz, nx, ny, nz, e, bounds)
+            if target < acc:
+                k = e
+                break
+        # The last entry with importance, if rounding ran past the total.
+        while importance(px, py, pz, nx, ny, nz, k, bounds) <= 0.0 and k > 0:
+            k -= 1
+    else:
+        k = sample_cdf(cdf, (u - a) / (1.0 - a) if a > 0.0 else u)
+    p = pmf[k]
+    if a > 0.0:
+        p = a * importance(px, py, pz, nx, ny, nz, k, bounds) / total + (1.0 - a) * pmf[k]
+    return k, p
 
 
 @njit(**JIT)

@@ -88,9 +88,10 @@ class Plan:
             s.append("trace light paths through specular chains to the camera")
         return s
 
-    def kernel_constants(self, light_grid: bool) -> dict:
+    def kernel_constants(self, light_grid: bool, light_importance: bool = False) -> dict:
         """The compile-time constants of this plan's kernel (integrator.PLAN_CONSTANTS;
-        light_grid: the emitters have a many-lights grid)."""
+        light_grid: the emitters have a many-lights grid; light_importance: few emitters,
+        chosen by their importance at each point)."""
         return dict(
             HAS_DIFFUSE=self.diffuse, HAS_MIRROR=self.mirror, HAS_METAL=self.metal,
             HAS_GLASS=self.glass, HAS_ROUGH=self.principled or self.glossy, HAS_DOF=self.dof,
@@ -101,6 +102,7 @@ class Plan:
             HAS_ENVIRONMENT=self.environment,
             HAS_WORLD_COLOUR=self.world_light and not self.environment,
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
+            HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 

@@ -152,7 +152,8 @@ class Kernels:
         self.scene, self.settings, self.plan = scene, settings, plan
         self.accel, self.emitters, self.camera, self.timers = accel, emitters, camera, timers
         grid = emitters is not None and hasattr(emitters, "local_pmf")
-        self.constants = plan.kernel_constants(grid)
+        self.constants = plan.kernel_constants(grid, emitters is not None
+                                               and hasattr(emitters, "bounds"))
         self.constants["PROFILE"] = self.profile
         generic = kernels.generic_constants(plan.fresnel == "exact")
         generic["PROFILE"] = self.profile

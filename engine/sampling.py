@@ -256,6 +256,75 @@ def uniform_cone_pdf(cos_max):
 
 
 # -------------------------------------------------------------------- MIS
+# Below this solid angle a rectangle is sampled by area: the spherical excess is a
+# difference of angles near 2 pi and loses its digits.
+MIN_SOLID_ANGLE = 1e-5
+
+
+@njit(**JIT)
+def _rectangle_frame(ox, oy, oz, cx, cy, cz, ux, uy, uz, vx, vy, vz, len_u, len_v):
+    """The rectangle (centre c, unit orthogonal axes u, v, side lengths) in the local frame
+    of Urena et al. 2013 seen from o: (x0, x1, y0, y1, z0 <= 0, solid angle, the four
+    constants the sampling reuses: b0, b1, k)."""
+    dx = cx - 0.5 * (len_u * ux + len_v * vx) - ox
+    dy = cy - 0.5 * (len_u * uy + len_v * vy) - oy
+    dz = cz - 0.5 * (len_u * uz + len_v * vz) - oz
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    z0 = dx * nx + dy * ny + dz * nz
+    if z0 > 0.0:
+        z0 = -z0
+    x0, y0 = dx * ux + dy * uy + dz * uz, dx * vx + dy * vy + dz * vz
+    x1, y1 = x0 + len_u, y0 + len_v
+    if not z0 < 0.0:  # o in the rectangle's plane: it subtends nothing
+        return x0, x1, y0, y1, z0, 0.0, 0.0, 0.0, 0.0
+    # The z parts of the unit normals of the spherical rectangle's four great-circle edges
+    # (cross products of successive corners; the angles below need only these).
+    n0z = -y0 / math.sqrt(z0 * z0 + y0 * y0)
+    n1z = x1 / math.sqrt(z0 * z0 + x1 * x1)
+    n2z = y1 / math.sqrt(z0 * z0 + y1 * y1)
+    n3z = -x0 / math.sqrt(z0 * z0 + x0 * x0)
+    # Internal angles between successive edges; the solid angle is their spherical excess.
+    g0 = math.acos(min(max(-(n0z * n1z), -1.0), 1.0))
+    g1 = math.acos(min(max(-(n1z * n2z), -1.0), 1.0))
+    g2 = math.acos(min(max(-(n2z * n3z), -1.0), 1.0))
+    g3 = math.acos(min(max(-(n3z * n0z), -1.0), 1.0))
+    k = 2.0 * math.pi - g2 - g3
+    return x0, x1, y0, y1, z0, max(g0 + g1 - k, 0.0), n0z, n2z, k
+
+
+@njit(**JIT)
+def spherical_rectangle_solid_angle(ox, oy, oz, cx, cy, cz, ux, uy, uz, vx, vy, vz, len_u,
+                                    len_v):
+    """The solid angle the rectangle subtends at o."""
+    return _rectangle_frame(ox, oy, oz, cx, cy, cz, ux, uy, uz, vx, vy, vz, len_u, len_v)[5]
+
+
+@njit(**JIT)
+def spherical_rectangle(ox, oy, oz, cx, cy, cz, ux, uy, uz, vx, vy, vz, len_u, len_v, ua, ub):
+    """A point on the rectangle uniform in the solid angle it subtends at o (Urena,
+    Fajardo and King 2013): (point, solid angle; the density is 1 / solid angle)."""
+    x0, x1, y0, y1, z0, solid, b0, b1, k = _rectangle_frame(
+        ox, oy, oz, cx, cy, cz, ux, uy, uz, vx, vy, vz, len_u, len_v)
+    au = ua * solid + k
+    fu = (math.cos(au) * b0 - b1) / math.sin(au)
+    cu = 1.0 / math.sqrt(fu * fu + b0 * b0)
+    if fu <= 0.0:
+        cu = -cu
+    cu = min(max(cu, -1.0), 1.0)
+    xu = -(cu * z0) / max(math.sqrt(max(1.0 - cu * cu, 0.0)), 1e-300)
+    xu = min(max(xu, x0), x1)
+    d = math.sqrt(xu * xu + z0 * z0)
+    h0 = y0 / math.sqrt(d * d + y0 * y0)
+    h1 = y1 / math.sqrt(d * d + y1 * y1)
+    hv = h0 + ub * (h1 - h0)
+    hv2 = hv * hv
+    yv = hv * d / math.sqrt(1.0 - hv2) if hv2 < 1.0 - 1e-12 else y1
+    yv = min(max(yv, y0), y1)
+    # Back to world space from the corner.
+    a, b = xu - x0 - 0.5 * len_u, yv - y0 - 0.5 * len_v
+    return (cx + a * ux + b * vx, cy + a * uy + b * vy, cz + a * uz + b * vz, solid)
+
+
 @njit(**JIT)
 def power_heuristic(a, b):
     """MIS weight of strategy a against b (beta = 2), safe for zero and infinite pdfs (an

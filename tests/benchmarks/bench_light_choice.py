@@ -2,9 +2,11 @@
 
     .venv/bin/python -m tests.benchmarks.bench_light_choice [--scenes unequal many]
         [--samples 16] [--seeds 4] [--reference-samples 2048] [--resolution 64x48]
+    [--replicates R]
 
-Scenes, built through Blender (the same .blend state for both engines):
-- "unequal": a room-sized floor with two boxes, a 1000 W point light 4 m up at one end and
+Scenes, built through Blender (the same .blend state for both engines;
+tests/addon/test_many_lights.py):
+- "unequal": a floor, a wall and two blocks, a 1000 W point light 4 m up at one end and
   a 25 W 0.5 m square area light 0.6 m above the floor at the other, where it outshines
   the point light (issue 16, point 5);
 - "unequal_area": the same without the point light (each light alone, for scale);
@@ -15,14 +17,14 @@ For each: a high-sample Cycles reference (its own seed), then Cycles and Specula
 `--samples`, `--seeds` seeds each; the mean squared error against the reference, minus the
 reference's own variance (estimated from two half-sample references), per engine, and the
 ratio Specula / Cycles ("variance per sample" ratio: equal samples). Writes
-out/bench/light_choice.json. A benchmark: it reports, never asserts.
+out/bench/light_choice.json, and per scene out/bench/light_choice_<scene>.png: the
+reference beside each engine's per-pixel RMS error. A benchmark: it reports, never asserts.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 
@@ -35,49 +37,13 @@ for p in (REPO, os.path.join(REPO, "tests", "addon")):
 
 OUT = os.path.join(REPO, "out", "bench")
 
-
-def _box(bpy, name, centre, size, mat):
-    cx, cy, cz = centre
-    sx, sy, sz = (0.5 * s for s in size)
-    v = [(cx + x * sx, cy + y * sy, cz + z * sz) for x in (-1, 1) for y in (-1, 1)
-         for z in (-1, 1)]
-    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    me = bpy.data.meshes.new(name)
-    me.from_pydata(v, [], faces)
-    me.materials.append(mat)
-    bpy.context.scene.collection.objects.link(bpy.data.objects.new(name, me))
+from tests.imageio import write_png  # noqa: E402
 
 
 def build_unequal(point=True, area=True):
-    import bpy
-    from addon_helpers import node_material
+    from test_many_lights import build_unequal_scene
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    cam = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    cam.location, cam.rotation_euler, cam.data.lens = (0, -9, 5), (math.radians(62), 0, 0), 28
-    grey = node_material("grey", "ShaderNodeBsdfDiffuse", Color=(0.6, 0.6, 0.6, 1))[0]
-    _box(bpy, "floor", (0, 0, -0.05), (12, 10, 0.1), grey)
-    _box(bpy, "wall", (0, 4, 1.5), (12, 0.2, 3), grey)
-    _box(bpy, "block_a", (-2.5, 0, 0.5), (1, 1, 1), grey)
-    _box(bpy, "block_b", (2.8, 0.8, 0.35), (0.7, 0.7, 0.7), grey)
-    if point:
-        light = bpy.data.lights.new("Sun-like point", "POINT")
-        light.energy, light.shadow_soft_size = 1000.0, 0.1
-        obj = bpy.data.objects.new("Point 1000 W", light)
-        obj.location = (-4.5, -1, 4)
-        scene.collection.objects.link(obj)
-    if area:
-        light = bpy.data.lights.new("Panel", "AREA")
-        light.energy, light.size = 25.0, 0.5
-        obj = bpy.data.objects.new("Area 25 W", light)
-        obj.location = (3.5, -0.5, 0.6)
-        scene.collection.objects.link(obj)
-    scene.world = bpy.data.worlds.new("W")
-    scene.world.color = (0, 0, 0)
-    return scene
+    return build_unequal_scene(point, area)
 
 
 def build_many():
@@ -92,7 +58,7 @@ SCENES = {"unequal": build_unequal,
           "many": build_many}
 
 
-def render(build, engine, samples, seed, resolution, path):
+def render(build, engine, samples, seed, resolution, path, replicates=0):
     import bpy
 
     from addon import cli
@@ -106,6 +72,8 @@ def render(build, engine, samples, seed, resolution, path):
         cli._configure_cycles(scene, args)
     else:
         scene.specula.samples, scene.specula.seed, scene.specula.max_bounces = samples, seed, 2
+        if replicates:
+            scene.specula.replicates = replicates
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
     scene.render.filepath, scene.render.use_file_extension = path, False
@@ -120,6 +88,11 @@ def render(build, engine, samples, seed, resolution, path):
 def main(argv=None) -> int:
     import tempfile
 
+    import bpy  # noqa: F401 - before the add-on
+
+    import addon
+
+    addon.register()
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--samples", type=int, default=16)
@@ -127,6 +100,8 @@ def main(argv=None) -> int:
     ap.add_argument("--reference-samples", type=int, default=2048)
     ap.add_argument("--resolution", default="64x48")
     ap.add_argument("--out", default="light_choice.json")
+    ap.add_argument("--replicates", type=int, default=0,
+                    help="Specula's replicates (0: the scene's default)")
     args = ap.parse_args(argv)
     res = tuple(int(v) for v in args.resolution.split("x"))
     tmp = tempfile.mkdtemp(prefix="light_choice_")
@@ -140,12 +115,18 @@ def main(argv=None) -> int:
         # Each half's error variance is twice the mean's: the mean's own variance per pixel
         # is mean((r1 - r2)^2) / 4.
         ref_var = float(np.mean((r1 - r2) ** 2)) / 4.0
-        row = {}
+        row, maps = {}, [ref]
         for engine in ("CYCLES", "SPECULA"):
-            mse = [float(np.mean((render(build, engine, args.samples, s + 1, res,
-                                         os.path.join(tmp, f"{engine}{s}.exr")) - ref) ** 2))
-                   - ref_var for s in range(args.seeds)]
-            row[engine.lower()] = float(np.mean(mse))
+            sq = np.mean([(render(build, engine, args.samples, s + 1, res,
+                                  os.path.join(tmp, f"{engine}{s}.exr"), args.replicates)
+                           - ref) ** 2
+                          for s in range(args.seeds)], axis=0)
+            row[engine.lower()] = float(np.mean(sq)) - ref_var
+            maps.append(np.sqrt(sq.mean(axis=2, keepdims=True)).repeat(3, 2))
+        os.makedirs(OUT, exist_ok=True)
+        # Reference, then each engine's RMS error per pixel, on one scale.
+        write_png(os.path.join(OUT, f"light_choice_{name}.png"),
+                  np.concatenate([m[::-1] for m in maps], axis=1).repeat(4, 0).repeat(4, 1))
         row["ratio"] = row["specula"] / row["cycles"]
         row["reference_variance"] = ref_var
         report[name] = row

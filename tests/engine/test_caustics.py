@@ -57,7 +57,7 @@ def agrees(result, runs):
 def test_plan_traces_light_only_where_caustics_can_occur(box):
     st = scenes.settings(**SIZE, light_tracing=True)
     assert make_plan(box, st).light_tracing
-    assert not make_plan(box, scenes.settings(**SIZE)).light_tracing  # off by default
+    assert make_plan(box, scenes.settings(**SIZE)).light_tracing  # on by default
     assert not make_plan(box, scenes.settings(**SIZE, light_tracing=False)).light_tracing
     diffuse_only = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(),
                                                            scenes.World((0, 0, 0)))
@@ -93,9 +93,10 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
     from engine.sampling import LOBE, bounce_dim, sample_1d
 
     def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
-        """Light paths (LightPaths has 11 fields, Paths more) see glass of IOR x 1.15."""
+        """Light paths (told apart from camera paths by their field count) see glass of
+        IOR x 1.15."""
         mt = sc.materials
-        if len(paths) == 11 and mt.kind[x.mat] == integrator.GLASS:
+        if len(paths) == LIGHT_FIELDS and mt.kind[x.mat] == integrator.GLASS:
             ior = mt.ior[x.mat] * 1.15
             eta = ior if x.front else 1.0 / ior
             u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, LOBE))
@@ -105,8 +106,12 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
             return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
         return original_sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample)  # noqa: F821
 
+    from engine.light_tracing import LightPaths
+
+    assert len(LightPaths._fields) != len(integrator.Paths._fields)
     one_off_kernels(monkeypatch, sample_bsdf=sample_bsdf,
-                    original_sample_bsdf=integrator.sample_bsdf)
+                    original_sample_bsdf=integrator.sample_bsdf,
+                    LIGHT_FIELDS=len(LightPaths._fields))
     c = agrees(combined(box), path_traced)
     assert not c.agree, c
 

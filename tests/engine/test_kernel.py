@@ -309,7 +309,8 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
-           "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_TRACING": "path_tracing_weight"}
+           "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_IMPORTANCE": "importance_pmf",
+           "HAS_LIGHT_TRACING": "path_tracing_weight"}
 
 
 def _ir(kernel):
@@ -321,7 +322,8 @@ def _ir(kernel):
 def test_a_diffuse_only_kernel_has_no_code_for_absent_features():
     """The plan's kernel is compiled without the stages a scene cannot reach: a diffuse
     box's kernel holds no dielectric, GGX, metal, lens, light-object, environment,
-    terminator or light-grid code, while the generic kernel holds all of it."""
+    terminator, light-grid, light-importance or light-tracing code, while the generic
+    kernel holds all of it."""
     from engine import kernels
     from engine.plan import make_plan
 
@@ -361,7 +363,11 @@ def test_a_render_switches_to_its_own_kernel_at_a_pass_boundary(monkeypatch):
     st = scenes.settings(width=24, height=18, samples=6)
     generic = render(scene, replace(st, kernel="generic"))
     own = render(scene, replace(st, kernel="specialised"))
-    constants = own.plan.kernel_constants(False)
+    from engine.lights import LightSampler
+
+    em = LightSampler(scene)  # the renderer's flags: few emitters, chosen by importance
+    constants = own.plan.kernel_constants(hasattr(em, "local_pmf"), hasattr(em, "bounds"))
+    assert constants["HAS_LIGHT_IMPORTANCE"]
     monkeypatch.delitem(kernels._ready, kernels.key_of(constants))  # not loaded yet
     monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: False)  # nor cached
 

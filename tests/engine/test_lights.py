@@ -247,3 +247,80 @@ def test_spatial_choice_samples_its_own_pmf(rng):
     power = np.array([np.mean(light.power) for light in many_lights_scene(12)])
     assert local_best == np.argmax(power / np.maximum(d2, 1e-3)) or \
         probs[local_best] > sampler.distribution.pmf[local_best]
+
+
+def unequal_lights():
+    """Issue 16's pair: a 1000 W point light far up and a 25 W area light low down."""
+    return [Light("far point", "POINT", (1000.0,) * 3, at((-4.5, -1, 4)), radius=0.1),
+            Light("low panel", "AREA", (25.0,) * 3, at((3.5, -0.5, 0.6)), size_x=0.5)]
+
+
+def test_few_lights_are_chosen_by_their_importance_at_the_point(rng):
+    """With few emitters each point weighs them by intensity / d^2 and both ends'
+    cosines: under the low panel the panel is chosen most, far from it the point light,
+    above the panel's plane (behind it) the panel only by the 1 % power share, and so is
+    the point light for a surface facing away from it.
+    choose_by_importance draws entries with the probabilities importance_pmf reports."""
+    from engine.lights import (IMPORTANCE_WEIGHT, LightSampler, choose_by_importance,
+                               importance_pmf)
+
+    b = SceneBuilder()
+    pm = b.add_material(Material.diffuse("plane", (RHO,) * 3))
+    b.add_mesh("plane", np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0.0]]),
+               np.array([[0, 1, 2], [0, 2, 3]]), pm)
+    for light in unequal_lights():
+        b.add_light(light)
+    sampler = LightSampler(b.build(Camera(), World()))
+    assert hasattr(sampler, "bounds") and not hasattr(sampler, "local_pmf")
+    em = sampler.data()
+    power = em.pmf
+
+    def probs(p):
+        return np.array([importance_pmf(*p, *up, e, em.pmf, em.bounds) for e in range(2)])
+
+    up = (0.0, 0.0, 1.0)  # the plane's shading normal
+    under, far, behind = (3.5, -0.5, 0.0), (-4.0, -1.0, 0.0), (3.5, -0.5, 1.5)
+    assert probs(under)[1] > 0.8 > power[1]
+    assert probs(far)[0] > 0.95
+    assert probs(behind)[1] == pytest.approx((1 - IMPORTANCE_WEIGHT) * power[1])
+    facing_away = probs(far)
+    up = (1.0, 0.0, 0.0)  # a wall at x = -4 facing +x, away from the point light at -4.5
+    assert probs(far)[0] == pytest.approx((1 - IMPORTANCE_WEIGHT) * power[0])
+    up = (0.0, 0.0, 1.0)
+    assert np.allclose(probs(far), facing_away)
+    for p in (under, far, behind):
+        assert probs(p).sum() == pytest.approx(1.0)
+        n = 100_000
+        draws = [choose_by_importance(*p, *up, u, em.pmf, em.cdf, em.bounds)
+                 for u in rng.random(n)]
+        k = np.array([d[0] for d in draws])
+        assert np.allclose([d[1] for d in draws], probs(p)[k])
+        expected = probs(p) * n
+        z = (np.bincount(k, minlength=2) - expected) / np.sqrt(expected * (1 - probs(p)))
+        assert np.all(np.abs(z) < 4.5), z
+
+
+@pytest.mark.parametrize("x", [3.5, 0.0, -4.0])
+def test_unequal_lights_stay_unbiased(x):
+    """Chosen by importance, the two lights' irradiance is still the sum of their closed
+    forms, under the panel, between and far from it."""
+    from dataclasses import replace
+
+    shift = np.eye(4)
+    shift[0, 3] = -x  # move the lights, not the plane's camera
+    point, panel = (replace(light, matrix=shift @ light.matrix) for light in unequal_lights())
+    pos = np.asarray(point.matrix)[:3, 3]
+    d2 = float(pos @ pos)
+    e = 1000.0 / (4 * np.pi * d2) * (pos[2] / math.sqrt(d2))
+    # The panel: four corner rectangles (signed) of the 0.5 m square at height 0.6.
+    c, h, s = np.asarray(panel.matrix)[:3, 3], 0.6, 0.25
+    L = 25.0 / (np.pi * 0.25)
+
+    def corner(x_, y_):  # signed irradiance below a corner of an x_ * y_ rectangle
+        sx, sy, x_, y_ = np.sign(x_), np.sign(y_), abs(x_), abs(y_)
+        return sx * sy * (x_ / math.hypot(x_, h) * math.atan(y_ / math.hypot(x_, h))
+                          + y_ / math.hypot(y_, h) * math.atan(x_ / math.hypot(y_, h))) / 2
+
+    e += L * (corner(c[0] + s, c[1] + s) - corner(c[0] - s, c[1] + s)
+              - corner(c[0] + s, c[1] - s) + corner(c[0] - s, c[1] - s))
+    assert_irradiance([point, panel], e, samples=128)

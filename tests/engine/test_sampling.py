@@ -13,7 +13,7 @@ from tests.stats import SIGNIFICANCE, chi2_test, expected_2d, histogram_2d, sida
 N = 200_000
 RES = 31  # odd, so no cell boundary sits on a symmetry axis
 # Family of chi-square tests in this module (each parametrisation counts once).
-ALPHA = sidak(SIGNIFICANCE, 10)
+ALPHA = sidak(SIGNIFICANCE, 16)
 
 
 def assert_chi2(observed, expected):
@@ -213,3 +213,40 @@ def test_sequence_depends_on_seed_and_is_deterministic():
     x = sampling.stream_1d(np.arange(100), 3, 1, 4)
     assert not np.array_equal(x, sampling.stream_1d(np.arange(100), 3, 2, 4))
     assert all(sampling.sample_1d(sampling.pixel_seed(r, 1), rev, 4) == x[r] for r in rows)
+
+
+RECTANGLES = {  # o, centre, u, v (unit, orthogonal), side lengths
+    "near, off-centre": ((0.1, 0.4, -0.5), (0.3, -0.2, 1.0), (1, 0, 0), (0, 0.955336, 0.29552),
+                         0.8, 0.5),
+    "grazing": ((2.0, 0.0, 0.05), (0, 0, 0), (1, 0, 0), (0, 1, 0), 1.0, 2.0),
+    "under a corner": ((0.5, 0.25, -0.01), (0, 0, 0), (1, 0, 0), (0, 1, 0), 1.0, 0.5),
+    "far": ((0.0, 0.0, 40.0), (0, 0, 0), (0.6, 0.8, 0), (-0.8, 0.6, 0), 1.0, 1.0),
+}
+
+
+@pytest.mark.parametrize("name", RECTANGLES)
+def test_spherical_rectangle_is_uniform_in_solid_angle(rng, name):
+    """Points land on the rectangle with area density cos / (d^2 S), S the solid angle,
+    which itself matches the integral of cos / d^2 over the rectangle (chi-square on the
+    rectangle's (u, v) cells; a uniform-area or wrong-corner warp fails)."""
+    o, c, u, v, lu, lv = (np.asarray(a, float) if isinstance(a, tuple) else a
+                          for a in RECTANGLES[name])
+    n_vec = np.cross(u, v)
+
+    def density(uv):  # area density of uniform solid-angle sampling, per unit (s, t) area
+        p = c + (uv[:, :1] * lu - lu / 2) * u + (uv[:, 1:] * lv - lv / 2) * v
+        d = p - o
+        dist = np.linalg.norm(d, axis=1)
+        return np.abs(d @ n_vec) / dist**3 * lu * lv
+
+    exact = expected_2d(density, (0, 0), (1, 1), 64, 1, sub=16).sum()
+    solid = sampling.spherical_rectangle_solid_angle(*o, *c, *u, *v, lu, lv)
+    assert solid == pytest.approx(exact, rel=1e-4)
+    pts = np.array([sampling.spherical_rectangle(*o, *c, *u, *v, lu, lv, a, b)
+                    for a, b in rng.random((N // 4, 2))])
+    assert np.allclose(pts[:, 3], solid)
+    st = np.column_stack([(pts[:, :3] - c) @ u / lu + 0.5, (pts[:, :3] - c) @ v / lv + 0.5])
+    assert st.min() >= -1e-9 and st.max() <= 1 + 1e-9
+    assert np.abs((pts[:, :3] - c) @ n_vec).max() < 1e-9
+    obs = histogram_2d(st, (0, 0), (1, 1), RES)
+    assert_chi2(obs, expected_2d(lambda uv: density(uv) / solid, (0, 0), (1, 1), RES, len(st)))
