@@ -20,13 +20,24 @@ pytestmark = pytest.mark.slow
 SPP, REF_SPP, RES = 16, 512, (64, 48)
 
 
-def build_scene():
+def empty_scene(location, tilt_degrees, lens):
+    """A factory-empty scene with a black world and a camera at `location` tilted down."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     cam = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
     scene.collection.objects.link(cam)
     scene.camera = cam
-    cam.location, cam.rotation_euler, cam.data.lens = (0, -14, 9), (math.radians(55), 0, 0), 30
+    cam.location, cam.data.lens = location, lens
+    cam.rotation_euler = (math.radians(tilt_degrees), 0, 0)
+    scene.world = bpy.data.worlds.new("W")
+    scene.world.color = (0, 0, 0)
+    scene.render.resolution_x, scene.render.resolution_y = RES
+    scene.render.resolution_percentage = 100
+    return scene
+
+
+def build_scene():
+    scene = empty_scene((0, -14, 9), 55, 30)
 
     floor = bpy.data.meshes.new("floor")
     floor.from_pydata([(-10, -10, 0), (10, -10, 0), (10, 10, 0), (-10, 10, 0)], [], [(0, 1, 2, 3)])
@@ -50,31 +61,32 @@ def build_scene():
         obj = bpy.data.objects.new(f"L{i}", light)
         obj.location = (rng.uniform(-9, 9), rng.uniform(-9, 9), rng.uniform(0.3, 2))
         scene.collection.objects.link(obj)
-    scene.world = bpy.data.worlds.new("W")
-    scene.world.color = (0, 0, 0)
-    scene.render.resolution_x, scene.render.resolution_y = RES
-    scene.render.resolution_percentage = 100
     return scene
 
 
-def render(engine, samples, seed, tmp_path, build=None):
+def render(engine, samples, seed, tmp_path, build=None, resolution=RES, replicates=0):
+    """The scene `build` makes (default: the many lights) rendered by `engine` at 2 bounces;
+    linear RGB (H, W, 3). replicates: Specula's (0: its default)."""
     scene = (build or build_scene)()
+    scene.render.resolution_x, scene.render.resolution_y = resolution
     scene.render.engine = engine
     args = type("Args", (), dict(samples=samples, time_limit=None, seed=seed, max_bounces=2))
     if engine == "CYCLES":
         cli._configure_cycles(scene, args)
     else:
         scene.specula.samples, scene.specula.seed, scene.specula.max_bounces = samples, seed, 2
+        if replicates:
+            scene.specula.replicates = replicates
     path = str(tmp_path / f"{engine}_{samples}_{seed}.exr")
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
     scene.render.filepath, scene.render.use_file_extension = path, False
     bpy.ops.render.render(write_still=True)
     image = bpy.data.images.load(path)
-    px = np.zeros(RES[0] * RES[1] * 4, np.float32)
+    px = np.zeros(resolution[0] * resolution[1] * 4, np.float32)
     image.pixels.foreach_get(px)
     bpy.data.images.remove(image)
-    return px.reshape(RES[1], RES[0], 4)[..., :3]
+    return px.reshape(resolution[1], resolution[0], 4)[..., :3]
 
 
 @pytest.fixture(scope="module")
@@ -108,12 +120,7 @@ def build_unequal_scene(point=True, area=True):
     """A floor, a back wall and two blocks lit by a 1000 W point light 4 m up at one end
     and a 25 W 0.5 m area light 0.6 m above the floor at the other, where it outshines the
     point light: chosen by power alone the area light gets 2.4 % of the samples."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    cam = bpy.data.objects.new("Cam", bpy.data.cameras.new("Cam"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    cam.location, cam.rotation_euler, cam.data.lens = (0, -9, 5), (math.radians(62), 0, 0), 28
+    scene = empty_scene((0, -9, 5), 62, 28)
     grey = node_material("grey", "ShaderNodeBsdfDiffuse", Color=(0.6, 0.6, 0.6, 1))[0]
     for name, centre, size in (("floor", (0, 0, -0.05), (12, 10, 0.1)),
                                ("wall", (0, 4, 1.5), (12, 0.2, 3)),
@@ -139,10 +146,6 @@ def build_unequal_scene(point=True, area=True):
         obj = bpy.data.objects.new("Area 25 W", light)
         obj.location = (3.5, -0.5, 0.6)
         scene.collection.objects.link(obj)
-    scene.world = bpy.data.worlds.new("W")
-    scene.world.color = (0, 0, 0)
-    scene.render.resolution_x, scene.render.resolution_y = RES
-    scene.render.resolution_percentage = 100
     return scene
 
 

@@ -58,34 +58,8 @@ SCENES = {"unequal": build_unequal,
           "many": build_many}
 
 
-def render(build, engine, samples, seed, resolution, path, replicates=0):
-    import bpy
-
-    from addon import cli
-
-    scene = build()
-    scene.render.resolution_x, scene.render.resolution_y = resolution
-    scene.render.resolution_percentage = 100
-    scene.render.engine = engine
-    args = type("Args", (), dict(samples=samples, time_limit=None, seed=seed, max_bounces=2))
-    if engine == "CYCLES":
-        cli._configure_cycles(scene, args)
-    else:
-        scene.specula.samples, scene.specula.seed, scene.specula.max_bounces = samples, seed, 2
-        if replicates:
-            scene.specula.replicates = replicates
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.render.image_settings.color_depth = "32"
-    scene.render.filepath, scene.render.use_file_extension = path, False
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path)
-    px = np.zeros(resolution[0] * resolution[1] * 4, np.float32)
-    image.pixels.foreach_get(px)
-    bpy.data.images.remove(image)
-    return px.reshape(resolution[1], resolution[0], 4)[..., :3].astype(np.float64)
-
-
 def main(argv=None) -> int:
+    import pathlib
     import tempfile
 
     import bpy  # noqa: F401 - before the add-on
@@ -93,6 +67,7 @@ def main(argv=None) -> int:
     import addon
 
     addon.register()
+    from test_many_lights import render
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--samples", type=int, default=16)
@@ -104,22 +79,21 @@ def main(argv=None) -> int:
                     help="Specula's replicates (0: the scene's default)")
     args = ap.parse_args(argv)
     res = tuple(int(v) for v in args.resolution.split("x"))
-    tmp = tempfile.mkdtemp(prefix="light_choice_")
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix="light_choice_"))
     report = {}
     for name in args.scenes:
         build = SCENES[name]
         half = args.reference_samples // 2
-        r1 = render(build, "CYCLES", half, 1001, res, os.path.join(tmp, "r1.exr"))
-        r2 = render(build, "CYCLES", half, 1002, res, os.path.join(tmp, "r2.exr"))
+        r1 = render("CYCLES", half, 1001, tmp, build, res).astype(np.float64)
+        r2 = render("CYCLES", half, 1002, tmp, build, res).astype(np.float64)
         ref = 0.5 * (r1 + r2)
         # Each half's error variance is twice the mean's: the mean's own variance per pixel
         # is mean((r1 - r2)^2) / 4.
         ref_var = float(np.mean((r1 - r2) ** 2)) / 4.0
         row, maps = {}, [ref]
         for engine in ("CYCLES", "SPECULA"):
-            sq = np.mean([(render(build, engine, args.samples, s + 1, res,
-                                  os.path.join(tmp, f"{engine}{s}.exr"), args.replicates)
-                           - ref) ** 2
+            sq = np.mean([(render(engine, args.samples, s + 1, tmp, build, res,
+                                  args.replicates) - ref) ** 2
                           for s in range(args.seeds)], axis=0)
             row[engine.lower()] = float(np.mean(sq)) - ref_var
             maps.append(np.sqrt(sq.mean(axis=2, keepdims=True)).repeat(3, 2))

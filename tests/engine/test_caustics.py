@@ -96,7 +96,7 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
         """Light paths (told apart from camera paths by their field count) see glass of
         IOR x 1.15."""
         mt = sc.materials
-        if len(paths) == LIGHT_FIELDS and mt.kind[x.mat] == integrator.GLASS:
+        if len(paths) == LIGHT_FIELDS and mt.kind[x.mat] == integrator.GLASS:  # noqa: F821
             ior = mt.ior[x.mat] * 1.15
             eta = ior if x.front else 1.0 / ior
             u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, LOBE))
