@@ -10,7 +10,8 @@ connects its first diffuse vertex to the camera, splatting into whichever pixel 
 in: it finds such paths as easily as path tracing finds direct light.
 
 Both strategies sample the same family of paths, camera -> x (Lambertian) -> any
-Lambertian or specular vertices -> S (mirror, metal, glass) -> y (emissive triangle): the
+Lambertian or specular vertices -> S (mirror, metal, glass) -> y (an emissive triangle, or
+an area light BSDF rays can hit): the
 light path goes on past its first diffuse vertex, connecting each, so light reflected by
 a mirror onto a wall and from there onto the floor is found too. Each strategy weighs a
 path by the balance heuristic w_LT = r / (1 + r), w_PT = 1 / (1 + r), with the ratio of
@@ -21,7 +22,8 @@ the two densities
 
 computed identically from either end (`light_tracing_ratio`). N_L is the number of light
 paths per pass (one per pixel of the render), p_sel p_A(y) the light tracer's density of
-the emitter point, p_dir(y) / |cos y| = 1 / (2 pi) for two-sided cosine emission, E the
+the emitter point, p_dir(y) / |cos y| = 1 / (2 pi) for a triangle's two-sided cosine
+emission and 1 / pi for an area light's one-sided one (their product: p_emit), E the
 ratio n_x / n_y of the refractive indices at the two ends (the chain's Jacobians differ
 by (n_x / n_y)^2, by conservation of etendue), and q_cam = |dr / dA_x| p_dir(x) the path
 tracer's density per unit raster area of reaching x from the camera (one sample per
@@ -36,15 +38,38 @@ from __future__ import annotations
 import math
 from collections import namedtuple
 
+import numpy as np
+
 from .jit import INLINE, JIT, njit
 
-# p_dir(y) / |cos y| of two-sided cosine emission from a triangle: |cos| / (2 pi).
-EMISSION_DIRECTION_DENSITY = 1.0 / (2.0 * math.pi)
+# p_dir(y) / |cos y| of cosine emission: from either face of a triangle |cos| / (2 pi), from
+# the front of an area light cos / pi.
+TWO_SIDED_DIRECTION_DENSITY = 1.0 / (2.0 * math.pi)
+ONE_SIDED_DIRECTION_DENSITY = 1.0 / math.pi
 
 # The light tracer as the kernel reads it: light paths per pass (0: no light tracing, every
-# path tracer weight is 1), and per emissive triangle entry (LightSampler's order) the CDF
-# by power and p_sel x p_A, the density of a point on it.
-CausticData = namedtuple("CausticData", "n_light cdf pdf_area")
+# path tracer weight is 1), and per source (LightSampler's emissive triangles, then its area
+# lights) the CDF by power, p_emit = p_sel p_A p_dir / |cos| (the density of a light path's
+# start point and direction per projected solid angle), and the light object's index (-1:
+# a triangle); per light object its source (-1: none).
+CausticData = namedtuple("CausticData", "n_light cdf pdf_emit light source_of_light")
+
+
+def caustic_data(n_light: float, sampler) -> CausticData:
+    """The light tracer's sources from a lights.LightSampler, n_light paths per pass."""
+    dist, light = sampler.caustic_distribution, sampler.caustic_light
+    per_cos = np.where(light < 0, TWO_SIDED_DIRECTION_DENSITY, ONE_SIDED_DIRECTION_DENSITY)
+    source_of_light = np.full(sampler.objects.count, -1, np.int64)
+    source_of_light[light[light >= 0]] = np.nonzero(light >= 0)[0]
+    return CausticData(float(n_light), dist.cdf,
+                       dist.pmf / np.maximum(sampler.caustic_area, 1e-300) * per_cos, light,
+                       source_of_light)
+
+
+def no_caustic_data() -> CausticData:
+    """What a kernel compiled with light tracing reads when a scene has none."""
+    return CausticData(0.0, np.zeros(0), np.zeros(0), np.zeros(0, np.int64),
+                       np.zeros(0, np.int64))
 
 
 @njit(**INLINE)
@@ -56,26 +81,27 @@ def camera_side_density(raster_per_area, pdf_direction, cos_chain):
 
 
 @njit(**INLINE)
-def light_tracing_ratio(n_light, pdf_area, eta2, camera_density):
-    """r = N_L p_LT / p_PT for a camera -> x -> S+ -> y path (module docstring): pdf_area is
-    p_sel p_A(y), eta2 = (n_x / n_y)^2, camera_density is `camera_side_density` at x."""
+def light_tracing_ratio(n_light, pdf_emit, eta2, camera_density):
+    """r = N_L p_LT / p_PT for a camera -> x -> S+ -> y path (module docstring): pdf_emit is
+    p_sel p_A(y) p_dir(y) / |cos y|, eta2 = (n_x / n_y)^2, camera_density is
+    `camera_side_density` at x."""
     if not camera_density > 0.0:
         return math.inf
-    return n_light * pdf_area * EMISSION_DIRECTION_DENSITY * eta2 / camera_density
+    return n_light * pdf_emit * eta2 / camera_density
 
 
 @njit(**JIT)
-def path_tracing_weight(n_light, pdf_area, eta2, camera_density):
+def path_tracing_weight(n_light, pdf_emit, eta2, camera_density):
     """w_PT = 1 / (1 + r); 1 without light tracing (n_light 0)."""
     if n_light == 0.0:
         return 1.0
-    return 1.0 / (1.0 + light_tracing_ratio(n_light, pdf_area, eta2, camera_density))
+    return 1.0 / (1.0 + light_tracing_ratio(n_light, pdf_emit, eta2, camera_density))
 
 
 @njit(**INLINE)
-def light_tracing_weight(n_light, pdf_area, eta2, camera_density):
+def light_tracing_weight(n_light, pdf_emit, eta2, camera_density):
     """w_LT = r / (1 + r)."""
-    r = light_tracing_ratio(n_light, pdf_area, eta2, camera_density)
+    r = light_tracing_ratio(n_light, pdf_emit, eta2, camera_density)
     return 1.0 if math.isinf(r) else r / (1.0 + r)
 
 

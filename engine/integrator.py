@@ -196,6 +196,8 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                                     em) * lights.object_pdf(
                     j, ox, oy, oz, dx, dy, dz, th, L)
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
+            elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
+                w = caustic_weight(i, sc.caustics.source_of_light[j], sc, paths)
             _add(paths, row, t0, t1, t2, l0, l1, l2, w)
     if HAS_SUN_DISCS and f < 0:
         sun_seen = _SUN_CAMERA if depth == 0 else _SUN_BSDF
@@ -297,17 +299,24 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
         pdf_l = pm / em.area_by_triangle[x.f] * x.t * x.t / max(cos_l, 1e-300)
         w = power_heuristic(paths.prev_pdf[i], pdf_l)
     elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
-        entry = sc.emitters.entry_of_triangle[x.f]
-        ca = sc.caustics
-        if 0 <= entry < len(ca.pdf_area):
-            eta = paths.caustic_eta[i]
-            w = caustics.path_tracing_weight(ca.n_light, ca.pdf_area[entry], 1.0 / (eta * eta),
-                                             paths.caustic_q[i])
+        # Emissive triangles are the light tracer's first sources, in entry order.
+        w = caustic_weight(i, sc.emitters.entry_of_triangle[x.f], sc, paths)
     _add(paths, row, paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2],
          le0, le1, le2, w)
     if DEBUG:
         _debug_mark(paths, row, 5, paths.radiance[row, 0], paths.radiance[row, 1],
                     paths.radiance[row, 2])
+
+
+def caustic_weight(i, source, sc, paths):
+    """w_PT of path i, which reached light-tracer source `source` (-1: not one) at the end
+    of a camera -> Lambertian -> ... -> specular chain (caustics.py)."""
+    ca = sc.caustics
+    if source < 0 or source >= len(ca.pdf_emit):
+        return 1.0
+    eta = paths.caustic_eta[i]
+    return caustics.path_tracing_weight(ca.n_light, ca.pdf_emit[source], 1.0 / (eta * eta),
+                                        paths.caustic_q[i])
 
 
 def russian_roulette(depth, t0, t1, t2, pseed, rev_sample):
@@ -621,8 +630,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
-    handle_emission,
-    russian_roulette, emitter_pmf, sample_emitter, shadow_origin, sample_light, sample_bsdf,
-    caustic_state, spawn)}
+    handle_emission, caustic_weight, russian_roulette, emitter_pmf, sample_emitter,
+    shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

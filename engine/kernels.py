@@ -22,7 +22,7 @@ import numpy as np
 
 from . import integrator, light_tracing, specialise
 from .bsdf import layer_tables
-from .caustics import CausticData
+from .caustics import caustic_data, no_caustic_data
 from .camera import CameraModel
 from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
@@ -206,10 +206,9 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     if plan.light_tracing:
         # As many light paths as the whole frame has pixels, even for a region: a region's
         # pixels are then the whole frame's, bit for bit (RenderSettings.region).
-        caustics = CausticData(float(settings.width * settings.height),
-                               emitters.triangle_distribution.cdf, emitters.triangle_pdf_area)
+        caustics = caustic_data(settings.width * settings.height, emitters)
     elif generic:
-        caustics = CausticData(0.0, np.zeros(0), np.zeros(0))
+        caustics = no_caustic_data()
     return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
                      cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table(),
                      caustics)

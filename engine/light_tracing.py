@@ -1,6 +1,6 @@
-"""The light tracer's stages: light paths from emissive triangles through specular chains,
-connected to the camera at their first diffuse vertex (caustics.py says why and how they
-are weighed against path tracing).
+"""The light tracer's stages: light paths from emissive triangles and area lights through
+specular chains, connected to the camera at their first diffuse vertex (caustics.py says
+why and how they are weighed against path tracing).
 
 A wavefront like the camera's (kernels.Tracer.trace_light): `start_light_paths` draws a
 point and a direction on an emitter, then per bounce embree's closest hits and
@@ -25,7 +25,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import camera, caustics
+from . import camera, caustics, lights
 from .film import filter_density
 from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roulette,
                          sample_bsdf, surface_interaction)
@@ -46,20 +46,21 @@ def light_path_seed(seed):
 
 # One batch of light paths: live rows, sequence seeds, the ray (float64 and embree's
 # float32), the weight beta (caustics.light_tracing_contribution), prev_pdf (unused, for
-# integrator.spawn's sake), the chain's IOR product n_x / n_y so far, p_sel p_A of the
-# path's emitter point over the shading_ratio of its Lambertian vertices so far, and the
+# integrator.spawn's sake), the chain's IOR product n_x / n_y so far, p_emit of the path's
+# start (caustics.CausticData) over the shading_ratio of its Lambertian vertices so far, the
 # largest channel of the starting weight (Russian roulette reads beta relative to it).
 LightPaths = namedtuple("LightPaths", "live pseed o64 d64 origin32 dir32 tmax32 throughput "
-                                      "prev_pdf eta pdf_area start")
+                                      "prev_pdf eta pdf_emit start")
 # Camera connections: shadow ray (float32), raster position (n, 2) and the contribution per
 # unit raster area, MIS weight and 1 / N_L included.
 Connections = namedtuple("Connections", "origin direction tmax raster contrib")
 
 
 def start_light_paths(ids, sample, seed, sc, lp):
-    """Light paths ids (n,) at index `sample` of the sequence of `seed`: an emissive
-    triangle by power, a uniform point on it, a cosine direction on either side. Returns
-    the number of paths started (0 without emissive triangles)."""
+    """Light paths ids (n,) at index `sample` of the sequence of `seed`: a source by power
+    (an emissive triangle or an area light), a uniform point on it, a cosine direction (on
+    either side of a triangle, in front of an area light). Returns the number of paths
+    started (0 without sources)."""
     em, ca = sc.emitters, sc.caustics
     if len(ca.cdf) == 0:
         return 0
@@ -70,36 +71,48 @@ def start_light_paths(ids, sample, seed, sc, lp):
         lp.live[i] = i
         e = sample_cdf(ca.cdf, sample_1d(ps, rev, bounce_dim(0, LIGHT_SELECT)))
         ua, ub = sample_2d(ps, rev, DIM_EMITTER_POINT)
-        b0, b1, b2 = uniform_triangle(ua, ub)
-        px = em.v0[e, 0] + b1 * em.e1[e, 0] + b2 * em.e2[e, 0]
-        py = em.v0[e, 1] + b1 * em.e1[e, 1] + b2 * em.e2[e, 1]
-        pz = em.v0[e, 2] + b1 * em.e1[e, 2] + b2 * em.e2[e, 2]
-        ua, ub = sample_2d(ps, rev, DIM_EMISSION)
-        side = 1.0
-        if ua < 0.5:
-            ua = 2.0 * ua
+        va, vb = sample_2d(ps, rev, DIM_EMISSION)
+        j = ca.light[e]
+        if HAS_LIGHT_OBJECTS and j >= 0:
+            L = em.objects
+            px, py, pz = lights.area_light_point(j, ua, ub, L)
+            nx, ny, nz = lights.emission_axis(j, L)
+            scale = max(abs(px), max(abs(py), abs(pz)))
         else:
-            ua, side = 2.0 * ua - 1.0, -1.0
-        nx, ny, nz = side * em.normal[e, 0], side * em.normal[e, 1], side * em.normal[e, 2]
-        lx, ly, lz = cosine_hemisphere(ua, ub)
+            b0, b1, b2 = uniform_triangle(ua, ub)
+            px = em.v0[e, 0] + b1 * em.e1[e, 0] + b2 * em.e2[e, 0]
+            py = em.v0[e, 1] + b1 * em.e1[e, 1] + b2 * em.e2[e, 1]
+            pz = em.v0[e, 2] + b1 * em.e1[e, 2] + b2 * em.e2[e, 2]
+            side = 1.0
+            if va < 0.5:
+                va = 2.0 * va
+            else:
+                va, side = 2.0 * va - 1.0, -1.0
+            nx, ny, nz = side * em.normal[e, 0], side * em.normal[e, 1], side * em.normal[e, 2]
+            scale = em.scale[e]
+        lx, ly, lz = cosine_hemisphere(va, vb)
         s, t = build_frame(nx, ny, nz)
         dx = lx * s[0] + ly * t[0] + lz * nx
         dy = lx * s[1] + ly * t[1] + lz * ny
         dz = lx * s[2] + ly * t[2] + lz * nz
-        eps = ray_offset(em.scale[e])
+        if HAS_LIGHT_OBJECTS and j >= 0:
+            r0, r1, r2 = lights.area_light_radiance(j, lz, em.objects)
+        else:
+            r0, r1, r2 = em.radiance[e, 0], em.radiance[e, 1], em.radiance[e, 2]
+        eps = ray_offset(scale)
         lp.o64[i, 0], lp.o64[i, 1], lp.o64[i, 2] = px + eps * nx, py + eps * ny, pz + eps * nz
         lp.d64[i, 0], lp.d64[i, 1], lp.d64[i, 2] = dx, dy, dz
-        for j in range(3):
-            lp.origin32[i, j] = lp.o64[i, j]
-            lp.dir32[i, j] = lp.d64[i, j]
-            # Radiance over p_sel p_A p_dir, the cosine cancelled (caustics.py).
-            lp.throughput[i, j] = em.radiance[e, j] / (
-                ca.pdf_area[e] * caustics.EMISSION_DIRECTION_DENSITY)
+        for k in range(3):
+            lp.origin32[i, k] = lp.o64[i, k]
+            lp.dir32[i, k] = lp.d64[i, k]
+        # Radiance over p_sel p_A p_dir, the cosine cancelled (caustics.py).
+        pe = ca.pdf_emit[e]
+        lp.throughput[i, 0], lp.throughput[i, 1], lp.throughput[i, 2] = r0 / pe, r1 / pe, r2 / pe
         lp.tmax32[i] = np.inf
         lp.prev_pdf[i] = np.inf
         lp.eta[i] = 1.0
-        lp.pdf_area[i] = ca.pdf_area[e]
-        lp.start[i] = max(lp.throughput[i, 0], max(lp.throughput[i, 1], lp.throughput[i, 2]))
+        lp.pdf_emit[i] = pe
+        lp.start[i] = max(max(r0, max(r1, r2)), 1e-300) / pe
     return len(ids)
 
 
@@ -130,7 +143,7 @@ def connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample):
     eta2 = lp.eta[i] * lp.eta[i]
     ca = sc.caustics
     w = caustics.light_tracing_weight(
-        ca.n_light, lp.pdf_area[i], eta2,
+        ca.n_light, lp.pdf_emit[i], eta2,
         caustics.camera_side_density(raster_per_area, cos_shading / math.pi, cos_chain))
     c = sc.materials.colour
     s = n_conn
@@ -204,7 +217,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         if not ratio > 0.0:  # lit from below its shading horizon: the integrand is 0
             continue
         t0, t1, t2 = t0 * ratio, t1 * ratio, t2 * ratio
-        pdf_area = lp.pdf_area[i] / ratio
+        pdf_emit = lp.pdf_emit[i] / ratio
         side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
         e = side * ray_offset(x.scale)
         lp.o64[out, 0], lp.o64[out, 1], lp.o64[out, 2] = (x.px + e * x.nx, x.py + e * x.ny,
@@ -216,7 +229,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         lp.tmax32[out] = np.inf
         lp.throughput[out, 0], lp.throughput[out, 1], lp.throughput[out, 2] = t0, t1, t2
         lp.eta[out] = eta
-        lp.pdf_area[out] = pdf_area
+        lp.pdf_emit[out] = pdf_emit
         lp.start[out] = b0
         lp.live[out] = row
         out += 1
@@ -265,4 +278,5 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
 STAGES = {connect_camera.__name__: (connect_camera, INLINE)}
 STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce)})
 STAGES["splat"] = (splat, ALLOCATING)  # one small scratch row per call
-HAS_DOF = HAS_POLYGON_APERTURE = True  # the plan's values replace these (specialise.py)
+# The plan's values replace these (specialise.py).
+HAS_DOF = HAS_POLYGON_APERTURE = HAS_LIGHT_OBJECTS = True

@@ -177,6 +177,15 @@ class LightObjects:
         return data
 
 
+def traces_light_paths(light) -> bool:
+    """Whether light paths start on a light object (scene.Light): an area light of some
+    size that BSDF rays can hit (Cycles' Multiple Importance; otherwise path tracing
+    never finds its caustics, and neither does Cycles). Point, spot and sun lights are not
+    sources yet."""
+    return (light.type == "AREA" and light.size_x > 0 and max(light.power) > 0
+            and bool(light.use_mis) and (light.size_y > 0 or light.shape in ("SQUARE", "DISK")))
+
+
 @njit(**JIT)
 def spread_attenuation(cos_theta, on, tan_half, norm):
     """Cycles' soft-box grid attenuation of an area light at one cosine, normalised to keep
@@ -294,16 +303,39 @@ def sample_object(j, px, py, pz, ua, ub, L):
             L[j, _AXIS_V + 2], L[j, _LEN_U], L[j, _LEN_V], ua, ub)
         return _area_light_toward(j, px, py, pz, yx, yy, yz, 1.0 / solid, L)
     # Otherwise a uniform point on the rectangle or ellipse.
+    yx, yy, yz = area_light_point(j, ua, ub, L)
+    return _area_light_toward(j, px, py, pz, yx, yy, yz, -1.0, L)
+
+
+@njit(**INLINE)
+def area_light_point(j, ua, ub, L):
+    """A uniform point on area light j (rectangle or ellipse)."""
     if L[j, _ELLIPTIC] != 0:
         la, lb = concentric_disk(ua, ub)
         la, lb = la * 0.5, lb * 0.5
     else:
         la, lb = ua - 0.5, ub - 0.5
     ka, kb = la * L[j, _LEN_U], lb * L[j, _LEN_V]
-    yx = L[j, _CENTRE] + ka * L[j, _AXIS_U] + kb * L[j, _AXIS_V]
-    yy = L[j, _CENTRE + 1] + ka * L[j, _AXIS_U + 1] + kb * L[j, _AXIS_V + 1]
-    yz = L[j, _CENTRE + 2] + ka * L[j, _AXIS_U + 2] + kb * L[j, _AXIS_V + 2]
-    return _area_light_toward(j, px, py, pz, yx, yy, yz, -1.0, L)
+    return (L[j, _CENTRE] + ka * L[j, _AXIS_U] + kb * L[j, _AXIS_V],
+            L[j, _CENTRE + 1] + ka * L[j, _AXIS_U + 1] + kb * L[j, _AXIS_V + 1],
+            L[j, _CENTRE + 2] + ka * L[j, _AXIS_U + 2] + kb * L[j, _AXIS_V + 2])
+
+
+@njit(**INLINE)
+def emission_axis(j, L):
+    """Light j's emission direction (an area light's front normal)."""
+    return L[j, _DIRECTION], L[j, _DIRECTION + 1], L[j, _DIRECTION + 2]
+
+
+@njit(**INLINE)
+def area_light_radiance(j, cos_theta, L):
+    """Area light j's radiance (per channel) leaving at cos_theta to its emission
+    direction: its factor times the spread's attenuation (0 behind it)."""
+    if not cos_theta > 0.0:
+        return 0.0, 0.0, 0.0
+    f = L[j, _FACTOR] * spread_attenuation(cos_theta, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
+                                           L[j, _SPREAD_NORM])
+    return L[j, _POWER] * f, L[j, _POWER + 1] * f, L[j, _POWER + 2] * f
 
 
 @njit(**INLINE)
@@ -319,9 +351,8 @@ def _area_light_toward(j, px, py, pz, yx, yy, yz, pdf_solid, L):
     area = L[j, _AREA_SIZE]
     if cos_l > 0 and d > 0 and area > 0:
         pdf = pdf_solid if pdf_solid >= 0.0 else d * d / max(area * cos_l, 1e-300)
-        f = L[j, _FACTOR] * spread_attenuation(cos_l, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
-                                    L[j, _SPREAD_NORM]) / pdf
-        v0, v1, v2 = L[j, _POWER] * f, L[j, _POWER + 1] * f, L[j, _POWER + 2] * f
+        r0, r1, r2 = area_light_radiance(j, cos_l, L)
+        v0, v1, v2 = r0 / pdf, r1 / pdf, r2 / pdf
     return wx, wy, wz, d, v0, v1, v2, pdf
 
 
@@ -473,10 +504,15 @@ class LightSampler:
         weights = np.concatenate([tri_power[self.index], self.objects.selection_power(),
                                   env_power])
         self.distribution = Distribution1D(weights)
-        # The light tracer's choice among the triangles alone, by the same power, and its
-        # density of a point: p_sel p_A = pmf / area (caustics.py).
-        self.triangle_distribution = Distribution1D(tri_power[self.index])
-        self.triangle_pdf_area = self.triangle_distribution.pmf / np.maximum(self.area, 1e-300)
+        # The light tracer's sources (caustics.py): the emissive triangles, then the area
+        # lights BSDF rays can hit, chosen by the same power.
+        lit = [j for j, light in enumerate(scene.lights)
+               if traces_light_paths(light) and self.objects.area[j] > 0]
+        self.caustic_light = np.concatenate([np.full(len(self.index), -1),
+                                             np.array(lit, np.int64)]).astype(np.int64)
+        self.caustic_area = np.concatenate([self.area, self.objects.area[lit]])
+        self.caustic_distribution = Distribution1D(np.concatenate(
+            [tri_power[self.index], self.objects.selection_power()[lit]]))
         k = len(self.index)
         self.num_triangles = k
         self.num_entries = len(weights)

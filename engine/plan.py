@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .lights import traces_light_paths
 from .scene import (
     DIFFUSE,
     GLASS,
@@ -150,10 +151,13 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
-        # Caustic paths need an emissive triangle, a specular surface to reach a Lambertian
+        # Caustic paths need an emissive triangle or an area light BSDF rays can hit
+        # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not).
-        light_tracing=bool(settings.light_tracing and num_emitters > 0 and specular
+        light_tracing=bool(settings.light_tracing and specular
+                           and (num_emitters > 0 or any(traces_light_paths(light)
+                                                        for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO"
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

@@ -54,7 +54,8 @@ def lens_for_fov(fov_deg, sensor=36.0):
 
 
 def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, spheres=True,
-                glass_ior=1.45, mirror=True, glass=True, light_half=(0.4, 0.3), light_z=1.49):
+                glass_ior=1.45, mirror=True, glass=True, light_half=(0.4, 0.3), light_z=1.49,
+                light_mesh=True):
     b = builder or SceneBuilder()
     grey = b.add_material(Material.diffuse("white", (0.6, 0.6, 0.6)))
     red = b.add_material(Material.diffuse("red", (0.6, 0.2, 0.2)))
@@ -71,7 +72,7 @@ def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, sphe
                        (hx, -hy, light_z)),
          light),
     ]
-    for name, (v, t), m in walls:
+    for name, (v, t), m in walls if light_mesh else walls[:-1]:
         b.add_mesh(name, v, t, m)
     if spheres:
         if mirror:
@@ -104,6 +105,20 @@ def caustic_box(light_half=0.05, light_z=1.2, **kw):
     radiance = 10.0 * (0.8 * 0.6) / (4 * light_half * light_half)
     return cornell_box(emitter_radiance=radiance, light_half=(light_half, light_half),
                        light_z=light_z, **kw).build(cornell_camera(), World((0, 0, 0)))
+
+
+def caustic_box_area_light(light_half=0.2, light_z=1.2):
+    """caustic_box with a Blender area light (a square facing down, as bright toward the
+    floor as the quad's lower face) in place of the emissive quad."""
+    from engine import Light
+
+    radiance = 10.0 * (0.8 * 0.6) / (4 * light_half * light_half)
+    power = radiance * np.pi * (2 * light_half) ** 2  # one-sided: P = pi A L
+    b = cornell_box(light_mesh=False)
+    b.add_light(Light("panel", "AREA", (power,) * 3,
+                      look_at((0, 0, light_z), (0, 0, light_z - 1), up=(0, 1, 0)),
+                      size_x=2 * light_half))
+    return b.build(cornell_camera(), World((0, 0, 0)))
 
 
 def settings(**kw):

@@ -19,8 +19,12 @@ plane along the view axis).
 
 Writes out/figures/cbspheres_depths.png, cbdragon_aperture.png, cbdragon_focus.png (rows:
 Specula, Cycles, signed difference), and out/figures/differences.md / .json with, per image,
-the relative RMS difference between the engines beside what noise alone would give and the
-statistical comparison of tests/cycles/compare.py (max |z| against its Sidak threshold).
+the relative RMS difference between the engines beside what noise alone would give, the
+statistical comparison of tests/cycles/compare.py (max |z| against its Sidak threshold), and
+Specula's samples, seconds and estimated relative error with its 95 % interval.
+`--seconds S` gives each Specula image a time budget instead of a sample count,
+`--without-light-tracing` turns its caustic light paths off (to compare at equal time), and
+`--prefix P` names the outputs P<name>.
 """
 
 from __future__ import annotations
@@ -54,10 +58,17 @@ def blender_bounces(course_depth: int) -> int:
     return max(course_depth - 1, 0)
 
 
+# Set by main: Specula's time budget per image (0: `samples`) and light tracing.
+SPECULA_SECONDS, LIGHT_TRACING = 0.0, True
+
+
 def open_scene(name, resolution, samples):
     scene = renderers.open_blend_scene(name, resolution)
     s = scene.specula
     s.samples, s.seed, s.time_limit, s.target_error = samples, 0, 0, 0
+    if SPECULA_SECONDS:
+        s.samples, s.time_limit = 1 << 20, SPECULA_SECONDS
+    s.use_light_tracing = LIGHT_TRACING
     return scene
 
 
@@ -115,15 +126,17 @@ def measure(label, result, runs):
                 rel_rms_difference=float(np.sqrt(np.mean((s - c) ** 2))) / max(rms_c, 1e-12),
                 rel_rms_noise=noise / max(rms_c, 1e-12), max_z=cmp.max_z,
                 z_threshold=cmp.z_threshold, agree=cmp.agree, specula_samples=result.samples,
-                specula_seconds=result.seconds)
+                specula_seconds=result.seconds,
+                specula_relative_error=float(result.relative_error),
+                specula_error_interval=[float(v) for v in result.error_interval])
 
 
 def sheet(title, items, path, exposure=1.0):
     rows = [[imaging.flip(imaging.srgb(it["specula"], exposure)) for it in items],
             [imaging.flip(imaging.srgb(it["cycles"], exposure)) for it in items],
             [imaging.flip(imaging.diff_image(it["specula"], it["cycles"], 0.1)) for it in items]]
-    captions = [[f"{it['specula_samples']} SPP"
-                 for it in items],
+    captions = [[f"{it['specula_samples']} SPP {it['specula_seconds']:.0f} S"
+                 f" E {100 * it['specula_relative_error']:.1f}%" for it in items],
                 ["" for _ in items],
                 [f"D {100 * it['rel_rms_difference']:.1f}% N {100 * it['rel_rms_noise']:.1f}%"
                  f" Z {it['max_z']:.1f}" for it in items]]
@@ -185,12 +198,17 @@ def write_table(groups, path_md, path_json, args):
              f"(max |z| and its Sidak threshold at family level 0.1 %).", ""]
     table = {}
     for title, items in groups:
-        lines += [f"## {title}", "", "| image | D | N | max abs z | threshold | agree |",
-                  "|---|---|---|---|---|---|"]
+        lines += [f"## {title}", "", "| image | D | N | max abs z | threshold | agree | "
+                  "Specula samples | s | estimated error (95 % interval) |",
+                  "|---|---|---|---|---|---|---|---|---|"]
         for it in items:
+            lo, hi = it["specula_error_interval"]
             lines.append(f"| {it['label']} | {100 * it['rel_rms_difference']:.2f} % | "
                          f"{100 * it['rel_rms_noise']:.2f} % | {it['max_z']:.2f} | "
-                         f"{it['z_threshold']:.2f} | {'yes' if it['agree'] else 'NO'} |")
+                         f"{it['z_threshold']:.2f} | {'yes' if it['agree'] else 'NO'} | "
+                         f"{it['specula_samples']} | {it['specula_seconds']:.1f} | "
+                         f"{100 * it['specula_relative_error']:.2f} % "
+                         f"({100 * lo:.2f}-{100 * hi:.2f} %) |")
         lines.append("")
         table[title] = [{k: v for k, v in it.items() if k not in ("specula", "cycles")}
                         for it in items]
@@ -212,7 +230,14 @@ def main(argv=None):
                         help="max_bounces for the CBdragon stacks (default 8)")
     parser.add_argument("--quick", action="store_true", help="80 px wide, 16 samples")
     parser.add_argument("--only", choices=("depths", "focus"), help="one experiment only")
+    parser.add_argument("--seconds", type=float, default=0.0,
+                        help="Specula's time budget per image instead of --samples")
+    parser.add_argument("--without-light-tracing", action="store_true",
+                        help="Specula without its caustic light paths")
+    parser.add_argument("--prefix", default="", help="prefix of the output files' names")
     args = parser.parse_args(argv)
+    global SPECULA_SECONDS, LIGHT_TRACING
+    SPECULA_SECONDS, LIGHT_TRACING = args.seconds, not args.without_light_tracing
     width, samples = (80, 16) if args.quick else (args.width, args.samples)
     os.makedirs(OUT, exist_ok=True)
     t0 = time.perf_counter()
@@ -220,19 +245,19 @@ def main(argv=None):
     if args.only in (None, "depths"):
         depths = depth_experiment((width, width * 3 // 4), samples)
         sheet("CBSPHERES: COURSE MAX RAY DEPTH (BLENDER MAX_BOUNCES = DEPTH - 1)", depths,
-              os.path.join(OUT, "cbspheres_depths.png"))
+              os.path.join(OUT, args.prefix + "cbspheres_depths.png"))
         groups.append(("CBspheres: course ray depth (Blender max_bounces)", depths))
     if args.only in (None, "focus"):
         aperture, focus = focus_experiments((width, width * 9 // 16), samples,
                                             args.dragon_bounces)
         sheet("CBDRAGON: APERTURE SWEEP AT FOCAL DISTANCE 4.56 (R = LENS RADIUS)", aperture,
-              os.path.join(OUT, "cbdragon_aperture.png"))
+              os.path.join(OUT, args.prefix + "cbdragon_aperture.png"))
         sheet("CBDRAGON: FOCAL DISTANCE SWEEP AT LENS RADIUS 1.23", focus,
-              os.path.join(OUT, "cbdragon_focus.png"))
+              os.path.join(OUT, args.prefix + "cbdragon_focus.png"))
         groups += [("CBdragon: aperture sweep at focal distance 4.56", aperture),
                    ("CBdragon: focal distance sweep at lens radius 1.23", focus)]
-    write_table(groups, os.path.join(OUT, "differences.md"),
-                os.path.join(OUT, "differences.json"), argv)
+    write_table(groups, os.path.join(OUT, args.prefix + "differences.md"),
+                os.path.join(OUT, args.prefix + "differences.json"), argv)
     print(f"done in {time.perf_counter() - t0:.0f} s")
     return 0
 

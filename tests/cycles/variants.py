@@ -649,6 +649,19 @@ def caustic_quad():
     bpy.context.scene.specula.use_light_tracing = True
 
 
+def caustic_area_light():
+    """caustic_quad with a Blender area light of the same size facing down in place of the
+    quad (the same power toward the floor): light paths start on light objects too."""
+    _open("cbspheres.blend")
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    light = bpy.data.lights.new("Panel", "AREA")
+    light.shape, light.size = "SQUARE", 0.4
+    light.energy = 10.0 * 0.48 / 0.16 * math.pi * 0.16  # P = pi A L
+    obj = bpy.data.objects.new("Panel", light)
+    obj.location = (0.0, 0.0, 1.2)
+    bpy.context.scene.collection.objects.link(obj)
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -704,6 +717,8 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,
              files=(BLEND["cbspheres.blend"],)))
+_add(Variant("caustic_area_light", caustic_area_light, max_bounces=8, samples=1024,
+             cycles_samples=2048, files=(BLEND["cbspheres.blend"],)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):

@@ -65,6 +65,12 @@ def test_plan_traces_light_only_where_caustics_can_occur(box):
     assert not make_plan(box, scenes.settings(**SIZE, fresnel="schlick",
                                               light_tracing=True)).light_tracing
     assert "trace light paths" in make_plan(box, st).describe()
+    # An area light is a source too, unless BSDF rays cannot hit it (then neither path
+    # tracing nor Cycles finds its caustics).
+    area = scenes.caustic_box_area_light()
+    assert make_plan(area, st).light_tracing
+    area.lights[0] = replace(area.lights[0], use_mis=False)
+    assert not make_plan(area, st).light_tracing
 
 
 @pytest.mark.slow
@@ -83,6 +89,37 @@ def test_dropping_the_light_paths_contribution_fails(box, path_traced, monkeypat
     one_off_kernels(monkeypatch, caustics=module_with(
         caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
     c = agrees(combined(box), path_traced)
+    assert not c.agree, c
+
+
+@pytest.fixture(scope="module")
+def area_box():
+    """The same box lit by a Blender area light of the same size (a light object, one-sided:
+    its light paths start in front of it)."""
+    return scenes.caustic_box_area_light(light_half=0.2)
+
+
+@pytest.fixture(scope="module")
+def area_path_traced(area_box):
+    return np.stack([render(area_box, scenes.settings(**SIZE, samples=1024, seed=100 + k,
+                                                      light_tracing=False)).combined[..., :3]
+                     for k in range(4)])
+
+
+@pytest.mark.slow
+def test_area_light_caustics_agree_with_path_tracing(area_box, area_path_traced):
+    r = combined(area_box)
+    c = agrees(r, area_path_traced)
+    assert c.agree, c
+    assert r.relative_error < 0.75 * render(area_box, scenes.settings(
+        **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
+
+
+@pytest.mark.slow
+def test_area_light_paths_dropped_fail(area_box, area_path_traced, monkeypatch):
+    one_off_kernels(monkeypatch, caustics=module_with(
+        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
+    c = agrees(combined(area_box), area_path_traced)
     assert not c.agree, c
 
 

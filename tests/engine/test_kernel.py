@@ -61,6 +61,14 @@ def test_cbspheres_same_in_both_kernels(opts):
     assert_same_image(*both(scenes.cbspheres(), **opts))
 
 
+def test_area_light_caustics_same_in_both_kernels():
+    """Light paths from a light object and its solid-angle sampling: the same bits in
+    both kernels."""
+    a, b = both(scenes.caustic_box_area_light())
+    assert a.plan.light_tracing
+    assert_same_image(a, b)
+
+
 @pytest.mark.parametrize("cam", [
     dict(use_dof=True, fstop=0.5, focus_distance=2.5),
     dict(use_dof=True, fstop=0.4, focus_distance=3.5, blades=5, rotation=0.3, ratio=1.6),
