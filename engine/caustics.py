@@ -41,6 +41,7 @@ from collections import namedtuple
 import numpy as np
 
 from .jit import INLINE, JIT, njit
+from .lights import SUN
 
 # p_dir(y) / |cos y| of cosine emission: from either face of a triangle |cos| / (2 pi), from
 # the front of an area light cos / pi.
@@ -52,24 +53,34 @@ ONE_SIDED_DIRECTION_DENSITY = 1.0 / math.pi
 # lights) the CDF by power, p_emit = p_sel p_A p_dir / |cos| (the density of a light path's
 # start point and direction per projected solid angle), and the light object's index (-1:
 # a triangle); per light object its source (-1: none).
-CausticData = namedtuple("CausticData", "n_light cdf pdf_emit light source_of_light")
+# A sun's paths start on a disk across its cone (lights.LightSampler._caustic_sources),
+# directions uniform in the cone: p_dir / |cos y| = 1 / (solid angle |cos y|), the cosine
+# to the disk's normal being the path's own; pdf_emit holds the rest and the cosine is
+# divided at either end. disk: (centre, radius) per source, zeros but for suns.
+CausticData = namedtuple("CausticData", "n_light cdf pdf_emit light source_of_light disk")
 
 
 def caustic_data(n_light: float, sampler) -> CausticData:
     """The light tracer's sources from a lights.LightSampler, n_light paths per pass."""
     dist, light = sampler.caustic_distribution, sampler.caustic_light
-    per_cos = np.where(light < 0, TWO_SIDED_DIRECTION_DENSITY, ONE_SIDED_DIRECTION_DENSITY)
-    source_of_light = np.full(sampler.objects.count, -1, np.int64)
+    o = sampler.objects
+    sun = np.zeros(len(light), bool)
+    sun[light >= 0] = o.type[light[light >= 0]] == SUN
+    cone = np.ones(len(light))
+    cone[sun] = 2.0 * np.pi * (1.0 - o.cos_half_angle[light[sun]])
+    per_cos = np.where(light < 0, TWO_SIDED_DIRECTION_DENSITY,
+                       np.where(sun, 1.0 / cone, ONE_SIDED_DIRECTION_DENSITY))
+    source_of_light = np.full(o.count, -1, np.int64)
     source_of_light[light[light >= 0]] = np.nonzero(light >= 0)[0]
     return CausticData(float(n_light), dist.cdf,
                        dist.pmf / np.maximum(sampler.caustic_area, 1e-300) * per_cos, light,
-                       source_of_light)
+                       source_of_light, sampler.caustic_disk)
 
 
 def no_caustic_data() -> CausticData:
     """What a kernel compiled with light tracing reads when a scene has none."""
     return CausticData(0.0, np.zeros(0), np.zeros(0), np.zeros(0, np.int64),
-                       np.zeros(0, np.int64))
+                       np.zeros(0, np.int64), np.zeros((0, 4)))
 
 
 @njit(**INLINE)

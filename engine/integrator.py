@@ -197,7 +197,7 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                     j, ox, oy, oz, dx, dy, dz, th, L)
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
             elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
-                w = caustic_weight(i, sc.caustics.source_of_light[j], sc, paths)
+                w = caustic_weight(i, sc.caustics.source_of_light[j], 1.0, sc, paths)
             _add(paths, row, t0, t1, t2, l0, l1, l2, w)
     if HAS_SUN_DISCS and f < 0:
         sun_seen = _SUN_CAMERA if depth == 0 else _SUN_BSDF
@@ -211,6 +211,11 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                 pdf_l = emitter_pmf(ox, oy, oz, paths.prev_normal[i], num_tri + j, em) / (
                     2.0 * np.pi * (1.0 - cos_half))
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
+            elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
+                # The light path's cosine at its start disk: to the sun's axis.
+                cos_y = -(dx * L[j, _DIRECTION] + dy * L[j, _DIRECTION + 1]
+                          + dz * L[j, _DIRECTION + 2])
+                w = caustic_weight(i, sc.caustics.source_of_light[j], cos_y, sc, paths)
             sr = L[j, _SUN_RADIANCE]
             _add(paths, row, t0, t1, t2, L[j, _POWER] * sr, L[j, _POWER + 1] * sr,
                  L[j, _POWER + 2] * sr, w)
@@ -300,7 +305,7 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
         w = power_heuristic(paths.prev_pdf[i], pdf_l)
     elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
         # Emissive triangles are the light tracer's first sources, in entry order.
-        w = caustic_weight(i, sc.emitters.entry_of_triangle[x.f], sc, paths)
+        w = caustic_weight(i, sc.emitters.entry_of_triangle[x.f], 1.0, sc, paths)
     _add(paths, row, paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2],
          le0, le1, le2, w)
     if DEBUG:
@@ -308,15 +313,16 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def caustic_weight(i, source, sc, paths):
+def caustic_weight(i, source, cos_y, sc, paths):
     """w_PT of path i, which reached light-tracer source `source` (-1: not one) at the end
-    of a camera -> Lambertian -> ... -> specular chain (caustics.py)."""
+    of a camera -> Lambertian -> ... -> specular chain (caustics.py); cos_y divides p_emit
+    (a sun's: the cosine at its start disk; 1 for the others)."""
     ca = sc.caustics
-    if source < 0 or source >= len(ca.pdf_emit):
+    if source < 0 or source >= len(ca.pdf_emit) or not cos_y > 0.0:
         return 1.0
     eta = paths.caustic_eta[i]
-    return caustics.path_tracing_weight(ca.n_light, ca.pdf_emit[source], 1.0 / (eta * eta),
-                                        paths.caustic_q[i])
+    return caustics.path_tracing_weight(ca.n_light, ca.pdf_emit[source] / cos_y,
+                                        1.0 / (eta * eta), paths.caustic_q[i])
 
 
 def russian_roulette(depth, t0, t1, t2, pseed, rev_sample):

@@ -31,9 +31,9 @@ from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roul
                          sample_bsdf, surface_interaction)
 from .jit import ALLOCATING, INLINE, JIT
 from .bsdf import Layer
-from .sampling import (LIGHT_POINT, LIGHT_SELECT, bounce_dim, build_frame, cosine_hemisphere,
-                       hash_combine, pixel_seed, reverse_bits, sample_1d, sample_2d, sample_cdf,
-                       uniform_triangle)
+from .sampling import (LIGHT_POINT, LIGHT_SELECT, bounce_dim, build_frame, concentric_disk,
+                       cosine_hemisphere, hash_combine, pixel_seed, reverse_bits, sample_1d,
+                       sample_2d, sample_cdf, uniform_triangle)
 
 # Dimension pairs of a light path's start (its per-bounce blocks follow, as a camera path's).
 DIM_EMITTER_POINT, DIM_EMISSION = 0, 1
@@ -73,6 +73,10 @@ def start_light_paths(ids, sample, seed, sc, lp):
         ua, ub = sample_2d(ps, rev, DIM_EMITTER_POINT)
         va, vb = sample_2d(ps, rev, DIM_EMISSION)
         j = ca.light[e]
+        pe = ca.pdf_emit[e]
+        if HAS_LIGHT_OBJECTS and HAS_SUN_DISCS and j >= 0 and lights.is_sun(j, em.objects):
+            start_sun_path(i, e, j, ua, ub, va, vb, sc, lp)
+            continue
         if HAS_LIGHT_OBJECTS and j >= 0:
             L = em.objects
             px, py, pz = lights.area_light_point(j, ua, ub, L)
@@ -105,15 +109,39 @@ def start_light_paths(ids, sample, seed, sc, lp):
         for k in range(3):
             lp.origin32[i, k] = lp.o64[i, k]
             lp.dir32[i, k] = lp.d64[i, k]
-        # Radiance over p_sel p_A p_dir, the cosine cancelled (caustics.py).
-        pe = ca.pdf_emit[e]
-        lp.throughput[i, 0], lp.throughput[i, 1], lp.throughput[i, 2] = r0 / pe, r1 / pe, r2 / pe
-        lp.tmax32[i] = np.inf
-        lp.prev_pdf[i] = np.inf
-        lp.eta[i] = 1.0
-        lp.pdf_emit[i] = pe
-        lp.start[i] = max(max(r0, max(r1, r2)), 1e-300) / pe
+        _set_start(i, r0, r1, r2, pe, lp)
     return len(ids)
+
+
+def _set_start(i, r0, r1, r2, pe, lp):
+    """A light path's start weight: radiance over p_emit = p_sel p_A p_dir / |cos| (the
+    cosine cancelled, caustics.py)."""
+    lp.throughput[i, 0], lp.throughput[i, 1], lp.throughput[i, 2] = r0 / pe, r1 / pe, r2 / pe
+    lp.tmax32[i] = np.inf
+    lp.prev_pdf[i] = np.inf
+    lp.eta[i] = 1.0
+    lp.pdf_emit[i] = pe
+    lp.start[i] = max(max(r0, max(r1, r2)), 1e-300) / pe
+
+
+def start_sun_path(i, e, j, ua, ub, va, vb, sc, lp):
+    """Light path i from sun j (source e): a direction in its cone, a uniform point on the
+    source's disk across it (caustics.CausticData.disk)."""
+    L, disk = sc.emitters.objects, sc.caustics.disk
+    ax, ay, az = lights.emission_axis(j, L)
+    dx, dy, dz, cos_y = lights.sun_direction(j, va, vb, L)
+    s, t = build_frame(ax, ay, az)
+    qa, qb = concentric_disk(ua, ub)
+    qa, qb = qa * disk[e, 3], qb * disk[e, 3]
+    lp.o64[i, 0] = disk[e, 0] + qa * s[0] + qb * t[0]
+    lp.o64[i, 1] = disk[e, 1] + qa * s[1] + qb * t[1]
+    lp.o64[i, 2] = disk[e, 2] + qa * s[2] + qb * t[2]
+    lp.d64[i, 0], lp.d64[i, 1], lp.d64[i, 2] = dx, dy, dz
+    for k in range(3):
+        lp.origin32[i, k] = lp.o64[i, k]
+        lp.dir32[i, k] = lp.d64[i, k]
+    r0, r1, r2 = lights.sun_disc_radiance(j, L)
+    _set_start(i, r0, r1, r2, sc.caustics.pdf_emit[e] / cos_y, lp)
 
 
 def connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample):
@@ -275,8 +303,8 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
 
 
 # name -> (function, numba options), compiled with integrator.STAGES (kernels.Kernel).
-STAGES = {connect_camera.__name__: (connect_camera, INLINE)}
+STAGES = {f.__name__: (f, INLINE) for f in (connect_camera, _set_start, start_sun_path)}
 STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce)})
 STAGES["splat"] = (splat, ALLOCATING)  # one small scratch row per call
 # The plan's values replace these (specialise.py).
-HAS_DOF = HAS_POLYGON_APERTURE = HAS_LIGHT_OBJECTS = True
+HAS_DOF = HAS_POLYGON_APERTURE = HAS_LIGHT_OBJECTS = HAS_SUN_DISCS = True

@@ -38,9 +38,10 @@ from .sampling import (MIN_SOLID_ANGLE, Distribution1D, build_frame, concentric_
                        cross_rows, sample_cdf, spherical_rectangle,
                        spherical_rectangle_solid_angle, uniform_cone, uniform_cone_pdf,
                        uniform_triangle)
-from .scene import Scene
+from .scene import GLASS, METAL, MIRROR, Scene
 
 POINT, SPOT, SUN, AREA = 0, 1, 2, 3
+SPECULAR_KINDS = (MIRROR, METAL, GLASS)
 LIGHT_TYPES = {"POINT": POINT, "SPOT": SPOT, "SUN": SUN, "AREA": AREA}
 ELLIPTIC_SHAPES = ("DISK", "ELLIPSE")
 
@@ -179,11 +180,16 @@ class LightObjects:
 
 def traces_light_paths(light) -> bool:
     """Whether light paths start on a light object (scene.Light): an area light of some
-    size that BSDF rays can hit (Cycles' Multiple Importance; otherwise path tracing
-    never finds its caustics, and neither does Cycles). Point, spot and sun lights are not
-    sources yet."""
-    return (light.type == "AREA" and light.size_x > 0 and max(light.power) > 0
-            and bool(light.use_mis) and (light.size_y > 0 or light.shape in ("SQUARE", "DISK")))
+    size or a sun of some angle, that BSDF rays can hit (Cycles' Multiple Importance;
+    otherwise path tracing never finds its caustics, and neither does Cycles). Point and
+    spot lights are not sources (with Soft Falloff a disk facing each shading point has no
+    density for light paths)."""
+    if not (max(light.power) > 0 and bool(light.use_mis)):
+        return False
+    if light.type == "SUN":  # up to 90 degrees (wider, its start disk is unbounded)
+        return 0 < light.angle <= math.pi / 2
+    return (light.type == "AREA" and light.size_x > 0
+            and (light.size_y > 0 or light.shape in ("SQUARE", "DISK")))
 
 
 @njit(**JIT)
@@ -323,8 +329,29 @@ def area_light_point(j, ua, ub, L):
 
 @njit(**INLINE)
 def emission_axis(j, L):
-    """Light j's emission direction (an area light's front normal)."""
+    """Light j's emission direction (an area light's front normal, the way a sun's light
+    travels)."""
     return L[j, _DIRECTION], L[j, _DIRECTION + 1], L[j, _DIRECTION + 2]
+
+
+@njit(**INLINE)
+def is_sun(j, L):
+    return L[j, _TYPE] == SUN
+
+
+@njit(**INLINE)
+def sun_direction(j, ua, ub, L):
+    """A direction light from sun j travels, uniform in its cone: (w, cos to its axis)."""
+    wx, wy, wz, cos, _ = uniform_cone(L[j, _DIRECTION], L[j, _DIRECTION + 1],
+                                      L[j, _DIRECTION + 2], L[j, _COS_ANGLE], ua, ub)
+    return wx, wy, wz, cos
+
+
+@njit(**INLINE)
+def sun_disc_radiance(j, L):
+    """Radiance of sun j's disc (per channel)."""
+    k = L[j, _SUN_RADIANCE]
+    return L[j, _POWER] * k, L[j, _POWER + 1] * k, L[j, _POWER + 2] * k
 
 
 @njit(**INLINE)
@@ -504,15 +531,7 @@ class LightSampler:
         weights = np.concatenate([tri_power[self.index], self.objects.selection_power(),
                                   env_power])
         self.distribution = Distribution1D(weights)
-        # The light tracer's sources (caustics.py): the emissive triangles, then the area
-        # lights BSDF rays can hit, chosen by the same power.
-        lit = [j for j, light in enumerate(scene.lights)
-               if traces_light_paths(light) and self.objects.area[j] > 0]
-        self.caustic_light = np.concatenate([np.full(len(self.index), -1),
-                                             np.array(lit, np.int64)]).astype(np.int64)
-        self.caustic_area = np.concatenate([self.area, self.objects.area[lit]])
-        self.caustic_distribution = Distribution1D(np.concatenate(
-            [tri_power[self.index], self.objects.selection_power()[lit]]))
+        self._caustic_sources(scene, tri_power[self.index])
         k = len(self.index)
         self.num_triangles = k
         self.num_entries = len(weights)
@@ -530,6 +549,41 @@ class LightSampler:
             self._build_grid(v.reshape(-1, 3), weights, centres, distant)
         elif self.IMPORTANCE and 2 <= self.num_entries < self.MIN_ENTRIES:
             self.bounds = self._bounds(weights, centres, distant)
+
+    def _caustic_sources(self, scene, tri_power):
+        """The light tracer's sources (caustics.py): the emissive triangles, then the
+        light objects light paths start on (traces_light_paths), chosen by power. A sun's
+        paths start on a disk across its direction, upstream of all the geometry (so
+        whatever shades a sun ray shades its light path), just big enough to send every
+        direction of its cone through the bounding sphere of the specular surfaces (only
+        paths whose first hit is specular are light tracing's): caustic_disk holds its
+        centre and radius (zeros for the others), caustic_area the sources' areas."""
+        o = self.objects
+        lit = [j for j, light in enumerate(scene.lights) if traces_light_paths(light)
+               and (o.area[j] > 0 or o.type[j] == SUN)]
+        kinds = scene.materials.kind[scene.material_index]
+        specular = np.isin(kinds, SPECULAR_KINDS)
+        pts = scene.vertices[specular].reshape(-1, 3)
+        centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0)) if len(pts) else np.zeros(3)
+        r_spec = float(np.linalg.norm(pts - centre, axis=1).max()) if len(pts) else 0.0
+        disk = np.zeros((len(lit), 4))
+        area = o.area[lit].astype(float)
+        power = o.power.mean(axis=1)[lit]
+        for k, j in enumerate(lit):
+            if o.type[j] == SUN:
+                tan_half = math.tan(math.acos(min(max(o.cos_half_angle[j], -1.0), 1.0)))
+                # Upstream of the geometry's bounding sphere (recentred: about the origin).
+                up = float(np.linalg.norm(centre)) + math.sqrt(3.0) * scene.extent + r_spec
+                up = 1.01 * up + 1e-9
+                radius = (max(r_spec, 1e-12) + up * tan_half) * 1.001
+                disk[k] = (*(centre - up * o.direction[j]), radius)
+                area[k] = math.pi * radius * radius
+                power[k] = power[k] * area[k]  # irradiance across the disk
+        self.caustic_light = np.concatenate([np.full(len(self.index), -1),
+                                             np.array(lit, np.int64)]).astype(np.int64)
+        self.caustic_area = np.concatenate([self.area, area])
+        self.caustic_disk = np.concatenate([np.zeros((len(self.index), 4)), disk])
+        self.caustic_distribution = Distribution1D(np.concatenate([tri_power, power]))
 
     def _bounds(self, weights, centres, distant):
         """The few emitters' bounds for the choice by importance at each point (as a light

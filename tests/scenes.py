@@ -121,6 +121,29 @@ def caustic_box_area_light(light_half=0.2, light_z=1.2):
     return b.build(cornell_camera(), World((0, 0, 0)))
 
 
+def sun_caustic_scene(angle_degrees=30.0, strength=3.0):
+    """A glass sphere and a mirror sphere on a floor in the sun (30 degrees from the
+    zenith, of the given angular diameter), seen from above; black world."""
+    from engine import Light
+
+    b = SceneBuilder()
+    grey = b.add_material(Material.diffuse("floor", (0.6, 0.6, 0.6)))
+    v, t = quad((-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0))
+    b.add_mesh("floor", v, t, grey)
+    gm = b.add_material(Material.glass("glass", (1, 1, 1), 1.5))
+    v, t, n = uv_sphere((0.0, 0.0, 0.3), 0.3)
+    b.add_mesh("glass sphere", v, t, gm, corner_normals=n)
+    mm = b.add_material(Material.mirror("mirror", (1, 1, 1)))
+    v, t, n = uv_sphere((0.75, 0.35, 0.2), 0.2)
+    b.add_mesh("mirror sphere", v, t, mm, corner_normals=n)
+    toward = np.array([-math.sin(math.radians(30)), 0.3, math.cos(math.radians(30))])
+    b.add_light(Light("sun", "SUN", (strength,) * 3, look_at(toward, (0, 0, 0), up=(0, 1, 0)),
+                      angle=math.radians(angle_degrees)))
+    cam = Camera(world_from_camera=look_at((0.3, -2.2, 2.0), (0.3, 0.0, 0.15)),
+                 lens_mm=lens_for_fov(40.0), sensor_fit="HORIZONTAL")
+    return b.build(cam, World((0, 0, 0)))
+
+
 def settings(**kw):
     base = dict(width=96, height=72, samples=8, max_bounces=8, seed=1)
     base.update(kw)

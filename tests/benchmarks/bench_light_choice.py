@@ -100,7 +100,7 @@ def main(argv=None) -> int:
         os.makedirs(OUT, exist_ok=True)
         # Reference, then each engine's RMS error per pixel, on one scale.
         write_png(os.path.join(OUT, f"light_choice_{name}.png"),
-                  np.concatenate([m[::-1] for m in maps], axis=1).repeat(4, 0).repeat(4, 1))
+                  np.concatenate(maps, axis=1).repeat(4, 0).repeat(4, 1))
         row["ratio"] = row["specula"] / row["cycles"]
         row["reference_variance"] = ref_var
         report[name] = row

@@ -24,6 +24,7 @@ import sys
 from dataclasses import dataclass, field
 
 import bpy
+import mathutils
 import numpy as np
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -662,6 +663,31 @@ def caustic_area_light():
     bpy.context.scene.collection.objects.link(obj)
 
 
+def caustic_sun():
+    """A glass and a mirror sphere on a floor under a 30-degree sun (tests/scenes.py
+    sun_caustic_scene): light paths start on a disk across the sun's cone."""
+    scene = bs.new_scene()
+    coll = scene.collection
+    bs.quad("Floor", [(-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0)],
+            bs.diffuse("Floor", (0.6, 0.6, 0.6)), coll)
+    bs.uv_sphere("Glass", (0.0, 0.0, 0.3), 0.3,
+                 bs.material("Glass", "ShaderNodeBsdfGlass", Color=(1, 1, 1, 1), Roughness=0.0,
+                             IOR=1.5), coll)
+    bs.uv_sphere("Mirror", (0.75, 0.35, 0.2), 0.2,
+                 bs.material("Mirror", "ShaderNodeBsdfGlossy", Color=(1, 1, 1, 1),
+                             Roughness=0.0), coll)
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy, sun.angle = 3.0, math.radians(30.0)
+    obj = bpy.data.objects.new("Sun", sun)
+    toward = mathutils.Vector((-math.sin(math.radians(30)), 0.3, math.cos(math.radians(30))))
+    obj.rotation_euler = toward.to_track_quat("Z", "Y").to_euler()  # local +Z to the sun
+    coll.objects.link(obj)
+    cam = bs.camera(scene, "Camera", (0.3, -2.2, 2.0), bs.CBSPHERES_LENS, (64, 48))
+    look = mathutils.Vector((0.3, 0.0, 0.15)) - cam.location
+    cam.rotation_euler = look.to_track_quat("-Z", "Y").to_euler()
+    bs.black_world(scene)
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -719,6 +745,7 @@ _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_s
              files=(BLEND["cbspheres.blend"],)))
 _add(Variant("caustic_area_light", caustic_area_light, max_bounces=8, samples=1024,
              cycles_samples=2048, files=(BLEND["cbspheres.blend"],)))
+_add(Variant("caustic_sun", caustic_sun, max_bounces=8, samples=1024, cycles_samples=2048))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):

@@ -123,6 +123,40 @@ def test_area_light_paths_dropped_fail(area_box, area_path_traced, monkeypatch):
     assert not c.agree, c
 
 
+@pytest.fixture(scope="module")
+def sun():
+    """A glass and a mirror sphere on a floor under a 30-degree sun: light paths start on
+    a disk across the sun's cone, upstream of the scene. (Under a 10-degree sun 4 x 1024
+    path-traced samples have not found the sunlight the mirror sphere spreads over the
+    floor: in a corner block they read 0.4760, light tracing 0.4784 and path tracing at
+    65,536 samples 0.4782 +- 0.0003.)"""
+    return scenes.sun_caustic_scene()
+
+
+@pytest.fixture(scope="module")
+def sun_path_traced(sun):
+    return np.stack([render(sun, scenes.settings(**SIZE, samples=1024, seed=100 + k,
+                                                 light_tracing=False)).combined[..., :3]
+                     for k in range(4)])
+
+
+@pytest.mark.slow
+def test_sun_caustics_agree_with_path_tracing(sun, sun_path_traced):
+    r = combined(sun)
+    c = agrees(r, sun_path_traced)
+    assert c.agree, c
+    assert r.relative_error < 0.75 * render(sun, scenes.settings(
+        **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
+
+
+@pytest.mark.slow
+def test_sun_light_paths_dropped_fail(sun, sun_path_traced, monkeypatch):
+    one_off_kernels(monkeypatch, caustics=module_with(
+        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
+    c = agrees(combined(sun), sun_path_traced)
+    assert not c.agree, c
+
+
 @pytest.mark.slow
 def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
     from engine import bsdf, integrator
