@@ -35,12 +35,16 @@ def box():
     return scenes.caustic_box(light_half=0.2)
 
 
+def plain_runs(scene):
+    """Four plain path-traced renders (light tracing off), independent seeds."""
+    return np.stack([render(scene, scenes.settings(**SIZE, samples=1024, seed=100 + k,
+                                                   light_tracing=False)).combined[..., :3]
+                     for k in range(4)])
+
+
 @pytest.fixture(scope="module")
 def path_traced(box):
-    """Four plain path-traced renders (light tracing off), independent seeds."""
-    return np.stack([render(box, scenes.settings(**SIZE, samples=1024, seed=100 + k,
-                                                 light_tracing=False)).combined[..., :3]
-                     for k in range(4)])
+    return plain_runs(box)
 
 
 def combined(box, seed=7):
@@ -75,86 +79,56 @@ def test_plan_traces_light_only_where_caustics_can_occur(box):
 
 @pytest.mark.slow
 def test_light_tracing_with_mis_agrees_with_path_tracing(box, path_traced):
-    r = combined(box)
-    c = agrees(r, path_traced)
+    assert_agrees_and_converges_faster(box, path_traced)
+
+
+def assert_agrees_and_converges_faster(scene, runs):
+    r = combined(scene)
+    c = agrees(r, runs)
     assert c.agree, c
     # And it is the better estimate of the two at equal samples: the light paths find the
     # caustics the camera paths hit by chance.
-    assert r.relative_error < 0.75 * render(box, scenes.settings(
+    assert r.relative_error < 0.75 * render(scene, scenes.settings(
         **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
+
+
+def assert_fails_without_light_paths(scene, runs, monkeypatch):
+    one_off_kernels(monkeypatch, caustics=module_with(
+        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
+    c = agrees(combined(scene), runs)
+    assert not c.agree, c
 
 
 @pytest.mark.slow
 def test_dropping_the_light_paths_contribution_fails(box, path_traced, monkeypatch):
-    one_off_kernels(monkeypatch, caustics=module_with(
-        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
-    c = agrees(combined(box), path_traced)
-    assert not c.agree, c
+    assert_fails_without_light_paths(box, path_traced, monkeypatch)
 
 
-@pytest.fixture(scope="module")
-def area_box():
-    """The same box lit by a Blender area light of the same size (a light object, one-sided:
-    its light paths start in front of it)."""
-    return scenes.caustic_box_area_light(light_half=0.2)
+# Light objects as sources: a Blender area light of the box's 0.4 quad (one-sided: its
+# light paths start in front of it), and a glass and a mirror sphere on a floor under a
+# 30-degree sun (light paths start on a disk across the sun's cone, upstream of the scene;
+# under a 10-degree sun 4 x 1024 path-traced samples have not found the sunlight the
+# mirror sphere spreads over the floor: in a corner block they read 0.4760, light tracing
+# 0.4784 and path tracing at 65,536 samples 0.4782 +- 0.0003).
+LIGHT_OBJECT_SCENES = {"area light": lambda: scenes.caustic_box_area_light(light_half=0.2),
+                       "sun": scenes.sun_caustic_scene}
 
 
-@pytest.fixture(scope="module")
-def area_path_traced(area_box):
-    return np.stack([render(area_box, scenes.settings(**SIZE, samples=1024, seed=100 + k,
-                                                      light_tracing=False)).combined[..., :3]
-                     for k in range(4)])
-
-
-@pytest.mark.slow
-def test_area_light_caustics_agree_with_path_tracing(area_box, area_path_traced):
-    r = combined(area_box)
-    c = agrees(r, area_path_traced)
-    assert c.agree, c
-    assert r.relative_error < 0.75 * render(area_box, scenes.settings(
-        **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
+@pytest.fixture(scope="module", params=list(LIGHT_OBJECT_SCENES))
+def lit_by_object(request):
+    """(scene, four plain path-traced renders of it)."""
+    scene = LIGHT_OBJECT_SCENES[request.param]()
+    return scene, plain_runs(scene)
 
 
 @pytest.mark.slow
-def test_area_light_paths_dropped_fail(area_box, area_path_traced, monkeypatch):
-    one_off_kernels(monkeypatch, caustics=module_with(
-        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
-    c = agrees(combined(area_box), area_path_traced)
-    assert not c.agree, c
-
-
-@pytest.fixture(scope="module")
-def sun():
-    """A glass and a mirror sphere on a floor under a 30-degree sun: light paths start on
-    a disk across the sun's cone, upstream of the scene. (Under a 10-degree sun 4 x 1024
-    path-traced samples have not found the sunlight the mirror sphere spreads over the
-    floor: in a corner block they read 0.4760, light tracing 0.4784 and path tracing at
-    65,536 samples 0.4782 +- 0.0003.)"""
-    return scenes.sun_caustic_scene()
-
-
-@pytest.fixture(scope="module")
-def sun_path_traced(sun):
-    return np.stack([render(sun, scenes.settings(**SIZE, samples=1024, seed=100 + k,
-                                                 light_tracing=False)).combined[..., :3]
-                     for k in range(4)])
+def test_light_object_caustics_agree_with_path_tracing(lit_by_object):
+    assert_agrees_and_converges_faster(*lit_by_object)
 
 
 @pytest.mark.slow
-def test_sun_caustics_agree_with_path_tracing(sun, sun_path_traced):
-    r = combined(sun)
-    c = agrees(r, sun_path_traced)
-    assert c.agree, c
-    assert r.relative_error < 0.75 * render(sun, scenes.settings(
-        **SIZE, samples=512, seed=7, replicates=4, light_tracing=False)).relative_error
-
-
-@pytest.mark.slow
-def test_sun_light_paths_dropped_fail(sun, sun_path_traced, monkeypatch):
-    one_off_kernels(monkeypatch, caustics=module_with(
-        caustics, light_tracing_contribution=lambda beta, refl, cs, cc, rpa, eta2: 0.0))
-    c = agrees(combined(sun), sun_path_traced)
-    assert not c.agree, c
+def test_light_object_paths_dropped_fail(lit_by_object, monkeypatch):
+    assert_fails_without_light_paths(*lit_by_object, monkeypatch)
 
 
 @pytest.mark.slow
