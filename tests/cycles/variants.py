@@ -661,6 +661,7 @@ def caustic_area_light():
     obj = bpy.data.objects.new("Panel", light)
     obj.location = (0.0, 0.0, 1.2)
     bpy.context.scene.collection.objects.link(obj)
+    bpy.context.scene.specula.use_light_tracing = True
 
 
 def caustic_sun():
@@ -686,6 +687,7 @@ def caustic_sun():
     look = mathutils.Vector((0.3, 0.0, 0.15)) - cam.location
     cam.rotation_euler = look.to_track_quat("-Z", "Y").to_euler()
     bs.black_world(scene)
+    scene.specula.use_light_tracing = True
 
 
 def _bounces(n):

@@ -64,7 +64,7 @@ def test_cbspheres_same_in_both_kernels(opts):
 def test_area_light_caustics_same_in_both_kernels():
     """Light paths from a light object and its solid-angle sampling: the same bits in
     both kernels."""
-    a, b = both(scenes.caustic_box_area_light())
+    a, b = both(scenes.caustic_box_area_light(), light_tracing=True)
     assert a.plan.light_tracing
     assert_same_image(a, b)
 
