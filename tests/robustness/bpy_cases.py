@@ -6,7 +6,6 @@ from __future__ import annotations  # noqa: I001 - bpy must be imported before b
 
 import json
 import os
-import resource
 import sys
 import time
 
@@ -17,10 +16,7 @@ import numpy as np
 import addon
 from addon import core as core_loader
 from addon import exporter, render_session
-
-
-def peak_rss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+from tests.memory import peak_rss_mb
 
 
 def fresh():

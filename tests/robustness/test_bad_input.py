@@ -90,9 +90,10 @@ def test_100k_instances_export_and_render_in_bounded_memory(tmp_path):
 
 # ------------------------------------------------------------------ the core
 FIVE_MILLION = r"""
-import json, resource, sys, time
+import json, sys, time
 import numpy as np
 from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from tests.memory import peak_rss_mb
 from tests.scenes import look_at
 k = 1581  # 2 * 1581^2 = 4,999,122 triangles: a bumpy height field
 xs = np.linspace(-1, 1, k + 1)
@@ -115,7 +116,7 @@ print(json.dumps(dict(triangles=int(scene.num_triangles), kept=kept, add_mesh_s=
                       build_s=t2 - t1, render_s=t3 - t2,
                       finite=bool(np.isfinite(r.combined).all()),
                       hit_fraction=float((r.depth < 1e9).mean()),
-                      peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)))
+                      peak_rss_mb=peak_rss_mb())))
 """
 
 
