@@ -43,7 +43,7 @@ class SpeculaSceneSettings(bpy.types.PropertyGroup):
         name="Caustics", description="Trace paths from emissive meshes through glass, mirrors "
         "and metal to the diffuse surfaces they light, and weigh them against path tracing: "
         "caustics from small lights converge instead of sparkling (only where the scene can "
-        "have them; same image, less noise)", default=False)
+        "have them; same image, less noise)", default=True)
     fresnel: EnumProperty(
         name="Fresnel", description="Fresnel model for glass", items=FRESNEL_ITEMS,
         default="EXACT")

@@ -370,7 +370,7 @@ class RenderSettings:
         R, with `samples` spread over them; renders of disjoint ranges merge exactly into
         the render of their union (`python -m addon merge`).
     light_tracing : trace light paths for caustics where the plan finds they can occur
-        (caustics.py); False (the default for now) leaves path tracing alone.
+        (caustics.py); False leaves path tracing alone.
     """
 
     width: int = 480
@@ -389,7 +389,7 @@ class RenderSettings:
     region: tuple | None = None
     replicates: int = DEFAULT_REPLICATES
     replicate_range: tuple | None = None
-    light_tracing: bool = False
+    light_tracing: bool = True
 
     @property
     def replicate_ids(self) -> tuple[int, ...]:

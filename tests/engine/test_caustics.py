@@ -61,7 +61,7 @@ def agrees(result, runs):
 def test_plan_traces_light_only_where_caustics_can_occur(box):
     st = scenes.settings(**SIZE, light_tracing=True)
     assert make_plan(box, st).light_tracing
-    assert not make_plan(box, scenes.settings(**SIZE)).light_tracing  # off by default
+    assert make_plan(box, scenes.settings(**SIZE)).light_tracing  # on by default
     assert not make_plan(box, scenes.settings(**SIZE, light_tracing=False)).light_tracing
     diffuse_only = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(),
                                                            scenes.World((0, 0, 0)))
