@@ -11,7 +11,7 @@ in: it finds such paths as easily as path tracing finds direct light.
 
 Both strategies sample the same family of paths, camera -> x (Lambertian) -> any
 Lambertian or specular vertices -> S (mirror, metal, glass) -> y (an emissive triangle, or
-an area light BSDF rays can hit): the
+an area, point, spot or sun light BSDF rays can hit): the
 light path goes on past its first diffuse vertex, connecting each, so light reflected by
 a mirror onto a wall and from there onto the floor is found too. Each strategy weighs a
 path by the balance heuristic w_LT = r / (1 + r), w_PT = 1 / (1 + r), with the ratio of
@@ -41,7 +41,7 @@ from collections import namedtuple
 import numpy as np
 
 from .jit import INLINE, JIT, njit
-from .lights import SUN
+from .lights import AREA
 
 # p_dir(y) / |cos y| of cosine emission: from either face of a triangle |cos| / (2 pi), from
 # the front of an area light cos / pi.
@@ -56,31 +56,35 @@ ONE_SIDED_DIRECTION_DENSITY = 1.0 / math.pi
 # A sun's paths start on a disk across its cone (lights.LightSampler._caustic_sources),
 # directions uniform in the cone: p_dir / |cos y| = 1 / (solid angle |cos y|), the cosine
 # to the disk's normal being the path's own; pdf_emit holds the rest and the cosine is
-# divided at either end. disk: (centre, radius) per source, zeros but for suns.
-CausticData = namedtuple("CausticData", "n_light cdf pdf_emit light source_of_light disk")
+# divided at either end. A point or spot light's are lines uniform in dA_perp dw
+# (lights.sphere_light_line): p_A p_dir / |cos| = 1 / (pi r^2 x the cone's solid angle).
+# disk: (centre, radius) per source, zeros but for suns; cos_cone: the cosine of the cone
+# of directions of a sun's, point or spot light's paths.
+CausticData = namedtuple("CausticData",
+                         "n_light cdf pdf_emit light source_of_light disk cos_cone")
 
 
 def caustic_data(n_light: float, sampler) -> CausticData:
     """The light tracer's sources from a lights.LightSampler, n_light paths per pass."""
     dist, light = sampler.caustic_distribution, sampler.caustic_light
     o = sampler.objects
-    sun = np.zeros(len(light), bool)
-    sun[light >= 0] = o.type[light[light >= 0]] == SUN
-    cone = np.ones(len(light))
-    cone[sun] = 2.0 * np.pi * (1.0 - o.cos_half_angle[light[sun]])
+    cone = np.zeros(len(light), bool)
+    cone[light >= 0] = o.type[light[light >= 0]] != AREA
+    solid = 2.0 * np.pi * (1.0 - sampler.caustic_cone)
     per_cos = np.where(light < 0, TWO_SIDED_DIRECTION_DENSITY,
-                       np.where(sun, 1.0 / cone, ONE_SIDED_DIRECTION_DENSITY))
+                       np.where(cone, 1.0 / np.where(cone, solid, 1.0),
+                                ONE_SIDED_DIRECTION_DENSITY))
     source_of_light = np.full(o.count, -1, np.int64)
     source_of_light[light[light >= 0]] = np.nonzero(light >= 0)[0]
     return CausticData(float(n_light), dist.cdf,
                        dist.pmf / np.maximum(sampler.caustic_area, 1e-300) * per_cos, light,
-                       source_of_light, sampler.caustic_disk)
+                       source_of_light, sampler.caustic_disk, sampler.caustic_cone)
 
 
 def no_caustic_data() -> CausticData:
     """What a kernel compiled with light tracing reads when a scene has none."""
     return CausticData(0.0, np.zeros(0), np.zeros(0), np.zeros(0, np.int64),
-                       np.zeros(0, np.int64), np.zeros((0, 4)))
+                       np.zeros(0, np.int64), np.zeros((0, 4)), np.zeros(0))
 
 
 @njit(**INLINE)

@@ -299,7 +299,7 @@ class Tracer:
         lp = light_tracing.LightPaths(
             np.empty(n, np.int64), np.empty(n, np.uint64), np.empty((n, 3)), np.empty((n, 3)),
             np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32), np.empty((n, 3)),
-            np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
         conn = light_tracing.Connections(np.empty((n, 3), F32), np.empty((n, 3), F32),
                                          np.empty(n, F32), np.empty((n, 2)), np.empty((n, 3)))
         t0 = time.perf_counter()

@@ -1,4 +1,4 @@
-"""The light tracer's stages: light paths from emissive triangles and area lights through
+"""The light tracer's stages: light paths from emissive triangles and light objects through
 specular chains, connected to the camera at their first diffuse vertex (caustics.py says
 why and how they are weighed against path tracing).
 
@@ -48,18 +48,21 @@ def light_path_seed(seed):
 # float32), the weight beta (caustics.light_tracing_contribution), prev_pdf (unused, for
 # integrator.spawn's sake), the chain's IOR product n_x / n_y so far, p_emit of the path's
 # start (caustics.CausticData) over the shading_ratio of its Lambertian vertices so far, the
-# largest channel of the starting weight (Russian roulette reads beta relative to it).
+# largest channel of the starting weight (Russian roulette reads beta relative to it), the
+# least distance of a first hit the path lights (lights.sphere_light_line; 0 but for Soft
+# Falloff lights).
 LightPaths = namedtuple("LightPaths", "live pseed o64 d64 origin32 dir32 tmax32 throughput "
-                                      "prev_pdf eta pdf_emit start")
+                                      "prev_pdf eta pdf_emit start near")
 # Camera connections: shadow ray (float32), raster position (n, 2) and the contribution per
 # unit raster area, MIS weight and 1 / N_L included.
 Connections = namedtuple("Connections", "origin direction tmax raster contrib")
 
 
 def start_light_paths(ids, sample, seed, sc, lp):
-    """Light paths ids (n,) at index `sample` of the sequence of `seed`: a source by power
-    (an emissive triangle or an area light), a uniform point on it, a cosine direction (on
-    either side of a triangle, in front of an area light). Returns the number of paths
+    """Light paths ids (n,) at index `sample` of the sequence of `seed`: a source by power;
+    on an emissive triangle or an area light a uniform point and a cosine direction (on
+    either side of a triangle, in front of an area light); suns, point and spot lights
+    their own way (start_sun_path, start_sphere_light_path). Returns the number of paths
     started (0 without sources)."""
     em, ca = sc.emitters, sc.caustics
     if len(ca.cdf) == 0:
@@ -76,6 +79,9 @@ def start_light_paths(ids, sample, seed, sc, lp):
         pe = ca.pdf_emit[e]
         if HAS_LIGHT_OBJECTS and HAS_SUN_DISCS and j >= 0 and lights.is_sun(j, em.objects):
             start_sun_path(i, e, j, ua, ub, va, vb, sc, lp)
+            continue
+        if HAS_LIGHT_OBJECTS and j >= 0 and not lights.is_area(j, em.objects):
+            start_sphere_light_path(i, e, j, ua, ub, va, vb, sc, lp)
             continue
         if HAS_LIGHT_OBJECTS and j >= 0:
             L = em.objects
@@ -109,19 +115,20 @@ def start_light_paths(ids, sample, seed, sc, lp):
         for k in range(3):
             lp.origin32[i, k] = lp.o64[i, k]
             lp.dir32[i, k] = lp.d64[i, k]
-        _set_start(i, r0, r1, r2, pe, lp)
+        _set_start(i, r0, r1, r2, pe, 0.0, lp)
     return len(ids)
 
 
-def _set_start(i, r0, r1, r2, pe, lp):
+def _set_start(i, r0, r1, r2, pe, near, lp):
     """A light path's start weight: radiance over p_emit = p_sel p_A p_dir / |cos| (the
-    cosine cancelled, caustics.py)."""
+    cosine cancelled, caustics.py), and the least distance of a first hit it lights."""
     lp.throughput[i, 0], lp.throughput[i, 1], lp.throughput[i, 2] = r0 / pe, r1 / pe, r2 / pe
     lp.tmax32[i] = np.inf
     lp.prev_pdf[i] = np.inf
     lp.eta[i] = 1.0
     lp.pdf_emit[i] = pe
     lp.start[i] = max(max(r0, max(r1, r2)), 1e-300) / pe
+    lp.near[i] = near
 
 
 def start_sun_path(i, e, j, ua, ub, va, vb, sc, lp):
@@ -141,7 +148,21 @@ def start_sun_path(i, e, j, ua, ub, va, vb, sc, lp):
         lp.origin32[i, k] = lp.o64[i, k]
         lp.dir32[i, k] = lp.d64[i, k]
     r0, r1, r2 = lights.sun_disc_radiance(j, L)
-    _set_start(i, r0, r1, r2, sc.caustics.pdf_emit[e] / cos_y, lp)
+    _set_start(i, r0, r1, r2, sc.caustics.pdf_emit[e] / cos_y, 0.0, lp)
+
+
+def start_sphere_light_path(i, e, j, ua, ub, va, vb, sc, lp):
+    """Light path i from point or spot light j (source e): a line it emits
+    (lights.sphere_light_line). Lights are not in the scene's geometry, so the ray needs
+    no offset."""
+    ox, oy, oz, dx, dy, dz, near, r0, r1, r2 = lights.sphere_light_line(
+        j, sc.caustics.cos_cone[e], ua, ub, va, vb, sc.emitters.objects)
+    lp.o64[i, 0], lp.o64[i, 1], lp.o64[i, 2] = ox, oy, oz
+    lp.d64[i, 0], lp.d64[i, 1], lp.d64[i, 2] = dx, dy, dz
+    for k in range(3):
+        lp.origin32[i, k] = lp.o64[i, k]
+        lp.dir32[i, k] = lp.d64[i, k]
+    _set_start(i, r0, r1, r2, sc.caustics.pdf_emit[e], near, lp)
 
 
 def connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample):
@@ -201,7 +222,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
     for i in range(m):
         row = lp.live[i]
         f = prim[i]
-        if f < 0:
+        if f < 0 or (depth == 0 and tfar[i] < lp.near[i]):
             continue
         x = surface_interaction(i, f, tfar[i], bu[i], bv[i], sc, lp)
         k = sc.materials.kind[x.mat]
@@ -303,7 +324,8 @@ def splat(conn, occluded_prim, count, x0, y0, x1, y1, table, pixels, values):
 
 
 # name -> (function, numba options), compiled with integrator.STAGES (kernels.Kernel).
-STAGES = {f.__name__: (f, INLINE) for f in (connect_camera, _set_start, start_sun_path)}
+STAGES = {f.__name__: (f, INLINE) for f in (connect_camera, _set_start, start_sun_path,
+                                             start_sphere_light_path)}
 STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce)})
 STAGES["splat"] = (splat, ALLOCATING)  # one small scratch row per call
 # The plan's values replace these (specialise.py).

@@ -100,6 +100,7 @@ class LightObjects:
         self.axis_u = cols[:, :, 0] / safe[:, 0:1]
         self.axis_v = cols[:, :, 1] / safe[:, 1:2]
         self.direction = -cols[:, :, 2] / safe[:, 2:3]
+        self.world_from_local = cols
         self.local_from_world = np.linalg.pinv(cols)
         self.radius = np.array([max(float(light.radius), 0.0) for light in lights])
         self.soft = np.array([bool(light.soft_falloff) for light in lights])
@@ -132,6 +133,13 @@ class LightObjects:
                 np.where(self.radius > 0, 1.0 / (np.pi * np.maximum(sphere_area, 1e-300)), 0.0))
         self.radiance_factor = radiance_factor
         self.scene_radius = max(scene_radius, 1e-12)
+
+    def round_cone(self, j) -> bool:
+        """Whether light j's frame is a rotation times a uniform scale, which keeps a
+        spot's cone round and about its axis."""
+        cols = self.world_from_local[j]
+        gram = cols.T @ cols
+        return bool(np.allclose(gram, gram[0, 0] * np.eye(3), rtol=1e-9, atol=0.0))
 
     def selection_power(self) -> np.ndarray:
         """Flux estimates used to pick lights (suns: irradiance x the scene's cross-section)."""
@@ -180,14 +188,15 @@ class LightObjects:
 
 def traces_light_paths(light) -> bool:
     """Whether light paths start on a light object (scene.Light): an area light of some
-    size or a sun of some angle, that BSDF rays can hit (Cycles' Multiple Importance;
-    otherwise path tracing never finds its caustics, and neither does Cycles). Point and
-    spot lights are not sources (with Soft Falloff a disk facing each shading point has no
-    density for light paths)."""
+    size, a point or spot light of some radius or a sun of some angle, that BSDF rays can
+    hit (Cycles' Multiple Importance; otherwise path tracing never finds its caustics, and
+    neither does Cycles)."""
     if not (max(light.power) > 0 and bool(light.use_mis)):
         return False
     if light.type == "SUN":  # up to 90 degrees (wider, its start disk is unbounded)
         return 0 < light.angle <= math.pi / 2
+    if light.type in ("POINT", "SPOT"):
+        return light.radius > 0
     return (light.type == "AREA" and light.size_x > 0
             and (light.size_y > 0 or light.shape in ("SQUARE", "DISK")))
 
@@ -340,11 +349,51 @@ def is_sun(j, L):
 
 
 @njit(**INLINE)
+def is_area(j, L):
+    return L[j, _TYPE] == AREA
+
+
+@njit(**INLINE)
 def sun_direction(j, ua, ub, L):
     """A direction light from sun j travels, uniform in its cone: (w, cos to its axis)."""
     wx, wy, wz, cos, _ = uniform_cone(L[j, _DIRECTION], L[j, _DIRECTION + 1],
                                       L[j, _DIRECTION + 2], L[j, _COS_ANGLE], ua, ub)
     return wx, wy, wz, cos
+
+
+@njit(**INLINE)
+def sphere_light_line(j, cos_cone, ua, ub, va, vb, L):
+    """A line light leaves point or spot light j (radius r > 0) along: a direction w
+    uniform in the cone of cos_cone about its axis (-1: every direction), through a point
+    uniform on the disk of radius r across w through the centre. Every line either kind
+    of light emits is one of these, and they are drawn uniformly in the throughput
+    measure dA_perp dw (which does not depend on where along a line it is measured), so
+    p_emit = p_sel / (pi r^2 x the cone's solid angle) (caustics.CausticData).
+    Returns (origin, w, near, radiance): a sphere's line starts where it leaves the
+    sphere. A Soft Falloff light is a disk facing each point it lights (intersect_object);
+    the line from the disk's point at offset b carries its radiance only to points at
+    least `near` beyond the centre's foot, where the disk facing the point is wide enough:
+    b^2 (d^2 + r^2) <= r^2 d^2 with d^2 = b^2 + s^2 at s along the line, so
+    s >= b^2 / sqrt(r^2 - b^2). (Geometry within about r of the centre, behind the foot,
+    does not shadow the line as it shadows path tracing's rays toward the disk.)"""
+    wx, wy, wz, _, _ = uniform_cone(L[j, _DIRECTION], L[j, _DIRECTION + 1],
+                                    L[j, _DIRECTION + 2], cos_cone, va, vb)
+    s, t = build_frame(wx, wy, wz)
+    r = L[j, _RADIUS]
+    qa, qb = concentric_disk(ua, ub)
+    qa, qb = qa * r, qb * r
+    b2 = qa * qa + qb * qb
+    if L[j, _SOFT] != 0:
+        along = 0.0
+        near = b2 / math.sqrt(r * r - b2) if b2 < r * r else np.inf
+    else:
+        along, near = math.sqrt(max(r * r - b2, 0.0)), 0.0
+    ox = L[j, _CENTRE] + qa * s[0] + qb * t[0] + along * wx
+    oy = L[j, _CENTRE + 1] + qa * s[1] + qb * t[1] + along * wy
+    oz = L[j, _CENTRE + 2] + qa * s[2] + qb * t[2] + along * wz
+    f = L[j, _FACTOR] * spot_attenuation(j, wx, wy, wz, L)
+    return (ox, oy, oz, wx, wy, wz, near, L[j, _POWER] * f, L[j, _POWER + 1] * f,
+            L[j, _POWER + 2] * f)
 
 
 @njit(**INLINE)
@@ -449,8 +498,8 @@ def intersect_object(j, ox, oy, oz, dx, dy, dz, tmax, L):
             inside = abs(lu) <= 0.5 and abs(lv) <= 0.5
         if front and inside and t > 0 and t < tmax:
             th = t
-        f = f * spread_attenuation(-denom, L[j, _SPREAD_ON] != 0, L[j, _SPREAD_TAN],
-                                   L[j, _SPREAD_NORM])
+        r0, r1, r2 = area_light_radiance(j, -denom, L)
+        return th, r0, r1, r2
     else:
         r = L[j, _RADIUS]
         ocx, ocy, ocz = ox - c0, oy - c1, oz - c2
@@ -557,10 +606,13 @@ class LightSampler:
         whatever shades a sun ray shades its light path), just big enough to send every
         direction of its cone through the bounding sphere of the specular surfaces (only
         paths whose first hit is specular are light tracing's): caustic_disk holds its
-        centre and radius (zeros for the others), caustic_area the sources' areas."""
+        centre and radius (zeros for the others), caustic_area the sources' areas
+        (a point or spot light's: its disk across each line, sphere_light_line), and
+        caustic_cone the cosine of the cone their directions fill (suns, point and spot
+        lights; a spot's own where its frame keeps cones round, else every direction)."""
         o = self.objects
         lit = [j for j, light in enumerate(scene.lights) if traces_light_paths(light)
-               and (o.area[j] > 0 or o.type[j] == SUN)]
+               and (o.type[j] != AREA or o.area[j] > 0)]
         kinds = scene.materials.kind[scene.material_index]
         specular = np.isin(kinds, SPECULAR_KINDS)
         pts = scene.vertices[specular].reshape(-1, 3)
@@ -569,8 +621,14 @@ class LightSampler:
         disk = np.zeros((len(lit), 4))
         area = o.area[lit].astype(float)
         power = o.power.mean(axis=1)[lit]
+        cone = np.zeros(len(lit))
         for k, j in enumerate(lit):
+            if o.type[j] in (POINT, SPOT):
+                cone[k] = o.cos_half_spot[j] if o.type[j] == SPOT and o.round_cone(j) else -1.0
+                area[k] = math.pi * o.radius[j] ** 2
+                power[k] *= 0.5 * (1.0 - cone[k])  # the share of the sphere the cone holds
             if o.type[j] == SUN:
+                cone[k] = o.cos_half_angle[j]
                 tan_half = math.tan(math.acos(min(max(o.cos_half_angle[j], -1.0), 1.0)))
                 # Upstream of the geometry's bounding sphere (recentred: about the origin).
                 up = float(np.linalg.norm(centre)) + math.sqrt(3.0) * scene.extent + r_spec
@@ -583,6 +641,7 @@ class LightSampler:
                                              np.array(lit, np.int64)]).astype(np.int64)
         self.caustic_area = np.concatenate([self.area, area])
         self.caustic_disk = np.concatenate([np.zeros((len(self.index), 4)), disk])
+        self.caustic_cone = np.concatenate([np.zeros(len(self.index)), cone])
         self.caustic_distribution = Distribution1D(np.concatenate([tri_power, power]))
 
     def _bounds(self, weights, centres, distant):

@@ -121,6 +121,31 @@ def caustic_box_area_light(light_half=0.2, light_z=1.2):
     return b.build(cornell_camera(), World((0, 0, 0)))
 
 
+def caustic_box_sphere_light(radius=0.2, light_z=1.2, soft_falloff=True):
+    """caustic_box with a Blender point light of the given radius (Soft Falloff on: a disk
+    facing each point it lights; off: a sphere) in place of the quad, about as bright."""
+    from engine import Light
+
+    b = cornell_box(light_mesh=False)
+    m = np.eye(4)
+    m[:3, 3] = (0.0, 0.0, light_z)
+    b.add_light(Light("bulb", "POINT", (30.0,) * 3, m, radius=radius,
+                      soft_falloff=soft_falloff))
+    return b.build(cornell_camera(), World((0, 0, 0)))
+
+
+def caustic_box_spot(radius=0.15, soft_falloff=False):
+    """caustic_box lit by a 70-degree spot light of the given radius above the glass sphere
+    and aimed at it (a sphere light by default: Soft Falloff off)."""
+    from engine import Light
+
+    b = cornell_box(light_mesh=False)
+    b.add_light(Light("spot", "SPOT", (60.0,) * 3,
+                      look_at((0.3, -0.3, 1.3), (0.45, -0.2, 0.3), up=(0, 1, 0)),
+                      radius=radius, soft_falloff=soft_falloff, spot_size=math.radians(70.0)))
+    return b.build(cornell_camera(), World((0, 0, 0)))
+
+
 def sun_caustic_scene(angle_degrees=30.0, strength=3.0):
     """A glass sphere and a mirror sphere on a floor in the sun (30 degrees from the
     zenith, of the given angular diameter), seen from above; black world."""

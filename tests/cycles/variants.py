@@ -664,6 +664,33 @@ def caustic_area_light():
     bpy.context.scene.specula.use_light_tracing = True
 
 
+def caustic_point_light():
+    """caustic_quad with a point light of radius 0.2 (Soft Falloff on, Blender's default:
+    a disk facing each point it lights) at the quad's place, about as bright."""
+    _open("cbspheres.blend")
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    light = bpy.data.lights.new("Bulb", "POINT")
+    light.energy, light.shadow_soft_size, light.use_soft_falloff = 30.0, 0.2, True
+    obj = bpy.data.objects.new("Bulb", light)
+    obj.location = (0.0, 0.0, 1.2)
+    bpy.context.scene.collection.objects.link(obj)
+
+
+def caustic_spot():
+    """CBspheres lit by a 70-degree spot light of radius 0.15 with Soft Falloff off (a
+    sphere), above the glass sphere and aimed at it."""
+    _open("cbspheres.blend")
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    light = bpy.data.lights.new("Spot", "SPOT")
+    light.energy, light.shadow_soft_size, light.use_soft_falloff = 60.0, 0.15, False
+    light.spot_size, light.spot_blend = math.radians(70.0), 0.15
+    obj = bpy.data.objects.new("Spot", light)
+    obj.location = (0.3, -0.3, 1.3)
+    look = mathutils.Vector((0.5, -0.25, 0.3)) - obj.location
+    obj.rotation_euler = look.to_track_quat("-Z", "Y").to_euler()
+    bpy.context.scene.collection.objects.link(obj)
+
+
 def caustic_sun():
     """A glass and a mirror sphere on a floor under a 30-degree sun (tests/scenes.py
     sun_caustic_scene): light paths start on a disk across the sun's cone."""
@@ -748,6 +775,9 @@ _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_s
 _add(Variant("caustic_area_light", caustic_area_light, max_bounces=8, samples=1024,
              cycles_samples=2048, files=(BLEND["cbspheres.blend"],)))
 _add(Variant("caustic_sun", caustic_sun, max_bounces=8, samples=1024, cycles_samples=2048))
+for _setup in (caustic_point_light, caustic_spot):
+    _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=1024, cycles_samples=2048,
+                 files=(BLEND["cbspheres.blend"],)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):

@@ -75,6 +75,11 @@ def test_plan_traces_light_only_where_caustics_can_occur(box):
     assert make_plan(area, st).light_tracing
     area.lights[0] = replace(area.lights[0], use_mis=False)
     assert not make_plan(area, st).light_tracing
+    # So is a point or spot light of some radius; of radius 0 path tracing never hits it.
+    bulb = scenes.caustic_box_sphere_light()
+    assert make_plan(bulb, st).light_tracing
+    bulb.lights[0] = replace(bulb.lights[0], radius=0.0)
+    assert not make_plan(bulb, st).light_tracing
 
 
 @pytest.mark.slow
@@ -109,9 +114,14 @@ def test_dropping_the_light_paths_contribution_fails(box, path_traced, monkeypat
 # 30-degree sun (light paths start on a disk across the sun's cone, upstream of the scene;
 # under a 10-degree sun 4 x 1024 path-traced samples have not found the sunlight the
 # mirror sphere spreads over the floor: in a corner block they read 0.4760, light tracing
-# 0.4784 and path tracing at 65,536 samples 0.4782 +- 0.0003).
+# 0.4784 and path tracing at 65,536 samples 0.4782 +- 0.0003); a point light of radius 0.2
+# with Soft Falloff (a disk facing each point it lights) and a 70-degree spot light of
+# radius 0.15 without (a sphere), aimed at the glass sphere (light paths are lines
+# uniform in the throughput measure, lights.sphere_light_line).
 LIGHT_OBJECT_SCENES = {"area light": lambda: scenes.caustic_box_area_light(light_half=0.2),
-                       "sun": scenes.sun_caustic_scene}
+                       "sun": scenes.sun_caustic_scene,
+                       "point light": scenes.caustic_box_sphere_light,
+                       "spot light": scenes.caustic_box_spot}
 
 
 @pytest.fixture(scope="module", params=list(LIGHT_OBJECT_SCENES))

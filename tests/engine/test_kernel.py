@@ -61,10 +61,13 @@ def test_cbspheres_same_in_both_kernels(opts):
     assert_same_image(*both(scenes.cbspheres(), **opts))
 
 
-def test_area_light_caustics_same_in_both_kernels():
-    """Light paths from a light object and its solid-angle sampling: the same bits in
-    both kernels."""
-    a, b = both(scenes.caustic_box_area_light(), light_tracing=True)
+@pytest.mark.parametrize("scene", [scenes.caustic_box_area_light,
+                                   lambda: scenes.caustic_box_spot(soft_falloff=True)],
+                         ids=["area light", "spot light"])
+def test_light_object_caustics_same_in_both_kernels(scene):
+    """Light paths from light objects (an area light and its solid-angle sampling, a
+    Soft Falloff spot's lines): the same bits in both kernels."""
+    a, b = both(scene(), light_tracing=True)
     assert a.plan.light_tracing
     assert_same_image(a, b)
 

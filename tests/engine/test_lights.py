@@ -324,3 +324,45 @@ def test_unequal_lights_stay_unbiased(x):
     e += L * (corner(c[0] + s, c[1] + s) - corner(c[0] - s, c[1] + s)
               - corner(c[0] + s, c[1] - s) + corner(c[0] - s, c[1] - s))
     assert_irradiance([point, panel], e, samples=128)
+
+
+@pytest.mark.parametrize("kind,soft", [("POINT", True), ("POINT", False), ("SPOT", True),
+                                       ("SPOT", False)])
+def test_light_path_lines_carry_what_path_tracing_sees(kind, soft, rng):
+    """A point or spot light's light paths are lines (lights.sphere_light_line): at every
+    point along one, a ray cast back along it hits the light (intersect_object, path
+    tracing's view: a sphere, or with Soft Falloff a disk facing the point) exactly where
+    the line is lit, from `near` on, with the radiance the line carries. And the lines are
+    drawn uniformly in the throughput measure: radiance / p_emit is the light's power
+    (within its cone)."""
+    from engine.caustics import caustic_data
+    from engine.lights import LightSampler, intersect_object, sphere_light_line
+
+    r, power = 0.3, 7.0
+    b = SceneBuilder()
+    gm = b.add_material(Material.glass("glass", (1, 1, 1), 1.5))
+    b.add_mesh("glass", np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0.0]]),
+               np.array([[0, 1, 2]]), gm)
+    b.add_light(Light("l", kind, (power,) * 3, look_at((0.2, 0.1, 2.0), (0.5, 0.0, 0.0)),
+                      radius=r, soft_falloff=soft, spot_size=math.radians(60.0)))
+    sampler = LightSampler(b.build(Camera(), World()))
+    L, ca = sampler.data().objects, caustic_data(1.0, sampler)
+    assert list(ca.light) == [0]
+    lit = unlit = 0
+    for u in rng.random((400, 4)):
+        ox, oy, oz, wx, wy, wz, near, r0, r1, r2 = sphere_light_line(0, ca.cos_cone[0], *u, L)
+        assert r0 == r1 == r2 >= 0.0
+        if kind == "POINT":
+            assert r0 / ca.pdf_emit[0] == pytest.approx(power, rel=1e-12)
+        for s in rng.random(8) * 4.0 * r:
+            if abs(s - near) < 1e-9:
+                continue
+            th, l0, _, _ = intersect_object(0, ox + s * wx, oy + s * wy, oz + s * wz, -wx, -wy,
+                                            -wz, np.inf, L)
+            assert math.isfinite(th) == (s > near), (s, near, th)
+            if s > near:
+                lit += 1
+                assert l0 == pytest.approx(r0, rel=1e-9)
+            else:
+                unlit += 1
+    assert lit > 1000 and (unlit > 100 if soft else unlit == 0)
