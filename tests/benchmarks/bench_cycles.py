@@ -55,6 +55,9 @@ DOF = {"cbspheres_dof": (2.75, 0.1)}
 # 0.1 x 0.1 quad of the same power at height 1.2 (or where the emitter was, 1 cm under the
 # ceiling): caustics lit through specular chains from a light paths hit rarely.
 SMALL_QUAD = {"cbspheres_small_quad": 1.2, "cbspheres_small_quad_ceiling": 1.49}
+# "<scene>_small_sphere": the ceiling emitter replaced by a point light of radius 2 cm
+# (Soft Falloff, Blender's default) of the quad's power (30 W), at height 1.2.
+SMALL_SPHERE = {"cbspheres_small_sphere": 1.2}
 
 
 def _small_quad(height):
@@ -64,12 +67,24 @@ def _small_quad(height):
     bpy.context.scene.specula.use_light_tracing = True
 
 
+def _small_sphere(height):
+    bpy.data.objects.remove(bpy.data.objects["Emitter"])
+    light = bpy.data.lights.new("Bulb", "POINT")
+    light.energy, light.shadow_soft_size, light.use_soft_falloff = 30.0, 0.02, True
+    obj = bpy.data.objects.new("Bulb", light)
+    obj.location = (0.0, 0.0, height)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.scene.specula.use_light_tracing = True
+
+
 def open_scene(name, resolution, max_bounces):
     base = name.removesuffix("_dof").removesuffix("_small_quad_ceiling").removesuffix(
-        "_small_quad")
+        "_small_quad").removesuffix("_small_sphere")
     scene = renderers.open_blend_scene(base, resolution)
     if name in SMALL_QUAD:
         _small_quad(SMALL_QUAD[name])
+    if name in SMALL_SPHERE:
+        _small_sphere(SMALL_SPHERE[name])
     if name in DOF:
         focus, radius = DOF[name]
         cam = scene.camera.data
