@@ -56,7 +56,7 @@ render: $(STAMP)
 		--output out/default.exr --output out/default.png
 
 test: $(STAMP)
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q --durations=40 tests
 
 test-fast: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import materials
+from . import materials, shader_nodes
 
 # Object types `Object.to_mesh()` can turn into triangles.
 GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
@@ -38,6 +38,8 @@ class MeshData:
     smooth : (t,) bool, whether the triangle interpolates `normals`
     material_lut : (s,) int32 exported material per mesh material slot (used when the
         object has no slots, e.g. materials set by geometry nodes)
+    uv_maps : UV map name -> (t, 3, 2) float32 per-corner coordinates, "" the render-active
+        map; read only when some material has a texture
     """
 
     vertices: np.ndarray
@@ -46,6 +48,7 @@ class MeshData:
     normals: np.ndarray
     smooth: np.ndarray
     material_lut: np.ndarray
+    uv_maps: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -97,8 +100,22 @@ def _corner_normals(mesh, n_loops):
     return cn.reshape(-1, 3)
 
 
-def read_mesh(mesh, material_lut) -> MeshData:
-    """Read a bpy Mesh into numpy with foreach_get (no per-triangle Python)."""
+def _uv_maps(mesh, tri_loops) -> dict:
+    """Every UV map of `mesh` per triangle corner; "" names the render-active one (what an
+    Image Texture without a Vector input reads in Cycles)."""
+    maps = {}
+    for layer in mesh.uv_layers:
+        uv = np.zeros(len(mesh.loops) * 2, np.float32)
+        layer.data.foreach_get("uv", uv)
+        maps[layer.name] = uv.reshape(-1, 2)[tri_loops.reshape(-1, 3)]
+        if layer.active_render:
+            maps[""] = maps[layer.name]
+    return maps
+
+
+def read_mesh(mesh, material_lut, uv=False) -> MeshData:
+    """Read a bpy Mesh into numpy with foreach_get (no per-triangle Python); `uv`: its UV
+    maps too."""
     n_vert, n_loops = len(mesh.vertices), len(mesh.loops)
     co = np.zeros(n_vert * 3, np.float32)
     mesh.vertices.foreach_get("co", co)
@@ -117,7 +134,8 @@ def read_mesh(mesh, material_lut) -> MeshData:
     if getattr(mesh, "has_custom_normals", False):
         smooth[:] = True
     return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
-                    mat_index, normals.astype(np.float64), smooth, material_lut)
+                    mat_index, normals.astype(np.float64), smooth, material_lut,
+                    _uv_maps(mesh, tri_loops) if uv else {})
 
 
 def to_world(mesh: MeshData, matrix_world):
@@ -156,6 +174,7 @@ class _Exporter:
         self._material_index = {}  # material pointer (or None) -> index in out.materials
         self._image_means = {}  # image means shared by this export's materials
         self._warned = set()
+        self.textured = False
 
     def warn(self, text):
         if text not in self._warned:
@@ -177,6 +196,11 @@ class _Exporter:
         return np.array([self.material(s) for s in slots], np.int32)
 
     def run(self):
+        # Materials first: whether any has a texture decides if meshes carry UV maps.
+        for id_ in self.depsgraph.ids:
+            if isinstance(id_, bpy.types.Material):
+                self.material(id_)
+        self.textured = any("colour_program" in m.kwargs for m in self.out.materials)
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             if obj.type in GEOMETRY_TYPES:
@@ -246,7 +270,7 @@ class _Exporter:
                 data = MeshData(np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32),
                                 np.zeros((0, 3, 3)), np.zeros(0, bool), np.zeros(0, np.int32))
             else:
-                data = read_mesh(mesh, self.slot_lut(mesh.materials))
+                data = read_mesh(mesh, self.slot_lut(mesh.materials), self.textured)
         finally:
             obj.to_mesh_clear()
         self.out.meshes[key] = data
@@ -430,7 +454,7 @@ def world_environment(world, warn):
     if image.channels < 3:
         rgb = np.repeat(px.reshape(h, w, image.channels)[..., :1], 3, axis=2)
     if not image.is_float and image.colorspace_settings.name == "sRGB":
-        rgb = materials.srgb_to_linear(rgb)
+        rgb = shader_nodes.srgb_to_linear(rgb)
     if not np.all(np.isfinite(rgb)):
         warn(f"{where}: image '{image.name}' has NaN/inf pixels; they are rendered black")
         rgb = np.nan_to_num(rgb, nan=0.0, posinf=0.0, neginf=0.0)
@@ -551,6 +575,14 @@ def _group_instances(exported: ExportedScene):
             yield name, mesh, chunk[0].material_lut, chunk
 
 
+def _instance_uvs(mesh: MeshData, insts) -> dict:
+    """The UV maps of k instances of `mesh`, corners in the order to_world gives them (a
+    mirroring matrix flips the winding)."""
+    mirrored = np.linalg.det(insts[0].matrix_world[:3, :3]) < 0
+    return {name: np.tile(m[:, [0, 2, 1]] if mirrored else m, (len(insts), 1, 1))
+            for name, m in mesh.uv_maps.items()}
+
+
 def to_core(exported: ExportedScene, core):
     """Build the core's `Scene`; returns (scene, builder warnings)."""
     builder = core.SceneBuilder()
@@ -568,7 +600,8 @@ def to_core(exported: ExportedScene, core):
         builder.add_mesh(name, vertices, triangles, np.tile(mat_index, k),
                          corner_normals=normals,
                          smooth=np.tile(mesh.smooth, k) if normals is not None else False,
-                         terminator_offset=insts[0].terminator_offset)
+                         terminator_offset=insts[0].terminator_offset,
+                         uv_maps=_instance_uvs(mesh, insts))
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
     world = core.World(exported.world_colour, **(exported.environment or {}))

@@ -32,8 +32,10 @@ import math
 from dataclasses import dataclass, field
 
 import bpy
-import mathutils
 import numpy as np
+
+from . import core, shader_nodes
+from .shader_nodes import COLOUR_SPACES
 
 DEFAULT_GREY = (0.8, 0.8, 0.8)
 # Cycles treats roughness below this as a perfect delta lobe (alpha = r^2 <= 2e-10 there).
@@ -77,6 +79,11 @@ class MaterialSpec:
 
 def default_material():
     return MaterialSpec("diffuse", "Specula default", {"colour": DEFAULT_GREY})
+
+
+def _with(program):
+    """The keyword of a colour's shader program, when it has one."""
+    return {} if program is None else {"colour_program": program}
 
 
 def invisible_boundary(name):
@@ -143,42 +150,6 @@ def _convert(value, from_type, to_type):
 # Non-Color, 0.5): read back in bpy 5.0.1. Byte texels are decoded one by one, since the
 # transfer function is not linear; the primaries are, so they convert the mean.
 
-def srgb_to_linear(c):
-    """The sRGB transfer function, encoded -> linear (IEC 61966-2-1), elementwise."""
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-# Linear Display P3 (D65) -> CIE XYZ, to reach scene linear through mathutils' XYZ conversion.
-_P3_TO_XYZ = np.array([[0.4865709, 0.2656677, 0.1982173],
-                       [0.2289746, 0.6917385, 0.0792869],
-                       [0.0000000, 0.0451134, 1.0439444]])
-
-
-def _xyz_to_scene(rgb):
-    return tuple(mathutils.Color(rgb).from_xyz_d65_to_scene_linear())
-
-
-def _via(method):
-    def to_scene(rgb):
-        # Blender releases without this conversion work in linear Rec.709: keep the values.
-        convert = getattr(mathutils.Color(rgb), method, None)
-        return tuple(rgb) if convert is None else tuple(convert())
-    return to_scene
-
-
-# Byte image colour space -> (per-texel transfer function, linear primaries -> scene linear).
-# Spaces not listed are decoded as sRGB, with a note in the warning.
-_COLOUR_SPACES = {
-    "sRGB": (srgb_to_linear, _via("from_rec709_linear_to_scene_linear")),
-    "Linear Rec.709": (None, _via("from_rec709_linear_to_scene_linear")),
-    "Linear Rec.2020": (None, _via("from_rec2020_linear_to_scene_linear")),
-    "ACEScg": (None, _via("from_acescg_to_scene_linear")),
-    "ACES2065-1": (None, _via("from_aces_to_scene_linear")),
-    "Linear CIE-XYZ D65": (None, _xyz_to_scene),
-    "Display P3": (srgb_to_linear, lambda rgb: _xyz_to_scene(tuple(_P3_TO_XYZ @ rgb))),
-}
-
-
 def image_mean(image, alpha_weighted):
     """Mean of what an Image Texture node outputs for `image`, in scene-linear space.
 
@@ -209,8 +180,8 @@ def image_mean(image, alpha_weighted):
     space = image.colorspace_settings
     to_scene = None
     if not image.is_float and not space.is_data:
-        known = space.name in _COLOUR_SPACES
-        transfer, to_scene = _COLOUR_SPACES[space.name if known else "sRGB"]
+        known = space.name in COLOUR_SPACES
+        transfer, to_scene = COLOUR_SPACES[space.name if known else "sRGB"]
         if not known:
             notes.append(f"its colour space '{space.name}' decoded as sRGB")
         if transfer is not None:
@@ -269,26 +240,10 @@ def _c_checker(k, node, out):
 
 
 def _blend(blend_type, t, c1, c2):
-    """Cycles' colour Mix (kernel/svm/color_util.h) of two constant colours."""
-    def lerp(b):
-        return tuple((1 - t) * a + t * x for a, x in zip(c1, b))
-    if blend_type == "MULTIPLY":
-        return tuple(a * ((1 - t) + t * b) for a, b in zip(c1, c2))
-    if blend_type == "ADD":
-        return tuple(a + t * b for a, b in zip(c1, c2))
-    if blend_type == "SUBTRACT":
-        return tuple(a - t * b for a, b in zip(c1, c2))
-    if blend_type == "SCREEN":
-        return tuple(1 - ((1 - t) + t * (1 - b)) * (1 - a) for a, b in zip(c1, c2))
-    if blend_type == "DIVIDE":
-        return tuple((1 - t) * a + t * a / b if b != 0 else a for a, b in zip(c1, c2))
-    if blend_type == "DIFFERENCE":
-        return lerp(tuple(abs(a - b) for a, b in zip(c1, c2)))
-    if blend_type == "DARKEN":
-        return lerp(tuple(min(a, b) for a, b in zip(c1, c2)))
-    if blend_type == "LIGHTEN":
-        return tuple(max(a, t * b) for a, b in zip(c1, c2))
-    return lerp(c2)
+    """Cycles' colour Mix of two constant colours (the core's formula, shading.blend)."""
+    sh = core.load().shading
+    mode = sh.BLENDS.index(blend_type)
+    return tuple(sh.blend(mode, t, a, b) for a, b in zip(c1, c2))
 
 
 def _mix(k, node, t, a, b, blend_type, clamp):
@@ -304,9 +259,9 @@ def _mix(k, node, t, a, b, blend_type, clamp):
         k.notes.append(f"node '{node.name}' factor taken as 0.5")
     if not isinstance(a, tuple):
         return (1 - t) * a + t * b
-    if blend_type not in ("MIX", "MULTIPLY", "ADD", "SUBTRACT", "SCREEN", "DIVIDE",
-                          "DIFFERENCE", "DARKEN", "LIGHTEN"):
+    if blend_type not in core.load().shading.BLENDS:
         k.notes.append(f"node '{node.name}' blend {blend_type} taken as Mix")
+        blend_type = "MIX"
     if isinstance(t, tuple):  # non-uniform vector factor
         out = tuple((1 - f) * x + f * y for f, x, y in zip(t, a, b))
     else:
@@ -392,28 +347,12 @@ def _c_color_ramp(k, node, out):
     return rgba[3] if out.name == "Alpha" else rgba[:3]
 
 
-_MATH = {
-    "ADD": lambda a, b, c: a + b,
-    "SUBTRACT": lambda a, b, c: a - b,
-    "MULTIPLY": lambda a, b, c: a * b,
-    "DIVIDE": lambda a, b, c: a / b if b != 0 else 0.0,
-    "MULTIPLY_ADD": lambda a, b, c: a * b + c,
-    "POWER": lambda a, b, c: a ** b if a > 0 or float(b).is_integer() else 0.0,
-    "MINIMUM": lambda a, b, c: min(a, b),
-    "MAXIMUM": lambda a, b, c: max(a, b),
-    "LESS_THAN": lambda a, b, c: float(a < b),
-    "GREATER_THAN": lambda a, b, c: float(a > b),
-    "ABSOLUTE": lambda a, b, c: abs(a),
-    "SQRT": lambda a, b, c: math.sqrt(a) if a > 0 else 0.0,
-}
-
-
 def _c_math(k, node, out):
-    op = _MATH.get(node.operation)
+    sh = core.load().shading
     args = [k.input(s) for s in node.inputs if s.enabled]
-    if op is None or any(v is None for v in args):
+    if node.operation not in sh.MATHS or any(v is None for v in args):
         return None
-    v = op(*(args + [0.0, 0.0])[:3])
+    v = sh.math_op(sh.MATHS.index(node.operation), *(args + [0.0, 0.0])[:3])
     return min(max(v, 0.0), 1.0) if node.use_clamp else v
 
 
@@ -535,8 +474,8 @@ class _Reader:
                       f"{_fmt(used)}, {why}")
             return used
         if notes:
-            self.warn(f"{where}, which Specula approximates by the constant {_fmt(v)} (it has "
-                      f"no textures yet): {', '.join(notes)}")
+            self.warn(f"{where}, which Specula approximates by the constant {_fmt(v)}: "
+                      f"{', '.join(notes)}")
         return v
 
     def colour(self, node, socket_name, default=DEFAULT_GREY, unknown=None):
@@ -547,6 +486,28 @@ class _Reader:
             return default
         return tuple(c if math.isfinite(c) and c > 0 else 0.0
                      for c in _rgb(_convert(v, "VALUE", "RGBA")))
+
+    def textured_colour(self, node, socket_name):
+        """A colour input that may vary over the surface: (the constant standing for it where
+        one is needed, e.g. its image's mean; its shader program, or None when it is one
+        constant or its chain does not compile, which is warned)."""
+        sock = _enabled_input(node, socket_name)
+        program, why = (None, "") if sock is None else \
+            shader_nodes.compile_colour(sock, self.constants.image_cache)
+        if program is None:
+            warned = len(self.warnings)
+            colour = self.colour(node, socket_name)
+            if why and len(self.warnings) > warned:  # say why the constant stands in
+                self.warnings[-1] += f"; it cannot be evaluated per point: {why} is not " \
+                    "supported yet"
+            elif why:
+                self.warn(f"node '{node.name}' input '{socket_name}' varies over the surface "
+                          f"through {why}, which Specula does not evaluate per point yet")
+            return colour, None
+        warned = len(self.warnings)
+        colour = self.colour(node, socket_name)
+        del self.warnings[warned:]  # the constant only stands in; the program is exact
+        return colour, program
 
     def number(self, node, socket_name, default=0.0, unknown=None):
         v = self.value(node, socket_name, None, unknown)
@@ -635,11 +596,13 @@ class _Reader:
             if self.unit(node, "Roughness") > ROUGHNESS_EPSILON:
                 self.warn(f"node '{node.name}' roughness > 0 (Oren-Nayar) is not supported; "
                           f"rendered as Lambert (roughness 0)")
-            return MaterialSpec("diffuse", name, {"colour": self.colour(node, "Color")})
+            colour, program = self.textured_colour(node, "Color")
+            return MaterialSpec("diffuse", name, {"colour": colour, **_with(program)})
         if kind in GLOSSY_NODES:
             # Rough Glossy is Multiscatter GGX (Cycles' default for the node); at Cycles'
             # delta threshold it is a perfect mirror.
-            return MaterialSpec("glossy", name, {"colour": self.colour(node, "Color"),
+            colour, program = self.textured_colour(node, "Color")
+            return MaterialSpec("glossy", name, {"colour": colour, **_with(program),
                                                  "roughness": self.unit(node, "Roughness")})
         if kind == "ShaderNodeBsdfGlass":
             r = self.unit(node, "Roughness")
@@ -686,7 +649,6 @@ class _Reader:
     def principled(self, node):
         name = self.material.name
         self.principled_ignored(node)
-        base = self.colour(node, "Base Color")
         metallic = self.unit(node, "Metallic")
         transmission = self.unit(node, "Transmission Weight", self.unit(node, "Transmission"))
         roughness = self.unit(node, "Roughness")
@@ -704,17 +666,19 @@ class _Reader:
                 self.warn(f"node '{node.name}' {label} {w:.3g} is not supported (only 0 or 1); "
                           f"treated as {1 if w >= 0.5 else 0}")
         if transmission >= 0.5:
-            ctor, kwargs = "principled_glass", {"base_colour": base, "ior": self.ior(node),
-                                                **kwargs}
+            ctor, kwargs = "principled_glass", {"base_colour": self.colour(node, "Base Color"),
+                                                "ior": self.ior(node), **kwargs}
         elif metallic >= 0.5:
-            ctor, kwargs = "metal", {"base_colour": base, **kwargs}
+            base, program = self.textured_colour(node, "Base Color")
+            ctor, kwargs = "metal", {"base_colour": base, **_with(program), **kwargs}
         else:
             # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
+            base, program = self.textured_colour(node, "Base Color")
             level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
                 if "Specular IOR Level" in node.inputs else 0.5
             return MaterialSpec("principled", name, {
-                "base_colour": base, "roughness": roughness, "ior": self.ior(node),
-                "specular_ior_level": level, **kwargs})
+                "base_colour": base, **_with(program), "roughness": roughness,
+                "ior": self.ior(node), "specular_ior_level": level, **kwargs})
         if roughness > ROUGHNESS_EPSILON:
             self.warn(f"node '{node.name}' roughness {roughness:.3g} is not supported; "
                       f"rendered smooth (roughness 0)")

@@ -311,7 +311,15 @@ class MicrofacetTables:
     def multiscatter_fresnel(self, fss):
         """Fms for a single-scatter Fresnel average Fss (scalar or per channel)."""
         fss = np.asarray(fss, np.float64)
-        return fss * self.e_avg / (1.0 - fss * (1.0 - self.e_avg))
+        return np.vectorize(multiscatter_fresnel)(fss, self.e_avg)
+
+
+@njit(**JIT)
+def multiscatter_fresnel(fss, e_avg):
+    """Fms, the Fresnel of light that scatters more than once among the microfacets, for
+    the single-scatter Fresnel average Fss and the lobe's average albedo E_avg (Kulla and
+    Conty 2017, as Cycles' microfacet_ggx_multiscatter)."""
+    return fss * e_avg / (1.0 - fss * (1.0 - e_avg))
 
 
 def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
@@ -327,8 +335,10 @@ def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
 # base (k, 3) diffuse colour (Principled) or 0 (Glossy); tint (k, 3) specular weight (1 or
 # the Glossy colour); alpha (k,); fresnel (k,) bool: dielectric Fresnel (Principled) or none;
 # mu (m,) the grid of view cosines with its guided_interp guide; fms (k, 3) per channel;
-# missing and albedo (k, m) over mu.
-LayerTables = namedtuple("LayerTables", "base tint alpha fresnel mu mu_guide fms missing albedo")
+# missing and albedo (k, m) over mu; e_avg (k,) the lobe's average albedo (a textured
+# Glossy colour's Fms at each hit).
+LayerTables = namedtuple("LayerTables", "base tint alpha fresnel mu mu_guide fms missing albedo "
+                                        "e_avg")
 
 # One rough vertex's lobe: the diffuse weight dw and specular tint (3 each), alpha, eta,
 # fresnel_on, the compensation per channel at mu_o (3) and the chance of the specular lobe.
@@ -343,6 +353,7 @@ def layer_tables(materials, used) -> LayerTables:
     alpha, fresnel, fms = np.zeros(k), np.zeros(k, np.bool_), np.zeros((k, 3))
     mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
     missing, albedo = np.zeros((k, len(mu))), np.zeros((k, len(mu)))
+    e_avg = np.zeros(k)
     roughness = materials.roughness if materials.roughness is not None else np.zeros(k)
     for j in used:
         if materials.kind[j] not in (PRINCIPLED, GLOSSY):
@@ -357,26 +368,35 @@ def layer_tables(materials, used) -> LayerTables:
         fms[j] = layer_fms(tables, principled, materials.colour[j])
         mu = tables.mu
         missing[j], albedo[j] = tables.missing_table, tables.albedo_table
+        e_avg[j] = tables.e_avg
     return LayerTables(base, tint, alpha, fresnel, mu, interp_guide(mu, 256), fms, missing,
-                       albedo)
+                       albedo, e_avg)
 
 
 @njit(**INLINE)
-def layer_at(mat, mu, eta, lt):
+def layer_at(mat, mu, eta, lt, textured, c0, c1, c2):
     """The layered lobe of rough material `mat` at view cosine mu (to its specular normal)
-    from its LayerTables lt."""
+    from its LayerTables lt; with `textured`, its colour at this point is c (the Principled
+    base, or the Glossy tint and, through Fss, its Fms) instead of the table's."""
     missing = guided_interp(mu, lt.mu, lt.missing[mat], lt.mu_guide)
     albedo = guided_interp(mu, lt.mu, lt.albedo[mat], lt.mu_guide)
-    dw0 = lt.base[mat, 0] * (1.0 - albedo)
-    dw1 = lt.base[mat, 1] * (1.0 - albedo)
-    dw2 = lt.base[mat, 2] * (1.0 - albedo)
+    b0, b1, b2 = lt.base[mat, 0], lt.base[mat, 1], lt.base[mat, 2]
     tint0, tint1, tint2 = lt.tint[mat, 0], lt.tint[mat, 1], lt.tint[mat, 2]
+    f0, f1, f2 = lt.fms[mat, 0], lt.fms[mat, 1], lt.fms[mat, 2]
+    if textured:
+        if lt.fresnel[mat]:  # Principled: the base
+            b0, b1, b2 = c0, c1, c2
+        else:  # Glossy: the tint is the Fresnel
+            tint0, tint1, tint2 = c0, c1, c2
+            e = lt.e_avg[mat]
+            f0, f1, f2 = (multiscatter_fresnel(c0, e), multiscatter_fresnel(c1, e),
+                          multiscatter_fresnel(c2, e))
+    dw0, dw1, dw2 = b0 * (1.0 - albedo), b1 * (1.0 - albedo), b2 * (1.0 - albedo)
     sp = (tint0 + tint1 + tint2) / 3.0 * albedo
     sd = (dw0 + dw1 + dw2) / 3.0
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, lt.alpha[mat], eta, lt.fresnel[mat],
-                 1.0 + lt.fms[mat, 0] * missing, 1.0 + lt.fms[mat, 1] * missing,
-                 1.0 + lt.fms[mat, 2] * missing, p_spec)
+                 1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec)
 
 
 @njit(**INLINE)

@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, camera, caustics, environment, lights, terminator
+from . import bsdf, camera, caustics, environment, lights, shading, terminator
 from .bsdf import DELTA_PDF
 from .film import filter_offset
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
@@ -52,14 +52,15 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
-                  "HAS_LIGHT_IMPORTANCE",
-                  "HAS_LIGHT_TRACING", "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES",
+                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
 HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
 HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
 HAS_LIGHT_IMPORTANCE = True
 HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
+HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -72,13 +73,15 @@ STAGE_NAMES = ("", "generate camera rays", "handle light hits", "handle escaped 
 # The scene as the kernel reads it. Parts a plan does not use are None (not passed).
 #   vertices (t, 3, 3), tri_normal (t, 3), tri_scale (t,), material_index (t,);
 #   normals (t, 3, 3) and smooth (t,) with shading normals; object_index (t,) and
-#   terminator_offset (objects,) with the terminator offset.
+#   terminator_offset (objects,) with the terminator offset; uv (maps, t, 3, 2) float32
+#   with textures.
 Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index normals "
-                                  "smooth object_index terminator_offset")
-# kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), and
-# the rough materials' bsdf.LayerTables (None without rough materials).
+                                  "smooth object_index terminator_offset uv")
+# kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
+# rough materials' bsdf.LayerTables (None without rough materials) and the colour programs'
+# shading.ProgramTable (None without textures).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
-                                            "transmission_tint emission layers")
+                                            "transmission_tint emission layers programs")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -88,10 +91,11 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # tracing (caustics.py): the camera ray's raster area per steradian until the first hit,
 # then camera_side_density at the path's diffuse first vertex while every vertex after it
 # is specular (0 otherwise), the chain's product of relative IORs, and the distance from
-# the lens point to where the camera ray starts (per row).
+# the lens point to where the camera ray starts (per row); svm: the shader programs'
+# registers (shading.MAX_REGISTERS floats, reused by every path of the batch).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
-                            "camera_near prev_normal")
+                            "camera_near prev_normal svm")
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side), the specular lobes' normal m, wo, front face, triangle, barycentrics,
@@ -284,6 +288,17 @@ def surface_interaction(i, f, tfar, bu, bv, sc, paths):
                   v, mat, np.float64(tfar), scale)
 
 
+def surface_colour(x, sc, paths):
+    """The material's colour at vertex x (diffuse, base, glossy or metal colour): its shader
+    program's result where it has one (shading.py: image textures), else the table's."""
+    mt = sc.materials
+    c0, c1, c2 = mt.colour[x.mat, 0], mt.colour[x.mat, 1], mt.colour[x.mat, 2]
+    if HAS_TEXTURES:
+        c0, c1, c2 = shading.colour_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                       paths.svm, c0, c1, c2)
+    return c0, c1, c2
+
+
 def handle_emission(i, row, depth, x, sc, paths, mis):
     """Emission of the hit triangle (two-sided), MIS-weighted against light sampling after
     soft bounces, and against light tracing at the end of a diffuse -> specular chain
@@ -406,7 +421,7 @@ def shadow_origin(x, wx, wy, wz, sc):
     return ox + eps * x.nx, oy + eps * x.ny, oz + eps * x.nz
 
 
-def sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow, rev_sample):
+def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sample):
     """Next-event estimation at a diffuse or rough vertex: an emitter, the BSDF toward it,
     MIS against BSDF sampling (delta lights take it all); the shadow ray, from the offset
     origin to just short of the sampled point, is queued. Returns the shadow rays queued."""
@@ -422,8 +437,7 @@ def sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow, rev_sample
                                               x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False)
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
-        c = sc.materials.colour
-        g0, g1, g2 = c[x.mat, 0] * pdf_b, c[x.mat, 1] * pdf_b, c[x.mat, 2] * pdf_b
+        g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
     if not (max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0):
         return n_shadow
     w = 1.0 if math.isinf(pdf_l) else power_heuristic(pdf_l, pdf_b)
@@ -453,9 +467,9 @@ def sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow, rev_sample
     return s + 1
 
 
-def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
-    """A direction from the vertex's BSDF (only the kinds the plan has): (w, weight, pdf,
-    ok); the pdf is DELTA_PDF for delta lobes."""
+def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
+    """A direction from the vertex's BSDF (only the kinds the plan has; c: the surface's
+    colour there): (w, weight, pdf, ok); the pdf is DELTA_PDF for delta lobes."""
     ps = paths.pseed[row]
     mt = sc.materials
     k = mt.kind[x.mat]
@@ -467,7 +481,7 @@ def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
     if HAS_DIFFUSE and k == DIFFUSE:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
-        return wx, wy, wz, mt.colour[x.mat, 0], mt.colour[x.mat, 1], mt.colour[x.mat, 2], pdf, ok
+        return wx, wy, wz, c[0], c[1], c[2], pdf, ok
     if HAS_GLASS and k == GLASS:
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
@@ -476,13 +490,12 @@ def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
             mt.transmission_tint[x.mat], u, EXACT_FRESNEL)
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
-    c = mt.colour
     if HAS_METAL and k == METAL:
-        return (wx, wy, wz, bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 0]),
-                bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 1]),
-                bsdf.fresnel_schlick_conductor(cos_o, c[x.mat, 2]), DELTA_PDF, True)
+        return (wx, wy, wz, bsdf.fresnel_schlick_conductor(cos_o, c[0]),
+                bsdf.fresnel_schlick_conductor(cos_o, c[1]),
+                bsdf.fresnel_schlick_conductor(cos_o, c[2]), DELTA_PDF, True)
     if HAS_MIRROR and k == MIRROR:
-        return wx, wy, wz, c[x.mat, 0], c[x.mat, 1], c[x.mat, 2], DELTA_PDF, True
+        return wx, wy, wz, c[0], c[1], c[2], DELTA_PDF, True
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
 
 
@@ -579,19 +592,24 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         if not alive:
             continue
         paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = t0, t1, t2
+        c = surface_colour(x, sc, paths)
         lobe = bsdf.Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0)
         if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
             mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
-            lobe = bsdf.layer_at(x.mat, mu, sc.materials.ior[x.mat], sc.materials.layers)
+            textured = False
+            if HAS_TEXTURES:
+                textured = sc.materials.programs.colour[x.mat, 0] >= 0
+            lobe = bsdf.layer_at(x.mat, mu, sc.materials.ior[x.mat], sc.materials.layers,
+                                 textured, c[0], c[1], c[2])
         if PROFILE:
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY):
-            n_shadow = sample_light(i, row, depth, x, lobe, sc, paths, shadow, n_shadow,
+            n_shadow = sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
-        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, lobe, sc, paths,
+        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, lobe, c, sc, paths,
                                                       rev_sample)
         t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
         if DEBUG:
@@ -636,7 +654,8 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
-    handle_emission, caustic_weight, russian_roulette, emitter_pmf, sample_emitter,
+    surface_colour, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
+    sample_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

@@ -31,6 +31,7 @@ from .jit import INLINE
 from .lights import BOUND_COLUMNS, COLUMNS, Emitters
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
+from .shading import MAX_REGISTERS, ProgramTable
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -191,14 +192,22 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         offset = np.asarray(scene.terminator_offset, np.float64)
         if len(offset) == 0:
             offset = np.zeros(1)
+    uv = programs = None
+    if scene.programs is not None and (plan.textures or generic):
+        uv, programs = scene.uv, scene.programs
+    elif generic:  # no material has a program
+        uv = np.zeros((1, 1, 3, 2), np.float32)
+        programs = ProgramTable(np.zeros((0, 8), np.int64), np.zeros(1), np.zeros((1, 4), F32),
+                                np.zeros((0, 6), np.int64),
+                                np.full((len(scene.materials), 3), -1, np.int64))
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
-                        normals, smooth, obj, offset)
+                        normals, smooth, obj, offset, uv)
     m = scene.materials
     rough = plan.principled or plan.glossy
     used = np.unique(scene.material_index)
     layers = layer_tables(m, used) if (rough or generic) else None
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
-                              m.transmission_tint, m.emission, layers)
+                              m.transmission_tint, m.emission, layers, programs)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -254,7 +263,8 @@ class Tracer:
                       np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
                       np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
                       np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
-                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)))
+                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
+                      np.zeros(MAX_REGISTERS))
         t0 = time.perf_counter()
         k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
                                replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,
@@ -299,7 +309,8 @@ class Tracer:
         lp = light_tracing.LightPaths(
             np.empty(n, np.int64), np.empty(n, np.uint64), np.empty((n, 3)), np.empty((n, 3)),
             np.empty((n, 3), F32), np.empty((n, 3), F32), np.empty(n, F32), np.empty((n, 3)),
-            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.zeros(MAX_REGISTERS))
         conn = light_tracing.Connections(np.empty((n, 3), F32), np.empty((n, 3), F32),
                                          np.empty(n, F32), np.empty((n, 2)), np.empty((n, 3)))
         t0 = time.perf_counter()

@@ -28,7 +28,7 @@ import numpy as np
 from . import camera, caustics, lights
 from .film import filter_density
 from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roulette,
-                         sample_bsdf, surface_interaction)
+                         sample_bsdf, surface_colour, surface_interaction)
 from .jit import ALLOCATING, INLINE, JIT
 from .bsdf import Layer
 from .sampling import (LIGHT_POINT, LIGHT_SELECT, bounce_dim, build_frame, concentric_disk,
@@ -50,9 +50,9 @@ def light_path_seed(seed):
 # start (caustics.CausticData) over the shading_ratio of its Lambertian vertices so far, the
 # largest channel of the starting weight (Russian roulette reads beta relative to it), the
 # least distance of a first hit the path lights (lights.sphere_light_line; 0 but for Soft
-# Falloff lights).
+# Falloff lights), and the shader programs' registers (integrator.Paths.svm).
 LightPaths = namedtuple("LightPaths", "live pseed o64 d64 origin32 dir32 tmax32 throughput "
-                                      "prev_pdf eta pdf_emit start near")
+                                      "prev_pdf eta pdf_emit start near svm")
 # Camera connections: shadow ray (float32), raster position (n, 2) and the contribution per
 # unit raster area, MIS weight and 1 / N_L included.
 Connections = namedtuple("Connections", "origin direction tmax raster contrib")
@@ -165,10 +165,10 @@ def start_sphere_light_path(i, e, j, ua, ub, va, vb, sc, lp):
     _set_start(i, r0, r1, r2, sc.caustics.pdf_emit[e], near, lp)
 
 
-def connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample):
-    """Queue the connection of Lambertian vertex x to a lens point (drawn as a camera ray
-    draws it), with its contribution and MIS weight, if the camera could see x. Returns
-    the connections queued."""
+def connect_camera(i, row, depth, x, c, sc, lp, conn, n_conn, rev_sample):
+    """Queue the connection of Lambertian vertex x of colour c to a lens point (drawn as a
+    camera ray draws it), with its contribution and MIS weight, if the camera could see x.
+    Returns the connections queued."""
     cam = sc.camera
     lx = ly = 0.0
     if HAS_DOF and cam.aperture > 0.0:
@@ -194,11 +194,10 @@ def connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample):
     w = caustics.light_tracing_weight(
         ca.n_light, lp.pdf_emit[i], eta2,
         caustics.camera_side_density(raster_per_area, cos_shading / math.pi, cos_chain))
-    c = sc.materials.colour
     s = n_conn
     for j in range(3):
         conn.contrib[s, j] = caustics.light_tracing_contribution(
-            lp.throughput[i, j], c[x.mat, j], cos_shading, cos_chain, raster_per_area,
+            lp.throughput[i, j], c[j], cos_shading, cos_chain, raster_per_area,
             eta2) * w / ca.n_light
     if not max(conn.contrib[s, 0], max(conn.contrib[s, 1], conn.contrib[s, 2])) > 0.0:
         return n_conn
@@ -226,12 +225,12 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
             continue
         x = surface_interaction(i, f, tfar[i], bu[i], bv[i], sc, lp)
         k = sc.materials.kind[x.mat]
-        if k == DIFFUSE:
-            if depth == 0:  # not a caustic path: path tracing's next-event estimation's
-                continue
-            n_conn = connect_camera(i, row, depth, x, sc, lp, conn, n_conn, rev_sample)
-        elif not (k == MIRROR or k == METAL or k == GLASS):
+        if not (k == DIFFUSE or k == MIRROR or k == METAL or k == GLASS) or \
+                (k == DIFFUSE and depth == 0):  # not a caustic path: NEE's
             continue
+        c = surface_colour(x, sc, lp)
+        if k == DIFFUSE:
+            n_conn = connect_camera(i, row, depth, x, c, sc, lp, conn, n_conn, rev_sample)
         if depth + 1 > max_bounces:
             continue
         # beta carries the emitter's power (it scales with the scene's area): the roulette
@@ -243,7 +242,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         if not alive:
             continue
         t0, t1, t2 = t0 * b0, t1 * b0, t2 * b0
-        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, no_lobe, sc, lp,
+        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, no_lobe, c, sc, lp,
                                                       rev_sample)
         t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
         if not (ok and max(t0, max(t1, t2)) > 0):

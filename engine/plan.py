@@ -58,6 +58,8 @@ class Plan:
     terminator: bool = False
     # Light paths from emissive triangles through specular chains to the camera (caustics.py).
     light_tracing: bool = False
+    # Some material used has a colour from a shader program (shading.py: image textures).
+    textures: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -73,6 +75,8 @@ class Plan:
                                           " (world colour)" if self.world_light else " (black)"))
         if self.shading_normals:
             s.append("interpolate shading normals")
+        if self.textures:
+            s.append("evaluate shader programs (textured colours)")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
@@ -104,7 +108,7 @@ class Plan:
             HAS_WORLD_COLOUR=self.world_light and not self.environment,
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
-            HAS_LIGHT_TRACING=self.light_tracing,
+            HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -151,6 +155,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
+        textures=scene.programs is not None and bool(np.any(scene.programs.colour[used, 0] >= 0)),
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .jit import ALLOCATING, njit
+from .shading import Program, ProgramTable, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
@@ -26,6 +27,8 @@ KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal"
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 
+# The kinds whose colour may come from a shader program (Material.colour_program).
+TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal")
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
@@ -79,6 +82,9 @@ class Material:
           `colour`, no Fresnel.
         - none: no BSDF (a pure Emission shader): paths end here.
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
+    colour_program : a shading.Program whose result replaces `colour` at each hit (an image
+        texture on the colour), or None. `colour` is then what the program's result is
+        approximated by where a constant is needed (its mean).
     """
 
     name: str
@@ -89,18 +95,22 @@ class Material:
     transmission_tint: tuple = (1.0, 1.0, 1.0)
     emission: tuple = (0.0, 0.0, 0.0)
     roughness: float = 0.0
+    colour_program: Program | None = field(default=None, compare=False)
 
     @classmethod
-    def diffuse(cls, name, colour, emission=(0, 0, 0)):
-        return cls(name, "diffuse", tuple(colour), emission=tuple(emission))
+    def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None):
+        return cls(name, "diffuse", tuple(colour), emission=tuple(emission),
+                   colour_program=colour_program)
 
     @classmethod
-    def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0)):
-        return cls(name, "mirror", tuple(colour), emission=tuple(emission))
+    def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0), colour_program=None):
+        return cls(name, "mirror", tuple(colour), emission=tuple(emission),
+                   colour_program=colour_program)
 
     @classmethod
-    def metal(cls, name, base_colour, emission=(0, 0, 0)):
-        return cls(name, "metal", tuple(base_colour), emission=tuple(emission))
+    def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None):
+        return cls(name, "metal", tuple(base_colour), emission=tuple(emission),
+                   colour_program=colour_program)
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0)):
@@ -117,7 +127,7 @@ class Material:
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
-                   specular_ior_level=0.5, emission=(0, 0, 0)):
+                   specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
         ior = float(ior)
@@ -127,15 +137,16 @@ class Material:
             eta = (1 + np.sqrt(f0)) / max(1 - np.sqrt(f0), 1e-12)
             ior = float(eta if ior >= 1 else 1 / eta)
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
-                   roughness=float(roughness))
+                   roughness=float(roughness), colour_program=colour_program)
 
     @classmethod
-    def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0)):
+    def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
+               colour_program=None):
         """Glossy BSDF: a mirror at (Cycles-)zero roughness, else rough GGX reflection."""
         if roughness <= DELTA_ROUGHNESS:
-            return cls.mirror(name, colour, emission)
+            return cls.mirror(name, colour, emission, colour_program)
         return cls(name, "glossy", tuple(colour), emission=tuple(emission),
-                   roughness=float(roughness))
+                   roughness=float(roughness), colour_program=colour_program)
 
     @classmethod
     def emission_only(cls, name, colour=(1, 1, 1), strength=1.0):
@@ -161,6 +172,8 @@ class Materials:
     emission: np.ndarray
     names: list
     roughness: np.ndarray | None = None
+    # Per material its colour's shading.Program or None (textured colours).
+    colour_programs: list | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -184,9 +197,15 @@ class Materials:
             rows.append((DIFFUSE, np.full(3, 0.8), 1.5, np.ones(3), np.ones(3), np.zeros(3)))
             materials = [Material("default")]
         k, c, i, rt, tt, e = zip(*rows)
+        programs = [m.colour_program for m in materials]
+        for m in materials:
+            if m.colour_program is not None and m.kind not in TEXTURED_KINDS:
+                raise ValueError(f"material '{m.name}': a {m.kind} material's colour cannot "
+                                 f"vary (textured colours: {', '.join(TEXTURED_KINDS)})")
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
-                   np.array([float(m.roughness) for m in materials]))
+                   np.array([float(m.roughness) for m in materials]),
+                   programs if any(p is not None for p in programs) else None)
 
     def __len__(self):
         return len(self.kind)
@@ -459,6 +478,9 @@ class Scene:
         relative to `origin` and (t, 3) int32 (shared_vertices[shared_triangles] equals
         `vertices`): what the acceleration structure is built from, since embree's buffers
         fill several times faster with a vertex shared by its triangles copied once
+    uv : (maps, t, 3, 2) float32 per-corner texture coordinates of the UV maps the colour
+        programs read, or None without programs
+    programs : the materials' shading.ProgramTable, or None without textured materials
     """
 
     vertices: np.ndarray
@@ -476,6 +498,8 @@ class Scene:
     shared_vertices: np.ndarray | None = None
     shared_triangles: np.ndarray | None = None
     terminator_offset: np.ndarray | None = None
+    uv: np.ndarray | None = None
+    programs: ProgramTable | None = None
 
     def __post_init__(self):
         if self.terminator_offset is None:
@@ -504,6 +528,7 @@ class SceneBuilder:
         self._lights: list[Light] = []
         self._materials: list[Material] = []
         self._meshes: list[tuple] = []
+        self._uv_maps: list[dict] = []
         self.warnings: list[str] = []
 
     def add_material(self, material: Material) -> int:
@@ -516,7 +541,8 @@ class SceneBuilder:
         self._lights.append(light)
 
     def add_mesh(self, name: str, vertices, triangles, material_index=0,
-                 corner_normals=None, smooth=None, terminator_offset=0.0) -> int:
+                 corner_normals=None, smooth=None, terminator_offset=0.0,
+                 uv_maps=None) -> int:
         """Add one object's triangles in world space; returns how many were kept.
 
         vertices : (n, 3) float, world-space positions
@@ -526,6 +552,9 @@ class SceneBuilder:
         smooth : optional (t,) bool; triangles not smooth use their geometric normal
         terminator_offset : the object's shadow terminator geometry offset, 0..1 (Cycles'
             default for a Blender object is 0.1; 0 starts shadow rays on the flat triangles)
+        uv_maps : optional dict, UV map name -> (t, 3, 2) per-corner coordinates; the name ""
+            is the map an Image Texture without a Vector input reads (Blender's render-active
+            map)
 
         Only the checks run here; `build` gathers the corners of every mesh straight into
         the scene's arrays (a million-triangle mesh is 72 MB per copy of its corners).
@@ -560,12 +589,16 @@ class SceneBuilder:
         if normals is not None:
             # Unusable shading normals fall back to the flat normal for that triangle.
             sm &= _normals_usable(normals)
+        uvs = {str(k): np.asarray(m, np.float32).reshape(t, 3, 2)
+               for k, m in (uv_maps or {}).items()}
         if not keep.all():
             sm, mi, tri = sm[keep], mi[keep], tri[keep]
             normals = None if normals is None else normals[keep]
+            uvs = {k: m[keep] for k, m in uvs.items()}
         if not finite_v.all():  # unreferenced now, but embree should see no NaN at all
             v = np.where(finite_v[:, None], v, 0.0)
         self._meshes.append((name, v, tri, normals, sm, mi, terminator_offset))
+        self._uv_maps.append(uvs)
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -600,6 +633,7 @@ class SceneBuilder:
         if not smooth_all.any():
             norms = None
         offsets = np.cumsum([0] + [len(m[1]) for m in meshes])
+        uv, programs = self._programs(materials, counts)
         return Scene(
             vertices=verts, origin=origin, normals=norms, smooth=smooth_all,
             material_index=(np.concatenate([m[5] for m in meshes]) if meshes
@@ -613,7 +647,34 @@ class SceneBuilder:
             shared_vertices=(np.concatenate([m[1] for m in meshes]) - origin if meshes
                              else np.zeros((0, 3))),
             shared_triangles=(np.concatenate([m[2] + o for m, o in zip(meshes, offsets)])
-                              .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)))
+                              .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)),
+            uv=uv, programs=programs)
+
+    def _programs(self, materials: Materials, counts) -> tuple:
+        """The scene's (uv, ProgramTable) for the materials' colour programs, (None, None)
+        without any: the UV maps the programs read, gathered over every mesh (a mesh
+        without one of them gets coordinates 0 there, as in Cycles, and a warning)."""
+        progs = materials.colour_programs
+        if progs is None:
+            return None, None
+        names = sorted({n for p in progs if p is not None for n in p.uv_maps}) or [""]
+        uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
+        start = 0
+        for (name, *_, mi, _), maps, count in zip(self._meshes, self._uv_maps, counts):
+            for j, uv_name in enumerate(names):
+                if uv_name in maps:
+                    uv[j, start:start + count] = maps[uv_name]
+                    continue
+                users = [materials.names[k] for k in np.unique(mi)
+                         if progs[k] is not None and uv_name in progs[k].uv_maps]
+                if users:
+                    label = f"UV map '{uv_name}'" if uv_name else "UV map"
+                    msg = (f"object '{name}' has no {label}, which material '{users[0]}' "
+                           f"reads: its texture coordinates there are 0")
+                    self.warnings.append(msg)
+                    warnings.warn(msg, stacklevel=3)
+            start += count
+        return uv, pack(progs, names.index)
 
 
 # -------------------------------------------------------------------- builder passes

@@ -173,3 +173,54 @@ def settings(**kw):
     base = dict(width=96, height=72, samples=8, max_bounces=8, seed=1)
     base.update(kw)
     return RenderSettings(**base)
+
+
+def checker_texels(n=8, c1=(0.9, 0.6, 0.1), c2=(0.1, 0.3, 0.8)):
+    """An n x n image (h, w, 4) of two colours in squares, with a red texel at (0, 0) and a
+    green one at the top right, so a flipped or transposed lookup shows."""
+    iy, ix = np.mgrid[0:n, 0:n]
+    texels = np.where(((ix + iy) % 2 == 0)[..., None], c1, c2)
+    texels[0, 0] = (1.0, 0.0, 0.0)
+    texels[n - 1, n - 1] = (0.0, 1.0, 0.0)
+    return np.concatenate([texels, np.ones((n, n, 1))], axis=2).astype(np.float32)
+
+
+def image_program(texels, interpolation="Closest", extension="REPEAT", srgb=False,
+                  scale=1.0):
+    """A colour program: the image on the default UV map, coordinates scaled by `scale`
+    (a Mapping node's Scale)."""
+    from engine.shading import OP_MAPPING, Program, Texture
+    p = Program()
+    uv = p.uv("")
+    if scale != 1.0:
+        uv = p.emit(OP_MAPPING, 3, a=uv, params=[scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0])
+    p.out = p.image(Texture("checker", texels, interpolation, extension, srgb), uv, False)
+    return p
+
+
+def quad_uvs():
+    """Per-corner UVs (2, 3, 2) of `quad`'s two triangles: p0 (0, 0) .. p2 (1, 1)."""
+    corners = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    return corners[np.array([[0, 1, 2], [0, 2, 3]])]
+
+
+def textured_box(interpolation="Closest", extension="REPEAT", srgb=False, scale=1.0,
+                 kind="diffuse", texels=None):
+    """The Cornell box with spheres whose back wall and floor carry an image texture
+    (`checker_texels`) on their own UVs."""
+    b = cornell_box()
+    texels = checker_texels() if texels is None else texels
+    prog = image_program(texels, interpolation, extension, srgb, scale)
+    mean = tuple(float(c) for c in texels[..., :3].reshape(-1, 3).mean(axis=0))
+    if kind == "diffuse":
+        mat = Material.diffuse("textured", mean, colour_program=prog)
+    else:
+        mat = Material.principled("textured", mean, roughness=0.4, colour_program=prog)
+    m = b.add_material(mat)
+    for name, corners in (("textured back", ((-1, 0.99, 0), (1, 0.99, 0), (1, 0.99, 1.5),
+                                               (-1, 0.99, 1.5))),
+                          ("textured floor", ((-1, -1, 0.001), (1, -1, 0.001), (1, 1, 0.001),
+                                              (-1, 1, 0.001)))):
+        v, t = quad(*corners)
+        b.add_mesh(name, v, t, m, uv_maps={"": quad_uvs()})
+    return b.build(cornell_camera(), World((0, 0, 0)))

@@ -227,15 +227,51 @@ def test_float_image_from_a_file_is_decoded_once(fresh, tmp_path, colorspace, ex
     assert spec.kwargs["colour"] == pytest.approx((float(expected),) * 3, abs=1e-4)
 
 
-def test_base_colour_from_a_texture_is_its_mean(fresh):
+def _program_at(program, uv):
+    """A colour program's result at UV coordinates uv (engine.shading.evaluate)."""
+    from engine import shading
+    reg = shading.evaluate(program, uv)
+    return reg[program.out:program.out + 3]
+
+
+# The centres of the 2 x 2 images' texels, in Blender's order (bottom row first).
+TEXEL_CENTRES = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)]
+
+
+def test_base_colour_from_a_texture_is_a_program(fresh):
+    """A textured Base Color compiles to a shader program that reads the image at each
+    point, decoding sRGB bytes as Cycles does; the mean stands in where a constant is needed,
+    and nothing is approximated, so nothing is warned."""
     mat, node = node_material("Albedo", "ShaderNodeBsdfPrincipled")
     img, stored = make_image("Albedo")
-    texture(mat, img, node, "Base Color")
+    tex = texture(mat, img, node, "Base Color")
+    tex.interpolation = "Closest"
     spec, warnings = convert(mat)
-    assert spec.ctor == "principled" and "emission" not in spec.kwargs
-    expected = srgb_to_linear(stored[:, :3]).mean(axis=0)
-    assert spec.kwargs["base_colour"] == pytest.approx(tuple(expected), abs=1e-5)
-    assert len(warnings) == 1 and "mean of image 'Albedo'" in warnings[0]
+    assert spec.ctor == "principled" and "emission" not in spec.kwargs and warnings == []
+    decoded = srgb_to_linear(stored[:, :3])
+    assert spec.kwargs["base_colour"] == pytest.approx(tuple(decoded.mean(axis=0)), abs=1e-5)
+    program = spec.kwargs["colour_program"]
+    for uv, texel in zip(TEXEL_CENTRES, decoded):
+        assert _program_at(program, uv) == pytest.approx(texel, abs=1e-6)
+    # Linear interpolation between the bottom two texels happens before the decoding.
+    tex.interpolation = "Linear"
+    spec, _ = convert(mat)
+    middle = srgb_to_linear(0.5 * (stored[0, :3] + stored[1, :3]))
+    assert _program_at(spec.kwargs["colour_program"], (0.5, 0.25)) == \
+        pytest.approx(middle, abs=1e-6)
+
+
+def test_a_node_without_an_instruction_falls_back_to_the_mean_and_says_so(fresh):
+    mat, node = node_material("Tinted", "ShaderNodeBsdfDiffuse")
+    img, stored = make_image("Tint")
+    hue = mat.node_tree.nodes.new("ShaderNodeHueSaturation")
+    texture(mat, img, hue, "Color")
+    mat.node_tree.links.new(hue.outputs["Color"], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert "colour_program" not in spec.kwargs
+    assert spec.kwargs["colour"] == pytest.approx(
+        tuple(srgb_to_linear(stored[:, :3]).mean(axis=0)), abs=1e-5)
+    assert len(warnings) == 1 and hue.name in warnings[0] and "per point" in warnings[0]
 
 
 def test_texture_times_colour_factor_and_separated_channels(fresh):
@@ -262,6 +298,10 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
     spec, warnings = convert(mat)
     base = srgb_to_linear(stored[:, :3]).mean(axis=0) * (0.5, 1.0, 0.25)
     assert spec.kwargs["base_colour"] == pytest.approx(tuple(base), abs=1e-5)
+    # The base colour varies per point (Linear, at the texel centres: the texels).
+    for uv, texel in zip(TEXEL_CENTRES, srgb_to_linear(stored[:, :3])):
+        assert _program_at(spec.kwargs["colour_program"], uv) == \
+            pytest.approx(texel * (0.5, 1.0, 0.25), abs=1e-6)
     assert spec.kwargs["roughness"] == pytest.approx(orm_stored[:, 1].mean(), abs=1e-6)
     metallic = 0.5 * orm_stored[:, 2].mean()
     assert any(f"the constant {metallic:.3g}" in w and "'Metallic'" in w for w in warnings)

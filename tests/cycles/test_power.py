@@ -138,6 +138,26 @@ def _spot_cone_toward_centre():
         yield
 
 
+def _texture_v_flipped(scene, settings):
+    scene.uv = scene.uv.copy()
+    scene.uv[..., 1] = 1.0 - scene.uv[..., 1]
+    return scene, settings
+
+
+def _srgb_not_decoded(scene, settings):
+    textures = scene.programs.textures.copy()
+    textures[:, 5] = 0
+    scene.programs = scene.programs._replace(textures=textures)
+    return scene, settings
+
+
+def _textures_as_their_means(scene, settings):
+    """The renderer before shader programs: every textured colour its image's mean."""
+    scene.programs = scene.programs._replace(
+        colour=np.full_like(scene.programs.colour, -1))
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -152,6 +172,9 @@ INJECTIONS = {
     "glossy_compensation_white": ("glossy_colours", None, _glossy_compensation_white),
     "no_terminator_offset": ("terminator_point", _no_terminator_offset, None),
     "no_terminator_offset_area_light": ("terminator_area", _no_terminator_offset, None),
+    "texture_v_flipped": ("textured_walls", _texture_v_flipped, None),
+    "srgb_texture_not_decoded": ("textured_walls", _srgb_not_decoded, None),
+    "textures_as_their_means": ("textured_walls", _textures_as_their_means, None),
 }
 
 

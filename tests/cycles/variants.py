@@ -24,6 +24,7 @@ import sys
 from dataclasses import dataclass, field
 
 import bpy
+import bmesh  # after bpy: the bpy module provides it
 import mathutils
 import numpy as np
 
@@ -35,6 +36,7 @@ SCENES_DIR = os.path.join(REPO, "blend_scenes")
 from blend_scenes import build_scenes as bs  # noqa: E402 - needs REPO on sys.path
 
 BUILD_SCENES = os.path.join(SCENES_DIR, "build_scenes.py")
+GLTF_DIR = os.path.join(REPO, "tests", "assets", "gltf")
 
 
 @dataclass(frozen=True)
@@ -717,6 +719,128 @@ def caustic_sun():
     scene.specula.use_light_tracing = True
 
 
+def _checker_image(name, n=8, colourspace="sRGB"):
+    """An n x n packed byte image of two colours in squares with a red texel at the bottom
+    left and a green one at the top right (a flipped or transposed lookup shows)."""
+    image = bpy.data.images.new(name, n, n, alpha=True)
+    iy, ix = np.mgrid[0:n, 0:n]
+    px = np.where(((ix + iy) % 2 == 0)[..., None], (0.9, 0.6, 0.1, 1.0), (0.1, 0.3, 0.8, 1.0))
+    px[0, 0], px[n - 1, n - 1] = (1.0, 0.0, 0.0, 1.0), (0.0, 1.0, 0.0, 1.0)
+    image.pixels.foreach_set(px.astype(np.float32).ravel())
+    image.pack()
+    image.colorspace_settings.name = colourspace
+    return image
+
+
+def _textured(name, image, shader="ShaderNodeBsdfDiffuse", socket="Color", scale=1.0,
+              interpolation="Closest", extension="REPEAT", **inputs):
+    """A material whose `socket` is an Image Texture of `image` on the UV map, through a
+    Mapping node scaling it by `scale`."""
+    mat = bs.material(name, shader, **inputs)
+    tree = mat.node_tree
+    shader_node = next(n for n in tree.nodes if n.bl_idname != "ShaderNodeOutputMaterial")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation, tex.extension = image, interpolation, extension
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Scale"].default_value = (scale, scale, 1.0)
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    tree.links.new(tex.outputs["Color"], shader_node.inputs[socket])
+    return mat
+
+
+def _quad_uvs(obj):
+    layer = obj.data.uv_layers.new(name="UVMap")
+    for loop, uv in zip(layer.data, ((0, 0), (1, 0), (1, 1), (0, 1))):
+        loop.uv = uv
+
+
+def textured_walls():
+    """The Cornell box whose back wall and floor carry an 8 x 8 sRGB image texture (Closest,
+    repeated twice by a Mapping node on the floor), a Principled sphere textured on its own
+    UVs (Linear, Extend) and a Glossy sphere whose colour is the image Mixed (Multiply)
+    with an RGB: the textured colour in Lambert, layered and specular lobes."""
+    scene = _box()
+    image = _checker_image("Checker")
+    back = bpy.data.objects["Back"]
+    back.data.materials[0] = _textured("BackTex", image, Roughness=0.0)
+    floor = bpy.data.objects["Floor"]
+    floor.data.materials[0] = _textured("FloorTex", image, scale=2.0, Roughness=0.0)
+    for obj in (back, floor):
+        _quad_uvs(obj)
+    ball = _textured("BallTex", image, "ShaderNodeBsdfPrincipled", "Base Color",
+                     interpolation="Linear", extension="EXTEND", Roughness=0.4)
+    mesh = bpy.data.meshes.new("Ball")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")  # calc_uvs fills an existing layer
+    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=0.3, calc_uvs=True)
+    for face in bm.faces:
+        face.smooth = True
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new("Ball", mesh)
+    obj.location = (-0.45, 0.2, 0.3)
+    obj.data.materials.append(ball)
+    scene.collection.objects.link(obj)
+    glossy = _textured("GlossyTex", image, "ShaderNodeBsdfGlossy", Roughness=0.3)
+    tree = glossy.node_tree
+    tex = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeTexImage")
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    mix.inputs["Factor"].default_value = 0.7
+    mix.inputs[7].default_value = (0.9, 0.9, 0.5, 1.0)  # B_Color
+    tree.links.new(tex.outputs["Color"], mix.inputs[6])  # A_Color
+    glossy_node = next(n for n in tree.nodes if n.bl_idname in ("ShaderNodeBsdfGlossy",
+                                                                "ShaderNodeBsdfAnisotropic"))
+    tree.links.new(mix.outputs[2], glossy_node.inputs["Color"])  # Result_Color
+    mesh2 = mesh.copy()
+    obj2 = bpy.data.objects.new("GlossyBall", mesh2)
+    obj2.location = (0.45, -0.2, 0.3)
+    mesh2.materials[0] = glossy
+    scene.collection.objects.link(obj2)
+
+
+def _gltf(name, direction=(0.6, -1.0, 0.5)):
+    """A Khronos glTF sample model (tests/assets/gltf/, licences beside them) imported with
+    Blender's own glTF importer, as a user would: framed by a camera from `direction`, lit
+    by a grey world and a sun."""
+    scene = bs.new_scene()
+    bpy.ops.import_scene.gltf(filepath=os.path.join(GLTF_DIR, name, name + ".glb"))
+    corners = [o.matrix_world @ mathutils.Vector(c) for o in scene.objects
+               if o.type == "MESH" for c in o.bound_box]
+    lo = mathutils.Vector([min(c[i] for c in corners) for i in range(3)])
+    hi = mathutils.Vector([max(c[i] for c in corners) for i in range(3)])
+    centre, radius = (lo + hi) / 2, (hi - lo).length / 2
+    d = mathutils.Vector(direction).normalized()
+    cam = bs.camera(scene, "Camera", centre + d * radius * 2.6, 50.0, (64, 48))
+    cam.rotation_euler = (-d).to_track_quat("-Z", "Y").to_euler()
+    cam.data.clip_start, cam.data.clip_end = radius * 0.05, radius * 20
+    world = bpy.data.worlds.new("Grey")
+    bg = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.3, 0.3, 0.3, 1.0)
+    world.color = (0.3, 0.3, 0.3)
+    scene.world = world
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy = 2.0
+    obj = bpy.data.objects.new("Sun", sun)
+    obj.rotation_euler = mathutils.Vector((0.4, -0.6, 1.0)).to_track_quat("Z", "Y").to_euler()
+    scene.collection.objects.link(obj)
+
+
+def gltf_box_textured():
+    _gltf("BoxTextured")
+
+
+def gltf_texture_settings():
+    """Wrap modes (the importer's Math WRAP / PINGPONG chains), single- and double-sided."""
+    _gltf("TextureSettingsTest", direction=(0.0, -1.0, 0.0))
+
+
+def gltf_texture_coordinates():
+    _gltf("TextureCoordinateTest", direction=(0.0, -1.0, 0.2))
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -778,6 +902,13 @@ _add(Variant("caustic_sun", caustic_sun, max_bounces=8, samples=1024, cycles_sam
 for _setup in (caustic_point_light, caustic_spot):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=1024, cycles_samples=2048,
                  files=(BLEND["cbspheres.blend"],)))
+# Image textures through Blender's own nodes (issue 14).
+_add(Variant("textured_walls", textured_walls, max_bounces=8))
+for _setup, _name in ((gltf_box_textured, "BoxTextured"),
+                      (gltf_texture_settings, "TextureSettingsTest"),
+                      (gltf_texture_coordinates, "TextureCoordinateTest")):
+    _add(Variant(_setup.__name__, _setup, max_bounces=8,
+                 files=(os.path.join(GLTF_DIR, _name, _name + ".glb"),)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):

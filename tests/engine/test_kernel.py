@@ -72,6 +72,15 @@ def test_light_object_caustics_same_in_both_kernels(scene):
     assert_same_image(a, b)
 
 
+@pytest.mark.parametrize("kind", ["diffuse", "principled"])
+def test_textured_colours_same_in_both_kernels(kind):
+    """Image textures through shader programs (engine/shading.py), in the Lambert and the
+    layered lobe, seen directly, in the mirror and through the glass (light paths too)."""
+    a, b = both(scenes.textured_box(interpolation="Cubic", scale=1.5, kind=kind))
+    assert a.plan.textures and a.plan.light_tracing
+    assert_same_image(a, b)
+
+
 @pytest.mark.parametrize("cam", [
     dict(use_dof=True, fstop=0.5, focus_distance=2.5),
     dict(use_dof=True, fstop=0.4, focus_distance=3.5, blades=5, rotation=0.3, ratio=1.6),
@@ -321,7 +330,7 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
            "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_IMPORTANCE": "importance_pmf",
-           "HAS_LIGHT_TRACING": "path_tracing_weight"}
+           "HAS_LIGHT_TRACING": "path_tracing_weight", "HAS_TEXTURES": "image_channel"}
 
 
 def _ir(kernel):

@@ -1,0 +1,410 @@
+"""Node chains -> shader programs (engine/shading.py), for inputs that vary over a surface.
+
+A material colour driven by an image texture (through Mapping, Mix, Math, Separate and
+Combine nodes ...) compiles into a program the kernel runs at each hit, as Cycles' SVM
+compiler emits one SVM node per shader node. One small function per node kind,
+`f(c, node, out) -> (register, socket type)`, in `NODES`; a chain with a node not listed
+there raises `Unsupported`, naming it, and the caller falls back to the chain's constant
+(materials.py). A chain with nothing varying in it (an RGB into a Mix) is left to the
+constant folding, which gives the same value.
+
+Images are read once per export (keyed by image, interpolation and extension) into the
+texels Cycles would sample: byte images in sRGB keep their encoded values and are decoded
+after interpolation, others are decoded per texel to scene linear; alpha is associated
+where Cycles associates it (see engine/shading.py).
+"""
+
+import mathutils
+import numpy as np
+
+from . import core
+
+WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
+# Node kinds whose output varies over a surface: a chain with none of them is a constant.
+VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
+           "ShaderNodeTexChecker")
+
+
+class Unsupported(Exception):
+    """A node (or a setting of one) that has no program instruction yet."""
+
+
+def _live_link(socket):
+    if not socket.is_linked:
+        return None
+    return next((k for k in socket.links if not k.is_muted and k.is_valid), None)
+
+
+def _enabled_input(node, name):
+    found = [s for s in node.inputs if s.name == name or s.identifier == name]
+    return next((s for s in found if s.enabled), found[0] if found else None)
+
+
+def varies(socket, seen=None) -> bool:
+    """Whether the chain behind `socket` has a node whose output varies over a surface
+    (each node looked at once: shared sub-chains are common in big trees)."""
+    link = _live_link(socket)
+    seen = set() if seen is None else seen
+    if link is None or link.from_node.as_pointer() in seen:
+        return False
+    node = link.from_node
+    seen.add(node.as_pointer())
+    if node.bl_idname in VARYING:
+        return True
+    return any(varies(s, seen) for s in node.inputs if s.enabled)
+
+
+class Compiler:
+    """Compiles the chain behind one socket into a `shading.Program`."""
+
+    def __init__(self, texture_cache):
+        self.sh = core.load().shading
+        self.program = self.sh.Program()
+        self.textures = texture_cache
+        self.done = {}  # (node pointer, output identifier) -> (register, type)
+
+    def compile(self, socket, to_type="RGBA"):
+        """The program computing `socket`'s value as `to_type` (its result register set)."""
+        self.program.out = self.input(socket, to_type)
+        return self.program
+
+    def input(self, socket, to_type):
+        """The register holding input `socket`'s value converted to `to_type`."""
+        if socket is None:
+            raise Unsupported("a missing input")
+        link = _live_link(socket)
+        if link is None:
+            value = getattr(socket, "default_value", None)
+            if value is None or isinstance(value, str):
+                raise Unsupported(f"input '{socket.name}' of node '{socket.node.name}'")
+            values = [float(v) for v in (value[:3] if WIDTHS.get(socket.type, 1) == 3
+                                         else [value])]
+            return self.convert(self.program.const(values), socket.type, to_type)
+        reg, kind = self.output(link.from_socket)
+        return self.convert(reg, kind, to_type)
+
+    def output(self, out):
+        key = (out.node.as_pointer(), out.identifier)
+        if key not in self.done:
+            node = out.node
+            if node.mute:
+                through = next((k.from_socket for k in node.internal_links
+                                if k.to_socket == out), None)
+                if through is None:
+                    raise Unsupported(f"muted node '{node.name}'")
+                self.done[key] = (self.input(through, out.type), out.type)
+            else:
+                fn = NODES.get(node.bl_idname)
+                if fn is None:
+                    raise Unsupported(f"node '{node.name}' ({node.bl_label or node.bl_idname})")
+                self.done[key] = fn(self, node, out)
+        return self.done[key]
+
+    def convert(self, reg, from_type, to_type):
+        """Blender's implicit conversions: colour -> float by luminance, vector -> float by
+        the average, float -> colour or vector by repeating it."""
+        wf, wt = WIDTHS.get(from_type), WIDTHS.get(to_type)
+        if wf is None or wt is None:
+            raise Unsupported(f"a {from_type} -> {to_type} link")
+        if wf == wt:
+            return reg
+        if wt == 3:
+            return self.program.emit(self.sh.OP_COMBINE, 3, a=reg, b=reg, c=reg)
+        op = self.sh.OP_LUMINANCE if from_type == "RGBA" else self.sh.OP_AVERAGE
+        return self.program.emit(op, 1, a=reg)
+
+    def texture(self, node):
+        """The shading.Texture of an Image Texture node's image, read once per export."""
+        image = node.image
+        if image is None:
+            raise Unsupported(f"image texture '{node.name}' without an image")
+        key = (image.as_pointer(), node.interpolation, node.extension)
+        if key not in self.textures:
+            texels, srgb = image_texels(image)
+            if texels is None:
+                raise Unsupported(f"image '{image.name}' (no pixels: a missing file?)")
+            self.textures[key] = self.sh.Texture(image.name, texels, node.interpolation,
+                                                 node.extension, srgb)
+        return self.textures[key]
+
+
+# ------------------------------------------------------------------ images
+# `Image.pixels` holds byte images as their stored 8-bit values / 255, still encoded in the
+# image's colour space (an sRGB 128 reads 0.502, not 0.216), and float images as the
+# scene-linear buffer Blender decoded on loading (a 16-bit sRGB PNG's 0.5 reads 0.214; as
+# Non-Color, 0.5): read back in bpy 5.0.1.
+
+def srgb_to_linear(c):
+    """The sRGB transfer function, encoded -> linear, elementwise (the core's formula)."""
+    c = np.asarray(c, np.float64)
+    return core.load().shading.srgb_decode(c.ravel()).reshape(c.shape)
+
+
+# Linear Display P3 (D65) -> CIE XYZ, to reach scene linear through mathutils' XYZ conversion.
+_P3_TO_XYZ = np.array([[0.4865709, 0.2656677, 0.1982173],
+                       [0.2289746, 0.6917385, 0.0792869],
+                       [0.0000000, 0.0451134, 1.0439444]])
+
+
+def _xyz_to_scene(rgb):
+    return tuple(mathutils.Color(rgb).from_xyz_d65_to_scene_linear())
+
+
+def _via(method):
+    def to_scene(rgb):
+        # Blender releases without this conversion work in linear Rec.709: keep the values.
+        convert = getattr(mathutils.Color(rgb), method, None)
+        return tuple(rgb) if convert is None else tuple(convert())
+    return to_scene
+
+
+# Byte image colour space -> (per-texel transfer function, linear primaries -> scene linear).
+# Spaces not listed are decoded as sRGB, with a note in the warning.
+COLOUR_SPACES = {
+    "sRGB": (srgb_to_linear, _via("from_rec709_linear_to_scene_linear")),
+    "Linear Rec.709": (None, _via("from_rec709_linear_to_scene_linear")),
+    "Linear Rec.2020": (None, _via("from_rec2020_linear_to_scene_linear")),
+    "ACEScg": (None, _via("from_acescg_to_scene_linear")),
+    "ACES2065-1": (None, _via("from_aces_to_scene_linear")),
+    "Linear CIE-XYZ D65": (None, _xyz_to_scene),
+    "Display P3": (srgb_to_linear, lambda rgb: _xyz_to_scene(tuple(_P3_TO_XYZ @ rgb))),
+}
+
+
+
+def _space_matrix(to_scene):
+    """The 3x3 matrix of a linear primaries conversion (materials.COLOUR_SPACES)."""
+    return np.array([to_scene(tuple(e)) for e in np.eye(3)]).T
+
+
+def image_texels(image):
+    """(texels (h, w, 4) float32, srgb) as Cycles samples `image` (None when it has no
+    pixels). `Image.pixels` holds byte images as stored (straight alpha, encoded) and float
+    images as Blender's scene-linear, premultiplied buffer."""
+    width, height = image.size
+    count = len(image.pixels) if width * height else 0
+    if count == 0:
+        return None, False
+    channels = count // (width * height)
+    px = np.empty(count, np.float32)
+    image.pixels.foreach_get(px)
+    px = px.reshape(height, width, channels)
+    texels = np.ones((height, width, 4), np.float32)
+    texels[..., :3] = px[..., :3] if channels >= 3 else px[..., :1]
+    if channels >= 4 or channels == 2:
+        texels[..., 3] = px[..., -1]
+    mode = image.alpha_mode
+    if mode == "NONE":
+        texels[..., 3] = 1.0
+    space = image.colorspace_settings
+    srgb = False
+    if not image.is_float and not space.is_data:
+        if mode in ("STRAIGHT", "PREMUL"):  # Cycles associates byte images on loading
+            texels[..., :3] *= texels[..., 3:]
+        known = space.name in COLOUR_SPACES
+        transfer, to_scene = COLOUR_SPACES[space.name if known else "sRGB"]
+        if space.name == "sRGB":
+            srgb = True  # decoded after interpolation, as Cycles' compress_as_srgb
+        else:
+            if transfer is not None:
+                texels[..., :3] = transfer(texels[..., :3].astype(np.float64))
+            texels[..., :3] = texels[..., :3] @ _space_matrix(to_scene).T.astype(np.float32)
+    return texels, srgb
+
+
+# ------------------------------------------------------------------ node functions
+def _n_image(c, node, out):
+    if node.projection != "FLAT":
+        raise Unsupported(f"image texture '{node.name}' projection {node.projection}")
+    vec = _enabled_input(node, "Vector")
+    coord = c.input(vec, "VECTOR") if _live_link(vec) is not None else c.program.uv("")
+    unassociate = (node.outputs["Alpha"].is_linked and node.image is not None
+                   and not node.image.colorspace_settings.is_data
+                   and node.image.alpha_mode not in ("CHANNEL_PACKED", "NONE"))
+    reg = c.program.image(c.texture(node), coord, unassociate)
+    return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
+
+
+def _n_tex_coord(c, node, out):
+    if out.name != "UV" or node.from_instancer:
+        raise Unsupported(f"texture coordinate '{node.name}' output {out.name}")
+    return c.program.uv(""), "VECTOR"
+
+
+def _n_uv_map(c, node, out):
+    if node.from_instancer:
+        raise Unsupported(f"UV map '{node.name}' from the instancer")
+    return c.program.uv(node.uv_map), "VECTOR"
+
+
+def _n_mapping(c, node, out):
+    kind = node.vector_type
+    values = {}
+    for name in ("Location", "Rotation", "Scale"):
+        s = _enabled_input(node, name)
+        if s is not None and _live_link(s) is not None:
+            raise Unsupported(f"mapping '{node.name}' with a linked {name}")
+        values[name] = np.array(s.default_value[:3] if s is not None else (0, 0, 0), float)
+    rot = np.array(mathutils.Euler(values["Rotation"], "XYZ").to_matrix())
+    loc, scale = values["Location"], values["Scale"]
+    if kind in ("POINT", "VECTOR"):
+        m = rot @ np.diag(scale)
+        t = loc if kind == "POINT" else np.zeros(3)
+    elif kind == "TEXTURE" and np.all(scale != 0):
+        m = np.diag(1.0 / scale) @ rot.T
+        t = -m @ loc
+    else:
+        raise Unsupported(f"mapping '{node.name}' type {kind}")
+    vec = c.input(_enabled_input(node, "Vector"), "VECTOR")
+    return c.program.emit(c.sh.OP_MAPPING, 3, a=vec,
+                          params=np.hstack([m, t[:, None]]).ravel()), "VECTOR"
+
+
+def _n_value(c, node, out):
+    v = node.outputs[0].default_value
+    values = [float(x) for x in v[:3]] if out.type == "RGBA" else [float(v)]
+    return c.program.const(values), out.type
+
+
+def _n_reroute(c, node, out):
+    return c.input(node.inputs[0], out.type), out.type
+
+
+def _n_mix(c, node, out):
+    sh = c.sh
+    data = node.data_type
+    if data == "RGBA":
+        return _blend(c, node, _enabled_input(node, "Factor_Float"), "A_Color", "B_Color",
+                      node.blend_type, node.clamp_factor, node.clamp_result)
+    if data not in ("FLOAT", "VECTOR"):
+        raise Unsupported(f"mix '{node.name}' of {data}")
+    width = 1 if data == "FLOAT" else 3
+    per_axis = data == "VECTOR" and node.factor_mode == "NON_UNIFORM"
+    fac_socket = _enabled_input(node, "Factor_Vector" if per_axis else "Factor_Float")
+    fac = c.input(fac_socket, "VECTOR" if per_axis else "VALUE")
+    if node.clamp_factor:
+        fac = _clamped(c, fac, 3 if per_axis else 1)
+    a = c.input(_enabled_input(node, f"A_{'Float' if width == 1 else 'Vector'}"), data)
+    b = c.input(_enabled_input(node, f"B_{'Float' if width == 1 else 'Vector'}"), data)
+    return c.program.emit(sh.OP_LERP, width, a=fac, b=a, c=b, d=width, e=int(per_axis)), data
+
+
+def _n_mix_rgb(c, node, out):
+    return _blend(c, node, node.inputs[0], node.inputs[1].identifier,
+                  node.inputs[2].identifier, node.blend_type, True, node.use_clamp)
+
+
+def _blend(c, node, fac_socket, a_name, b_name, blend_type, clamp_factor, clamp_result):
+    if blend_type not in c.sh.BLENDS:
+        raise Unsupported(f"mix '{node.name}' blend {blend_type}")
+    fac = c.input(fac_socket, "VALUE")
+    if clamp_factor:
+        fac = _clamped(c, fac, 1)
+    a = c.input(_enabled_input(node, a_name), "RGBA")
+    b = c.input(_enabled_input(node, b_name), "RGBA")
+    return c.program.emit(c.sh.OP_BLEND, 3, a=fac, b=a, c=b, d=c.sh.BLENDS.index(blend_type),
+                          e=int(clamp_result)), "RGBA"
+
+
+def _clamped(c, reg, width):
+    """reg's `width` values clamped to [0, 1] (Math Add 0 with its clamp)."""
+    zero = c.program.const([0.0])
+    regs = [c.program.emit(c.sh.OP_MATH, 1, a=reg + j, b=zero, c=zero, d=0, e=1)
+            for j in range(width)]
+    if width == 1:
+        return regs[0]
+    return c.program.emit(c.sh.OP_COMBINE, 3, a=regs[0], b=regs[1], c=regs[2])
+
+
+def _n_math(c, node, out):
+    if node.operation not in c.sh.MATHS:
+        raise Unsupported(f"math '{node.name}' operation {node.operation}")
+    args = [c.input(s, "VALUE") for s in node.inputs if s.enabled]
+    zero = None
+    while len(args) < 3:
+        zero = zero if zero is not None else c.program.const([0.0])
+        args.append(zero)
+    return c.program.emit(c.sh.OP_MATH, 1, a=args[0], b=args[1], c=args[2],
+                          d=c.sh.MATHS.index(node.operation), e=int(node.use_clamp)), "VALUE"
+
+
+def _n_separate(c, node, out):
+    if getattr(node, "mode", "RGB") != "RGB":
+        raise Unsupported(f"separate '{node.name}' mode {node.mode}")
+    kind = "VECTOR" if node.bl_idname == "ShaderNodeSeparateXYZ" else "RGBA"
+    reg = c.input(node.inputs[0], kind)
+    index = [s.identifier for s in node.outputs].index(out.identifier)
+    return reg + index, "VALUE"
+
+
+def _n_combine(c, node, out):
+    if getattr(node, "mode", "RGB") != "RGB":
+        raise Unsupported(f"combine '{node.name}' mode {node.mode}")
+    a, b, d = (c.input(s, "VALUE") for s in node.inputs[:3])
+    return c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=b, c=d), out.type
+
+
+def _n_invert(c, node, out):
+    fac, col = c.input(node.inputs[0], "VALUE"), c.input(node.inputs[1], "RGBA")
+    return c.program.emit(c.sh.OP_INVERT, 3, a=fac, b=col), "RGBA"
+
+
+def _n_gamma(c, node, out):
+    col, g = c.input(node.inputs[0], "RGBA"), c.input(node.inputs[1], "VALUE")
+    return c.program.emit(c.sh.OP_GAMMA, 3, a=col, b=g), "RGBA"
+
+
+def _n_bright_contrast(c, node, out):
+    col, bright, contrast = (c.input(s, t) for s, t in zip(node.inputs[:3],
+                                                           ("RGBA", "VALUE", "VALUE")))
+    return c.program.emit(c.sh.OP_BRIGHT_CONTRAST, 3, a=col, b=bright, c=contrast), "RGBA"
+
+
+def _n_checker(c, node, out):
+    vec = _enabled_input(node, "Vector")
+    if _live_link(vec) is None:
+        raise Unsupported(f"checker '{node.name}' on Generated coordinates")
+    co = c.input(vec, "VECTOR")
+    c1, c2 = c.input(node.inputs["Color1"], "RGBA"), c.input(node.inputs["Color2"], "RGBA")
+    scale = c.input(node.inputs["Scale"], "VALUE")
+    reg = c.program.emit(c.sh.OP_CHECKER, 4, a=co, b=c1, c=c2, d=scale)
+    return (reg + 3, "VALUE") if out.identifier == "Fac" else (reg, "RGBA")
+
+
+NODES = {
+    "ShaderNodeTexImage": _n_image,
+    "ShaderNodeTexCoord": _n_tex_coord,
+    "ShaderNodeUVMap": _n_uv_map,
+    "ShaderNodeMapping": _n_mapping,
+    "ShaderNodeRGB": _n_value,
+    "ShaderNodeValue": _n_value,
+    "NodeReroute": _n_reroute,
+    "ShaderNodeMix": _n_mix,
+    "ShaderNodeMixRGB": _n_mix_rgb,
+    "ShaderNodeMath": _n_math,
+    "ShaderNodeSeparateColor": _n_separate,
+    "ShaderNodeSeparateRGB": _n_separate,
+    "ShaderNodeSeparateXYZ": _n_separate,
+    "ShaderNodeCombineColor": _n_combine,
+    "ShaderNodeCombineRGB": _n_combine,
+    "ShaderNodeCombineXYZ": _n_combine,
+    "ShaderNodeInvert": _n_invert,
+    "ShaderNodeGamma": _n_gamma,
+    "ShaderNodeBrightContrast": _n_bright_contrast,
+    "ShaderNodeTexChecker": _n_checker,
+}
+
+
+def compile_colour(socket, texture_cache):
+    """(program or None, why not): the program for colour input `socket` when its chain
+    varies over the surface and every node in it compiles; (None, "") for a chain that does
+    not vary (the constant folding handles it exactly)."""
+    if not varies(socket):
+        return None, ""
+    try:
+        return Compiler(texture_cache).compile(socket, "RGBA"), ""
+    except Unsupported as exc:
+        return None, str(exc)
+    except (ValueError, ArithmeticError) as exc:  # a program too large, an odd value
+        return None, f"{type(exc).__name__}: {exc}"
+

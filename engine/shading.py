@@ -1,0 +1,489 @@
+"""Shader programs: a material input that varies over a surface, evaluated at each hit.
+
+Cycles compiles a material's node tree into a linear program of SVM nodes that its kernel
+interprets per shading point (intern/cycles/kernel/svm/). Specula does the same for the
+inputs it can vary: a program is a list of instructions over a small file of float
+registers, one instruction per node, each a function of its own below; a new node is one
+new function and one opcode. A colour occupies three consecutive registers, a vector
+three, a float one; Separate XYZ/RGB is register addressing and needs no instruction.
+
+An instruction is a row of int64: (op, out, a, b, c, d, e, p): `out` and `a`..`e` are
+register indices or small integer arguments (the opcode says which), `p` an offset into
+the program's float parameters. Programs of all materials are packed into one table
+(`ProgramTable`), their images into one texel array, so the kernel gets a few arrays.
+
+Images are stored as Cycles stores them: byte images in sRGB keep their encoded values
+and are decoded after interpolation (Cycles' NODE_IMAGE_COMPRESS_AS_SRGB), every other
+image holds scene-linear values; alpha is associated (premultiplied) unless the image's
+alpha is channel-packed or ignored, and an Image node whose Alpha output is used
+un-associates its colour again (NODE_IMAGE_ALPHA_UNASSOCIATE).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .jit import ALLOCATING, INLINE, JIT, njit
+
+# ------------------------------------------------------------------ opcodes
+OP_CONST = 0        # reg[out:out+c] = params[p:p+c]
+OP_UV = 1           # reg[out:out+3] = (u, v, 0) of UV map a at the hit
+OP_MAPPING = 2      # reg[out:out+3] = M (params[p:p+12], 3x4 row-major) (reg[a:a+3], 1)
+OP_IMAGE = 3        # reg[out:out+3] colour, reg[out+3] alpha of image b at reg[a:a+2];
+#                     c: un-associate alpha
+OP_BLEND = 4        # colour Mix: reg[out:out+3] = blend d of fac reg[a], reg[b:b+3], reg[c:c+3];
+#                     e: clamp the result
+OP_LERP = 5         # reg[out:out+d] = lerp(reg[b:], reg[c:], fac reg[a] (e=0) or reg[a:a+d] (e=1))
+OP_MATH = 6         # reg[out] = math d (reg[a], reg[b], reg[c]); e: clamp to [0, 1]
+OP_LUMINANCE = 7    # reg[out] = Rec.709 luminance of reg[a:a+3] (colour -> float)
+OP_AVERAGE = 8      # reg[out] = mean of reg[a:a+3] (vector -> float)
+OP_COMBINE = 9      # reg[out:out+3] = (reg[a], reg[b], reg[c]) (also float -> colour)
+OP_INVERT = 10      # reg[out:out+3] = lerp(reg[b:b+3], 1 - reg[b:b+3], fac reg[a])
+OP_GAMMA = 11       # reg[out:out+3] = reg[a:a+3] ** reg[b] where positive
+OP_BRIGHT_CONTRAST = 12  # reg[out:out+3] from colour reg[a:a+3], bright reg[b], contrast reg[c]
+OP_CHECKER = 13     # reg[out:out+3] colour, reg[out+3] fac of Cycles' checker at reg[a:a+3],
+#                     colours reg[b:b+3], reg[c:c+3], scale reg[d]
+
+# Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
+BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
+          "LIGHTEN", "EXCLUSION")
+# Operations of OP_MATH (Cycles' svm_math, kernel/svm/math_util.h).
+MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "MINIMUM", "MAXIMUM",
+         "LESS_THAN", "GREATER_THAN", "ABSOLUTE", "SQRT", "FLOOR", "CEIL", "FRACT", "MODULO",
+         "SINE", "COSINE", "WRAP", "PINGPONG", "ROUND", "TRUNC", "SIGN", "EXPONENT",
+         "LOGARITHM", "SNAP", "COMPARE", "FLOORED_MODULO")
+INTERPOLATIONS = ("Closest", "Linear", "Cubic", "Smart")  # Smart is Cubic on the CPU
+EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+# The registers one program may use (the kernel's scratch per path batch).
+MAX_REGISTERS = 256
+WIDTH = 8  # int64 columns of an instruction
+
+
+@dataclass
+class Texture:
+    """One image as the kernel samples it: texels (h, w, 4) float32, bottom row first
+    (Blender's and Cycles' order), already associated and, unless `srgb`, scene linear."""
+
+    name: str
+    texels: np.ndarray
+    interpolation: str = "Linear"
+    extension: str = "REPEAT"
+    srgb: bool = False  # encoded sRGB values, decoded after interpolation
+
+    def __post_init__(self):
+        t = np.asarray(self.texels, np.float32)
+        if t.ndim != 3 or t.shape[2] != 4 or t.shape[0] < 1 or t.shape[1] < 1:
+            raise ValueError(f"image '{self.name}': texels must be (h, w, 4), got {t.shape}")
+        if self.interpolation not in INTERPOLATIONS:
+            raise ValueError(f"image '{self.name}': interpolation {self.interpolation!r} not one "
+                             f"of {INTERPOLATIONS}")
+        if self.extension not in EXTENSIONS:
+            raise ValueError(f"image '{self.name}': extension {self.extension!r} not one of "
+                             f"{EXTENSIONS}")
+        # A NaN or inf texel would put one in a pixel: Cycles reads them as 0 too.
+        self.texels = np.nan_to_num(t, nan=0.0, posinf=0.0, neginf=0.0)
+
+
+@dataclass
+class Program:
+    """One input's program under construction: instructions, float parameters, the
+    registers it uses, its textures and UV maps (by name; "" the render-active map), and
+    the register holding the result."""
+
+    code: list = field(default_factory=list)
+    params: list = field(default_factory=list)
+    textures: list = field(default_factory=list)
+    uv_maps: list = field(default_factory=list)
+    registers: int = 0
+    out: int = -1
+
+    def register(self, width: int) -> int:
+        r = self.registers
+        self.registers += width
+        if self.registers > MAX_REGISTERS:
+            raise ValueError(f"the node chain needs more than {MAX_REGISTERS} registers")
+        return r
+
+    def emit(self, op, width, a=0, b=0, c=0, d=0, e=0, params=()) -> int:
+        """Append one instruction writing `width` new registers; returns the first."""
+        out = self.register(width)
+        p = len(self.params)
+        self.params.extend(float(x) for x in params)
+        self.code.append((op, out, a, b, c, d, e, p))
+        return out
+
+    def const(self, values) -> int:
+        values = [float(v) for v in np.atleast_1d(values)]
+        return self.emit(OP_CONST, len(values), c=len(values), params=values)
+
+    def uv(self, name: str) -> int:
+        if name not in self.uv_maps:
+            self.uv_maps.append(name)
+        return self.emit(OP_UV, 3, a=self.uv_maps.index(name))
+
+    def image(self, texture: Texture, coordinate: int, unassociate: bool) -> int:
+        self.textures.append(texture)
+        return self.emit(OP_IMAGE, 4, a=coordinate, b=len(self.textures) - 1, c=int(unassociate))
+
+    @property
+    def varies(self) -> bool:
+        """Whether the result depends on the surface point (else it is one constant)."""
+        return any(row[0] in (OP_UV,) for row in self.code)
+
+
+# The kernel's view of every program of a scene:
+#   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
+#   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
+#   colour (k, 3) int64 per material: first instruction (-1: no program), end, out register.
+ProgramTable = namedtuple("ProgramTable", "code params texels textures colour")
+
+
+def pack(programs: list, uv_index) -> ProgramTable:
+    """Pack the colour programs (one per material, or None) into a ProgramTable; each
+    program's UV map names become scene-wide map indices through `uv_index(name)`."""
+    code, params, texels, tex_rows = [], [], [], []
+    colour = np.full((len(programs), 3), -1, np.int64)
+    n_code = n_params = n_texels = 0
+    for k, prog in enumerate(programs):
+        if prog is None:
+            continue
+        first_tex = len(tex_rows)
+        for t in prog.textures:
+            h, w = t.texels.shape[:2]
+            tex_rows.append((n_texels, w, h, INTERPOLATIONS.index(t.interpolation),
+                             EXTENSIONS.index(t.extension), int(t.srgb)))
+            texels.append(t.texels.reshape(-1, 4))
+            n_texels += w * h
+        for op, out, a, b, c, d, e, p in prog.code:
+            if op == OP_UV:
+                a = uv_index(prog.uv_maps[a])
+            elif op == OP_IMAGE:
+                b += first_tex
+            code.append((op, out, a, b, c, d, e, p + n_params))
+        colour[k] = (n_code, n_code + len(prog.code), prog.out)
+        n_code += len(prog.code)
+        params.extend(prog.params)
+        n_params += len(prog.params)
+    return ProgramTable(np.array(code, np.int64).reshape(-1, WIDTH),
+                        np.array(params + [0.0], np.float64),
+                        (np.concatenate(texels) if texels else np.zeros((1, 4), np.float32)),
+                        np.array(tex_rows, np.int64).reshape(-1, 6), colour)
+
+
+# ------------------------------------------------------------------ node functions
+@njit(**JIT)
+def srgb_to_linear(c):
+    """The sRGB transfer function, encoded -> linear (Cycles' color_srgb_to_linear)."""
+    if c < 0.04045:
+        return 0.0 if c < 0.0 else c * (1.0 / 12.92)
+    return ((c + 0.055) * (1.0 / 1.055)) ** 2.4
+
+
+@njit(**ALLOCATING)
+def srgb_decode(c):
+    """srgb_to_linear over a 1-d array (images, outside the kernel)."""
+    out = np.empty(len(c))
+    for i in range(len(c)):
+        out[i] = srgb_to_linear(c[i])
+    return out
+
+
+@njit(**JIT)
+def blend(mode, t, a, b):
+    """One channel of Cycles' colour Mix of a and b at factor t (mode: BLENDS index)."""
+    if mode == 1:  # ADD
+        return a + t * b
+    if mode == 2:  # MULTIPLY
+        return a * ((1.0 - t) + t * b)
+    if mode == 3:  # SUBTRACT
+        return a - t * b
+    if mode == 4:  # SCREEN
+        return 1.0 - ((1.0 - t) + t * (1.0 - b)) * (1.0 - a)
+    if mode == 5:  # DIVIDE
+        return (1.0 - t) * a + t * a / b if b != 0.0 else a
+    if mode == 6:  # DIFFERENCE
+        return (1.0 - t) * a + t * abs(a - b)
+    if mode == 7:  # DARKEN
+        return (1.0 - t) * a + t * min(a, b)
+    if mode == 8:  # LIGHTEN
+        return max(a, t * b)
+    if mode == 9:  # EXCLUSION
+        return max((1.0 - t) * a + t * (a + b - 2.0 * a * b), 0.0)
+    return (1.0 - t) * a + t * b
+
+
+@njit(**JIT)
+def math_op(op, a, b, c):
+    """Cycles' Math node (op: MATHS index), with its safe division, power and root."""
+    if op == 0:
+        return a + b
+    if op == 1:
+        return a - b
+    if op == 2:
+        return a * b
+    if op == 3:
+        return a / b if b != 0.0 else 0.0
+    if op == 4:
+        return a * b + c
+    if op == 5:  # safe_powf: a negative base needs an integer exponent
+        if a < 0.0 and b != math.floor(b):
+            return 0.0
+        return a ** b if (a != 0.0 or b > 0.0) else (1.0 if b == 0.0 else 0.0)
+    if op == 6:
+        return min(a, b)
+    if op == 7:
+        return max(a, b)
+    if op == 8:
+        return 1.0 if a < b else 0.0
+    if op == 9:
+        return 1.0 if a > b else 0.0
+    if op == 10:
+        return abs(a)
+    if op == 11:
+        return math.sqrt(a) if a > 0.0 else 0.0
+    if op == 12:
+        return math.floor(a)
+    if op == 13:
+        return math.ceil(a)
+    if op == 14:
+        return a - math.floor(a)
+    if op == 15:  # safe_modulo: fmod, 0 for b = 0
+        return np.fmod(a, b) if b != 0.0 else 0.0
+    if op == 16:
+        return math.sin(a)
+    if op == 17:
+        return math.cos(a)
+    return _math_more(op, a, b, c)
+
+
+@njit(**JIT)
+def _math_more(op, a, b, c):
+    """The Math node's operations from WRAP on (math_op's second half)."""
+    if op == 18:  # wrapf(a, max b, min c)
+        r = b - c
+        return a - r * math.floor((a - c) / r) if r != 0.0 else c
+    if op == 19:  # pingpongf
+        if b == 0.0:
+            return 0.0
+        q = (a - b) / (b * 2.0)
+        return abs((q - math.floor(q)) * b * 2.0 - b)
+    if op == 20:
+        return math.floor(a + 0.5)
+    if op == 21:
+        return math.floor(a) if a >= 0.0 else math.ceil(a)
+    if op == 22:
+        return 1.0 if a > 0.0 else (-1.0 if a < 0.0 else 0.0)
+    if op == 23:
+        return math.exp(min(a, 700.0))
+    if op == 24:  # safe_logf
+        return math.log(a) / math.log(b) if a > 0.0 and b > 0.0 and b != 1.0 else 0.0
+    if op == 25:
+        return math.floor(a / b) * b if b != 0.0 else 0.0
+    if op == 26:
+        return 1.0 if abs(a - b) <= max(c, 1e-5) else 0.0
+    return a - math.floor(a / b) * b if b != 0.0 else 0.0
+
+
+@njit(**JIT)
+def _wrap(i, n, extension):
+    """Texel index i of a row or column of n under an extension (EXTENSIONS index);
+    -1 for Clip outside the image."""
+    if extension == 0:  # REPEAT
+        i %= n
+        return i + n if i < 0 else i
+    if extension == 1:  # EXTEND
+        return min(max(i, 0), n - 1)
+    if extension == 3:  # MIRROR
+        m = abs(i + (1 if i < 0 else 0)) % (2 * n)
+        return 2 * n - m - 1 if m >= n else m
+    return i if 0 <= i < n else -1
+
+
+@njit(**JIT)
+def _texel(texels, first, w, h, ix, iy, ch):
+    if ix < 0 or iy < 0 or ix >= w or iy >= h:
+        return 0.0
+    return np.float64(texels[first + iy * w + ix, ch])
+
+
+@njit(**JIT)
+def _cubic_weight(k, t):
+    """Cycles' uniform cubic B-spline weight k (0..3) at t (SET_CUBIC_SPLINE_WEIGHTS)."""
+    if k == 0:
+        return (((-1.0 / 6.0) * t + 0.5) * t - 0.5) * t + (1.0 / 6.0)
+    if k == 1:
+        return ((0.5 * t - 1.0) * t) * t + (2.0 / 3.0)
+    if k == 2:
+        return ((-0.5 * t + 0.5) * t + 0.5) * t + (1.0 / 6.0)
+    return (1.0 / 6.0) * t * t * t
+
+
+@njit(**JIT)
+def image_channel(x, y, ch, texels, tex):
+    """Channel ch of the image row `tex` at texture coordinates (x, y), interpolated and
+    extended as Cycles' CPU kernel does (kernel/device/cpu/image.h)."""
+    first, w, h, interp, ext = tex[0], tex[1], tex[2], tex[3], tex[4]
+    if interp == 0:  # Closest
+        ix = _wrap(int(math.floor(x * w)), w, ext)
+        iy = _wrap(int(math.floor(y * h)), h, ext)
+        return _texel(texels, first, w, h, ix, iy, ch)
+    fx, fy = x * w - 0.5, y * h - 0.5
+    ix0, iy0 = int(math.floor(fx)), int(math.floor(fy))
+    tx, ty = fx - ix0, fy - iy0
+    if interp == 1:  # Linear
+        r = 0.0
+        for j in range(2):
+            wy = ty if j else 1.0 - ty
+            iy = _wrap(iy0 + j, h, ext)
+            for i in range(2):
+                wx = tx if i else 1.0 - tx
+                r += wx * wy * _texel(texels, first, w, h, _wrap(ix0 + i, w, ext), iy, ch)
+        return r
+    r = 0.0  # Cubic (and Smart)
+    for j in range(4):
+        iy = _wrap(iy0 + j - 1, h, ext)
+        row = 0.0
+        for i in range(4):
+            row += _cubic_weight(i, tx) * _texel(texels, first, w, h,
+                                                 _wrap(ix0 + i - 1, w, ext), iy, ch)
+        r += _cubic_weight(j, ty) * row
+    return r
+
+
+@njit(**INLINE)
+def node_image(ins, reg, pt):
+    """Image Texture: colour and alpha at the coordinate in reg[a], reg[a + 1]."""
+    tex = pt.textures[ins[3]]
+    x, y = reg[ins[2]], reg[ins[2] + 1]
+    out = ins[1]
+    alpha = image_channel(x, y, 3, pt.texels, tex)
+    for ch in range(3):
+        c = image_channel(x, y, ch, pt.texels, tex)
+        if ins[4] != 0 and alpha != 1.0 and alpha != 0.0:
+            c /= alpha
+        reg[out + ch] = srgb_to_linear(c) if tex[5] != 0 else c
+    reg[out + 3] = alpha
+
+
+@njit(**INLINE)
+def node_uv(ins, reg, uv, f, u, v):
+    """The hit's coordinates on UV map a, interpolated from the triangle's corners."""
+    m = ins[2]
+    w0 = 1.0 - u - v
+    out = ins[1]
+    for j in range(2):
+        reg[out + j] = (w0 * np.float64(uv[m, f, 0, j]) + u * np.float64(uv[m, f, 1, j])
+                        + v * np.float64(uv[m, f, 2, j]))
+    reg[out + 2] = 0.0
+
+
+@njit(**INLINE)
+def node_mapping(ins, reg, params):
+    a, out, p = ins[2], ins[1], ins[7]
+    x, y, z = reg[a], reg[a + 1], reg[a + 2]
+    for j in range(3):
+        q = p + 4 * j
+        reg[out + j] = params[q] * x + params[q + 1] * y + params[q + 2] * z + params[q + 3]
+
+
+@njit(**INLINE)
+def node_checker(ins, reg):
+    """Cycles' Checker Texture (kernel/svm/checker.h) at reg[a:a+3] with scale reg[d]."""
+    a, s = ins[2], reg[ins[5]]
+    # The nudge keeps faces at integer coordinates off a square's edge, as in Cycles.
+    x = abs(int(math.floor((reg[a] * s + 0.000001) * 0.999999)))
+    y = abs(int(math.floor((reg[a + 1] * s + 0.000001) * 0.999999)))
+    z = abs(int(math.floor((reg[a + 2] * s + 0.000001) * 0.999999)))
+    first = (1 if x % 2 == y % 2 else 0) == z % 2
+    src = ins[3] if first else ins[4]
+    out = ins[1]
+    for j in range(3):
+        reg[out + j] = reg[src + j]
+    reg[out + 3] = 1.0 if first else 0.0
+
+
+@njit(**INLINE)
+def node_colour_ops(ins, reg):
+    """The colour adjustments: Mix (blend modes), Invert, Gamma, Bright/Contrast."""
+    op, out, a, b, c = ins[0], ins[1], ins[2], ins[3], ins[4]
+    for j in range(3):
+        if op == OP_BLEND:
+            t = reg[a]
+            v = blend(ins[5], t, reg[b + j], reg[c + j])
+            reg[out + j] = min(max(v, 0.0), 1.0) if ins[6] != 0 else v
+        elif op == OP_INVERT:
+            x = reg[b + j]
+            reg[out + j] = (1.0 - reg[a]) * x + reg[a] * (1.0 - x)
+        elif op == OP_GAMMA:
+            x = reg[a + j]
+            reg[out + j] = x ** reg[b] if x > 0.0 else x
+        else:  # OP_BRIGHT_CONTRAST
+            contrast = reg[c]
+            reg[out + j] = max((1.0 + contrast) * reg[a + j] + reg[b] - contrast * 0.5, 0.0)
+
+
+@njit(**INLINE)
+def run(first, end, pt, uv, f, u, v, reg):
+    """Execute instructions first..end-1 of the ProgramTable pt at the hit (triangle f,
+    barycentrics u, v) in the register file reg."""
+    for k in range(first, end):
+        ins = pt.code[k]
+        op, out = ins[0], ins[1]
+        if op == OP_CONST:
+            for j in range(ins[4]):
+                reg[out + j] = pt.params[ins[7] + j]
+        elif op == OP_UV:
+            node_uv(ins, reg, uv, f, u, v)
+        elif op == OP_MAPPING:
+            node_mapping(ins, reg, pt.params)
+        elif op == OP_IMAGE:
+            node_image(ins, reg, pt)
+        elif op == OP_LERP:
+            for j in range(ins[5]):
+                t = reg[ins[2] + j] if ins[6] != 0 else reg[ins[2]]
+                reg[out + j] = (1.0 - t) * reg[ins[3] + j] + t * reg[ins[4] + j]
+        elif op == OP_MATH:
+            r = math_op(ins[5], reg[ins[2]], reg[ins[3]], reg[ins[4]])
+            reg[out] = min(max(r, 0.0), 1.0) if ins[6] != 0 else r
+        elif op == OP_LUMINANCE:
+            reg[out] = (LUMINANCE[0] * reg[ins[2]] + LUMINANCE[1] * reg[ins[2] + 1]
+                        + LUMINANCE[2] * reg[ins[2] + 2])
+        elif op == OP_AVERAGE:
+            reg[out] = (reg[ins[2]] + reg[ins[2] + 1] + reg[ins[2] + 2]) / 3.0
+        elif op == OP_COMBINE:
+            reg[out], reg[out + 1], reg[out + 2] = reg[ins[2]], reg[ins[3]], reg[ins[4]]
+        elif op == OP_CHECKER:
+            node_checker(ins, reg)
+        else:
+            node_colour_ops(ins, reg)
+
+
+@njit(**INLINE)
+def colour_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
+    """Material mat's colour at the hit: its program's result (negative or non-finite
+    channels are 0, as Cycles clamps closure weights) or the constant c0, c1, c2."""
+    first = pt.colour[mat, 0]
+    if first < 0:
+        return c0, c1, c2
+    run(first, pt.colour[mat, 1], pt, uv, f, u, v, reg)
+    o = pt.colour[mat, 2]
+    r0, r1, r2 = reg[o], reg[o + 1], reg[o + 2]
+    return (r0 if r0 > 0.0 and math.isfinite(r0) else 0.0,
+            r1 if r1 > 0.0 and math.isfinite(r1) else 0.0,
+            r2 if r2 > 0.0 and math.isfinite(r2) else 0.0)
+
+
+def evaluate(program: Program, uv=(0.0, 0.0)):
+    """Run a program outside the kernel (tests, constant folding): the registers after it
+    ran at UV coordinates `uv` on every map."""
+    pt = pack([program], lambda name: 0)
+    corners = np.broadcast_to(np.asarray([[uv[0], uv[1]]] * 3, np.float32),
+                              (max(len(program.uv_maps), 1), 1, 3, 2)).copy()
+    reg = np.zeros(MAX_REGISTERS)
+    run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
+    return reg

@@ -1,0 +1,168 @@
+"""Shader programs (engine/shading.py): image lookups as Cycles' CPU kernel does them, the
+node functions, packing several materials' programs, and UV maps through the scene."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from engine import shading
+from engine.scene import Material, SceneBuilder, World
+from engine.shading import OP_BLEND, OP_MAPPING, OP_MATH, Program, Texture
+from tests import scenes
+
+RNG = np.random.default_rng(14)
+
+
+def _table(texels, interpolation, extension):
+    """A ProgramTable holding just one image (for image_channel)."""
+    prog = Program()
+    prog.out = prog.image(Texture("t", texels, interpolation, extension), prog.uv(""), False)
+    return shading.pack([prog], lambda name: 0)
+
+
+def lookup(texels, x, y, interpolation="Linear", extension="REPEAT"):
+    pt = _table(texels, interpolation, extension)
+    return np.array([shading.image_channel(x, y, ch, pt.texels, pt.textures[0])
+                     for ch in range(4)])
+
+
+def image(h=4, w=5):
+    return RNG.random((h, w, 4)).astype(np.float32)
+
+
+def test_closest_reads_the_texel_under_the_point_with_every_extension():
+    tex = image()
+    h, w = tex.shape[:2]
+    for iy in range(h):
+        for ix in range(w):
+            x, y = (ix + 0.3) / w, (iy + 0.8) / h
+            np.testing.assert_array_equal(lookup(tex, x, y, "Closest"), tex[iy, ix])
+            # Repeat: one period over, the same texel; Mirror: reflected at 0.
+            np.testing.assert_array_equal(lookup(tex, x + 2.0, y - 1.0, "Closest"), tex[iy, ix])
+            np.testing.assert_array_equal(lookup(tex, -x, y, "Closest", "MIRROR"), tex[iy, ix])
+    np.testing.assert_array_equal(lookup(tex, 1.7, -0.2, "Closest", "EXTEND"), tex[0, w - 1])
+    np.testing.assert_array_equal(lookup(tex, 1.01, 0.5, "Closest", "CLIP"), np.zeros(4))
+    np.testing.assert_array_equal(lookup(tex, 2.5 / w, 1.5 / h, "Closest", "CLIP"), tex[1, 2])
+
+
+def test_linear_is_exact_at_texel_centres_and_blends_across_the_repeat_seam():
+    tex = image()
+    h, w = tex.shape[:2]
+    np.testing.assert_allclose(lookup(tex, 2.5 / w, 1.5 / h), tex[1, 2], atol=1e-6)
+    # Half way between texel columns 1 and 2, a quarter way from row 3 to row 0 (wrapped).
+    got = lookup(tex, 2.0 / w, 3.75 / h)
+    want = 0.75 * 0.5 * (tex[3, 1] + tex[3, 2]) + 0.25 * 0.5 * (tex[0, 1] + tex[0, 2])
+    np.testing.assert_allclose(got, want, atol=1e-6)
+    # At x = 0 Repeat mixes the first and last columns, Extend keeps the first.
+    y = 1.5 / h
+    np.testing.assert_allclose(lookup(tex, 0.0, y), 0.5 * (tex[1, 0] + tex[1, w - 1]), atol=1e-6)
+    np.testing.assert_allclose(lookup(tex, 0.0, y, extension="EXTEND"), tex[1, 0], atol=1e-6)
+    np.testing.assert_allclose(lookup(tex, 0.0, y, extension="CLIP"), 0.5 * tex[1, 0], atol=1e-6)
+
+
+def test_cubic_is_cycles_b_spline():
+    """The uniform cubic B-spline: weights 1/6, 2/3, 1/6 at a texel centre (a smoothing
+    filter, not interpolating), and a constant image stays constant."""
+    tex = image(6, 6)
+    x, y = 2.5 / 6, 3.5 / 6
+    k = np.array([1 / 6, 2 / 3, 1 / 6])
+    want = np.einsum("i,j,ijc->c", k, k, tex[2:5, 1:4].astype(np.float64))
+    np.testing.assert_allclose(lookup(tex, x, y, "Cubic"), want, atol=1e-6)
+    flat = np.full((3, 4, 4), 0.3, np.float32)
+    for extension in ("REPEAT", "EXTEND", "MIRROR"):
+        np.testing.assert_allclose(lookup(flat, 0.07, 0.93, "Cubic", extension), 0.3, atol=1e-6)
+
+
+def test_srgb_images_are_decoded_after_interpolation():
+    """Cycles keeps byte sRGB images encoded and decodes the interpolated value."""
+    tex = np.zeros((1, 2, 4), np.float32)
+    tex[0, 1] = 1.0
+    prog = Program()
+    prog.out = prog.image(Texture("s", tex, "Linear", "EXTEND", srgb=True), prog.uv(""), False)
+    got = shading.evaluate(prog, (0.5, 0.5))[prog.out]
+    assert got == pytest.approx(((0.5 + 0.055) / 1.055) ** 2.4, abs=1e-7)
+
+
+def test_mapping_blend_and_math():
+    prog = Program()
+    uv = prog.uv("")
+    # Mapping (Point): scale 2 then translate by (0.25, 0, 0).
+    mapped = prog.emit(OP_MAPPING, 3, a=uv, params=[2, 0, 0, 0.25, 0, 2, 0, 0, 0, 0, 2, 0])
+    a, b = prog.const([0.2, 0.5, 0.8]), prog.const([0.6, 0.1, 1.0])
+    fac = prog.const([0.25])
+    mul = prog.emit(OP_BLEND, 3, a=fac, b=a, c=b, d=shading.BLENDS.index("MULTIPLY"))
+    screen = prog.emit(OP_BLEND, 3, a=fac, b=a, c=b, d=shading.BLENDS.index("SCREEN"), e=1)
+    power = prog.emit(OP_MATH, 1, a=mapped, b=fac, c=fac, d=shading.MATHS.index("POWER"))
+    reg = shading.evaluate(prog, (0.3, 0.7))
+    np.testing.assert_allclose(reg[mapped:mapped + 3], [0.85, 1.4, 0.0])
+    av, bv = np.array([0.2, 0.5, 0.8]), np.array([0.6, 0.1, 1.0])
+    np.testing.assert_allclose(reg[mul:mul + 3], av * (0.75 + 0.25 * bv))
+    np.testing.assert_allclose(reg[screen:screen + 3], 1 - (0.75 + 0.25 * (1 - bv)) * (1 - av))
+    assert reg[power] == pytest.approx(0.85 ** 0.25)
+
+
+@pytest.mark.parametrize("op, a, b, want", [
+    ("DIVIDE", 1.0, 0.0, 0.0), ("POWER", -2.0, 0.5, 0.0), ("POWER", -2.0, 3.0, -8.0),
+    ("POWER", 0.0, -1.0, 0.0), ("SQRT", -4.0, 0.0, 0.0), ("MODULO", 5.5, 2.0, 1.5),
+    ("MODULO", 1.0, 0.0, 0.0), ("FRACT", -0.25, 0.0, 0.75), ("WRAP", 1.25, 1.0, 0.25),
+    ("PINGPONG", 1.25, 1.0, 0.75), ("PINGPONG", 0.5, 0.0, 0.0), ("LOGARITHM", 8.0, 2.0, 3.0),
+    ("LOGARITHM", -1.0, 2.0, 0.0), ("EXPONENT", 1000.0, 0.0, math.exp(700.0))])
+def test_math_is_safe_where_cycles_is(op, a, b, want):
+    """No NaN or inf from a node: Cycles' safe division, power, root and modulo."""
+    got = shading.math_op(shading.MATHS.index(op), a, b, 0.0)
+    assert math.isfinite(got) and got == pytest.approx(want)
+
+
+def test_programs_of_several_materials_keep_their_own_images_and_parameters():
+    progs = []
+    for k in range(3):
+        p = Program()
+        tex = np.full((2, 2, 4), 0.1 * (k + 1), np.float32)
+        scaled = p.emit(OP_MAPPING, 3, a=p.uv(f"map{k}"),
+                        params=[1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0])
+        p.out = p.image(Texture(f"t{k}", tex, "Closest"), scaled, False)
+        progs.append(p)
+    names = ["map0", "map1", "map2"]
+    pt = shading.pack([progs[0], None, progs[1], progs[2]], names.index)
+    assert pt.colour[1, 0] == -1
+    uv = np.zeros((3, 1, 3, 2), np.float32)
+    reg = np.zeros(shading.MAX_REGISTERS)
+    for mat, k in ((0, 0), (2, 1), (3, 2)):
+        c = shading.colour_at(mat, 0, 0.2, 0.2, pt, uv, reg, -1.0, -1.0, -1.0)
+        np.testing.assert_allclose(c, 0.1 * (k + 1), rtol=1e-6)
+    assert shading.colour_at(1, 0, 0.2, 0.2, pt, uv, reg, 0.5, 0.6, 0.7) == (0.5, 0.6, 0.7)
+
+
+def test_textures_validate_their_input():
+    with pytest.raises(ValueError, match="'bad'.*interpolation"):
+        Texture("bad", np.zeros((2, 2, 4)), "Bilinear")
+    with pytest.raises(ValueError, match="'flat'.*\\(h, w, 4\\)"):
+        Texture("flat", np.zeros((2, 4)))
+    nan = Texture("nan", np.full((1, 1, 4), np.nan))
+    assert np.all(nan.texels == 0)
+    b = SceneBuilder()
+    b.add_material(Material("glass", "glass", colour_program=Program()))
+    with pytest.raises(ValueError, match="'glass'.*cannot vary"):
+        b.build(scenes.cornell_camera())
+
+
+def test_uv_maps_follow_their_triangles_and_a_missing_map_is_named():
+    b = SceneBuilder()
+    prog = scenes.image_program(scenes.checker_texels())
+    m = b.add_material(Material.diffuse("tex", (0.5, 0.5, 0.5), colour_program=prog))
+    v, t = scenes.quad((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0))
+    # A degenerate triangle first: it is dropped, and the UVs must drop with it.
+    v = np.vstack([v, [(2, 0, 0)]])
+    t = np.vstack([[[4, 4, 4]], t])
+    uvs = np.vstack([np.full((1, 3, 2), 9.0), scenes.quad_uvs()])
+    b.add_mesh("textured", v, t, m, uv_maps={"": uvs})
+    b.add_mesh("plain", *scenes.quad((0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)), m)
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        scene = b.build(scenes.cornell_camera(), World())
+    assert scene.uv.shape == (1, 4, 3, 2)
+    np.testing.assert_array_equal(scene.uv[0, :2], scenes.quad_uvs())
+    np.testing.assert_array_equal(scene.uv[0, 2:], 0.0)
+    assert any("'plain'" in w and "UV map" in w and "'tex'" in w for w in scene.warnings)
