@@ -200,7 +200,8 @@ class _Exporter:
         for id_ in self.depsgraph.ids:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
-        self.textured = any("colour_program" in m.kwargs for m in self.out.materials)
+        self.textured = any("colour_program" in m.kwargs or "emission_program" in m.kwargs
+                            for m in self.out.materials)
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             if obj.type in GEOMETRY_TYPES:

@@ -487,7 +487,7 @@ class _Reader:
         return tuple(c if math.isfinite(c) and c > 0 else 0.0
                      for c in _rgb(_convert(v, "VALUE", "RGBA")))
 
-    def textured_colour(self, node, socket_name):
+    def textured_colour(self, node, socket_name, default=DEFAULT_GREY, unknown=None):
         """A colour input that may vary over the surface: (the constant standing for it where
         one is needed, e.g. its image's mean; its shader program, or None when it is one
         constant or its chain does not compile, which is warned)."""
@@ -496,7 +496,7 @@ class _Reader:
             shader_nodes.compile_colour(sock, self.constants.image_cache)
         if program is None:
             warned = len(self.warnings)
-            colour = self.colour(node, socket_name)
+            colour = self.colour(node, socket_name, default, unknown)
             if why and len(self.warnings) > warned:  # say why the constant stands in
                 self.warnings[-1] += f"; it cannot be evaluated per point: {why} is not " \
                     "supported yet"
@@ -505,7 +505,7 @@ class _Reader:
                           f"through {why}, which Specula does not evaluate per point yet")
             return colour, None
         warned = len(self.warnings)
-        colour = self.colour(node, socket_name)
+        colour = self.colour(node, socket_name, default, unknown)
         del self.warnings[warned:]  # the constant only stands in; the program is exact
         return colour, program
 
@@ -614,9 +614,13 @@ class _Reader:
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
             # the socket's own colour.
+            colour, program = self.textured_colour(node, "Color", (1.0, 1.0, 1.0))
+            strength = max(self.number(node, "Strength", 1.0), 0.0)
+            textured = program is not None and strength * max(colour) > 0
             return MaterialSpec("emission_only", name, {
-                "colour": self.colour(node, "Color", (1.0, 1.0, 1.0)),
-                "strength": max(self.number(node, "Strength", 1.0), 0.0)})
+                "colour": colour, "strength": strength,
+                **({"emission_program": shader_nodes.scaled(program, strength)}
+                   if textured else {})})
         if kind == "ShaderNodeBsdfPrincipled":
             return self.principled(node)
         colour_socket = next((s for s in ("Color", "Base Color") if s in node.inputs), None)
@@ -657,10 +661,13 @@ class _Reader:
         strength = self.number(node, "Emission Strength", 0.0, unknown=0.0)
         # The colour input is "Emission Color" since 4.0 and "Emission" before.
         emission_socket = "Emission Color" if "Emission Color" in node.inputs else "Emission"
-        emission = tuple(strength * c for c in self.colour(node, emission_socket,
-                                                           (1.0, 1.0, 1.0),
-                                                           unknown=(0.0, 0.0, 0.0)))
+        colour, program = self.textured_colour(node, emission_socket, (1.0, 1.0, 1.0),
+                                               unknown=(0.0, 0.0, 0.0)) \
+            if strength > 0 else ((0.0, 0.0, 0.0), None)
+        emission = tuple(strength * c for c in colour)
         kwargs = {"emission": emission} if strength > 0 and max(emission) > 0 else {}
+        if kwargs and program is not None:
+            kwargs["emission_program"] = shader_nodes.scaled(program, strength)
         for label, w in (("Metallic", metallic), ("Transmission Weight", transmission)):
             if 0.0 < w < 1.0:
                 self.warn(f"node '{node.name}' {label} {w:.3g} is not supported (only 0 or 1); "

@@ -395,6 +395,16 @@ NODES = {
 }
 
 
+def scaled(program, strength):
+    """`program` with its colour result multiplied by the constant `strength` (an emission's
+    colour times its strength: a Multiply blend at factor 1)."""
+    sh = core.load().shading
+    fac, s = program.const([1.0]), program.const([float(strength)] * 3)
+    program.out = program.emit(sh.OP_BLEND, 3, a=fac, b=program.out, c=s,
+                               d=sh.BLENDS.index("MULTIPLY"))
+    return program
+
+
 def compile_colour(socket, texture_cache):
     """(program or None, why not): the program for colour input `socket` when its chain
     varies over the surface and every node in it compiles; (None, "") for a chain that does

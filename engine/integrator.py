@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, camera, caustics, environment, lights, shading, terminator
+from . import bsdf, camera, caustics, environment, lights, sampling, shading, terminator
 from .bsdf import DELTA_PDF
 from .film import filter_offset
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
@@ -305,8 +305,11 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
     from the camera (caustics.py)."""
     e = sc.materials.emission
     le0, le1, le2 = e[x.mat, 0], e[x.mat, 1], e[x.mat, 2]
-    if not max(le0, max(le1, le2)) > 0:
+    if not max(le0, max(le1, le2)) > 0:  # (a textured emission's constant is > 0 too)
         return
+    if HAS_TEXTURES:
+        le0, le1, le2 = shading.emission_at(x.mat, x.f, x.u, x.v, sc.materials.programs,
+                                            sc.geometry.uv, paths.svm, le0, le1, le2)
     w = 1.0
     if mis:
         em = sc.emitters
@@ -365,10 +368,11 @@ def emitter_pmf(px, py, pz, normal, entry, em):
     return em.pmf[entry]
 
 
-def sample_emitter(x, u_sel, ua, ub, em):
+def sample_emitter(x, u_sel, ua, ub, sc, paths):
     """An emitter chosen from the vertex (by power, or by the grid's local distribution)
     and a point or direction on it: (wi, distance (inf: none), radiance / (selection x
     pdf), combined pdf, length scale at the light for the shadow ray's offset)."""
+    em = sc.emitters
     if len(em.pmf) == 0:  # the generic kernel on a scene without emitters
         return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     if HAS_LIGHT_GRID and em.grid > 0:
@@ -386,6 +390,8 @@ def sample_emitter(x, u_sel, ua, ub, em):
         wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_triangle(e, x.px, x.py, x.pz, ua, ub,
                                                                    em)
         light_scale = em.scale[e]
+        if HAS_TEXTURES and pdf > 0.0:
+            q0, q1, q2 = textured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths)
     elif HAS_ENVIRONMENT and e == em.env_entry and e >= 0:
         wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_environment(ua, ub, em.environment)
     elif HAS_LIGHT_OBJECTS:
@@ -398,6 +404,19 @@ def sample_emitter(x, u_sel, ua, ub, em):
         return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     ps = p_sel if p_sel > 0 else 1.0
     return wx, wy, wz, dist, q0 / ps, q1 / ps, q2 / ps, pdf * p_sel, light_scale
+
+
+def textured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths):
+    """Radiance / pdf of the point (ua, ub) on emissive triangle entry e
+    (lights.sample_triangle's point) where its material's emission is textured; else q."""
+    f = sc.emitters.triangle_of_entry[e]
+    mat = sc.geometry.material_index[f]
+    if sc.materials.programs.emission[mat, 0] < 0:
+        return q0, q1, q2
+    _, b1, b2 = sampling.uniform_triangle(ua, ub)
+    l0, l1, l2 = shading.emission_at(mat, f, b1, b2, sc.materials.programs, sc.geometry.uv,
+                                     paths.svm, 0.0, 0.0, 0.0)
+    return l0 / pdf, l1 / pdf, l2 / pdf
 
 
 def shadow_origin(x, wx, wy, wz, sc):
@@ -428,8 +447,8 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     ps = paths.pseed[row]
     u_sel = sample_1d(ps, rev_sample, bounce_dim(depth, LIGHT_SELECT))
     ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, LIGHT_POINT))
-    wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub,
-                                                                      sc.emitters)
+    wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
+                                                                      paths)
     g0 = g1 = g2 = pdf_b = 0.0
     k = sc.materials.kind[x.mat]
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
@@ -655,7 +674,7 @@ def all_finite(radiance, depth, normal):
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
     surface_colour, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
-    sample_emitter,
+    sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

@@ -199,6 +199,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         uv = np.zeros((1, 1, 3, 2), np.float32)
         programs = ProgramTable(np.zeros((0, 8), np.int64), np.zeros(1), np.zeros((1, 4), F32),
                                 np.zeros((0, 6), np.int64),
+                                np.full((len(scene.materials), 3), -1, np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64))
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
                         normals, smooth, obj, offset, uv)
@@ -233,7 +234,7 @@ def _generic_emitters(em, num_triangles: int) -> Emitters:
                         np.zeros(1, np.bool_), np.full(num_triangles, -1, np.int64),
                         np.ones(num_triangles), z3, z3, z3, z3, z, z3, z,
                         np.zeros((0, COLUMNS)), stand_in_env, -1,
-                        np.zeros((0, BOUND_COLUMNS)))
+                        np.zeros((0, BOUND_COLUMNS)), np.zeros(0, np.int64))
     if em.environment is None:
         em = em._replace(environment=stand_in_env)
     return em

@@ -25,7 +25,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import camera, caustics, lights
+from . import camera, caustics, lights, shading
 from .film import filter_density
 from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roulette,
                          sample_bsdf, surface_colour, surface_interaction)
@@ -83,6 +83,7 @@ def start_light_paths(ids, sample, seed, sc, lp):
         if HAS_LIGHT_OBJECTS and j >= 0 and not lights.is_area(j, em.objects):
             start_sphere_light_path(i, e, j, ua, ub, va, vb, sc, lp)
             continue
+        b1 = b2 = 0.0
         if HAS_LIGHT_OBJECTS and j >= 0:
             L = em.objects
             px, py, pz = lights.area_light_point(j, ua, ub, L)
@@ -109,6 +110,11 @@ def start_light_paths(ids, sample, seed, sc, lp):
             r0, r1, r2 = lights.area_light_radiance(j, lz, em.objects)
         else:
             r0, r1, r2 = em.radiance[e, 0], em.radiance[e, 1], em.radiance[e, 2]
+            if HAS_TEXTURES:
+                f = em.triangle_of_entry[e]
+                r0, r1, r2 = shading.emission_at(sc.geometry.material_index[f], f, b1, b2,
+                                                 sc.materials.programs, sc.geometry.uv, lp.svm,
+                                                 r0, r1, r2)
         eps = ray_offset(scale)
         lp.o64[i, 0], lp.o64[i, 1], lp.o64[i, 2] = px + eps * nx, py + eps * ny, pz + eps * nz
         lp.d64[i, 0], lp.d64[i, 1], lp.d64[i, 2] = dx, dy, dz
@@ -328,4 +334,4 @@ STAGES = {f.__name__: (f, INLINE) for f in (connect_camera, _set_start, start_su
 STAGES.update({f.__name__: (f, JIT) for f in (start_light_paths, light_bounce)})
 STAGES["splat"] = (splat, ALLOCATING)  # one small scratch row per call
 # The plan's values replace these (specialise.py).
-HAS_DOF = HAS_POLYGON_APERTURE = HAS_LIGHT_OBJECTS = HAS_SUN_DISCS = True
+HAS_DOF = HAS_POLYGON_APERTURE = HAS_LIGHT_OBJECTS = HAS_SUN_DISCS = HAS_TEXTURES = True

@@ -64,10 +64,12 @@ OMNI, ONE_SIDED, TWO_SIDED, CONE, DISTANT = 0, 1, 2, 3, 4
 #   entry_of_triangle, area_by_triangle (t,); per emissive triangle v0, e1, e2, normal (k, 3),
 #   area (k,), radiance (k, 3), scale (k,); objects (j, COLUMNS); environment (None or
 #   environment.Environment) and its entry (-1: none).
-#   bounds (k, BOUND_COLUMNS) or (0, BOUND_COLUMNS): the choice by importance at the point.
+#   bounds (k, BOUND_COLUMNS) or (0, BOUND_COLUMNS): the choice by importance at the point;
+#   triangle_of_entry (emissive triangles,): each one's triangle (its textured emission).
 Emitters = namedtuple("Emitters", "pmf cdf grid lo cell local_pmf local_cdf_flat has_mass "
                                   "entry_of_triangle area_by_triangle v0 e1 e2 normal area "
-                                  "radiance scale objects environment env_entry bounds")
+                                  "radiance scale objects environment env_entry bounds "
+                                  "triangle_of_entry")
 
 (_TYPE, _POWER, _CENTRE, _AXIS_U, _AXIS_V, _DIRECTION, _LOCAL, _RADIUS, _SOFT, _COS_SPOT,
  _SPOT_SMOOTH, _COS_ANGLE, _SUN_RADIANCE, _LEN_U, _LEN_V, _ELLIPTIC, _AREA_SIZE, _SPREAD_ON,
@@ -712,7 +714,8 @@ class LightSampler:
         return Emitters(self.distribution.pmf, self.distribution.cdf, *grid,
                         self.entry_of_triangle, self.area_by_triangle, self.v0, self.e1, self.e2,
                         self.normal, self.area, self.radiance, self.scale,
-                        self.objects.table(), env, int(self.environment_index), bounds)
+                        self.objects.table(), env, int(self.environment_index), bounds,
+                        self.index.astype(np.int64))
 
 
 @njit(**INLINE)

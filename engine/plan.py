@@ -58,7 +58,7 @@ class Plan:
     terminator: bool = False
     # Light paths from emissive triangles through specular chains to the camera (caustics.py).
     light_tracing: bool = False
-    # Some material used has a colour from a shader program (shading.py: image textures).
+    # Some material used has a colour or an emission from a shader program (shading.py).
     textures: bool = False
 
     @property
@@ -76,7 +76,7 @@ class Plan:
         if self.shading_normals:
             s.append("interpolate shading normals")
         if self.textures:
-            s.append("evaluate shader programs (textured colours)")
+            s.append("evaluate shader programs (textures)")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
@@ -155,7 +155,9 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
-        textures=scene.programs is not None and bool(np.any(scene.programs.colour[used, 0] >= 0)),
+        textures=scene.programs is not None and bool(
+            np.any(scene.programs.colour[used, 0] >= 0)
+            or np.any(scene.programs.emission[used, 0] >= 0)),
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must

@@ -85,6 +85,9 @@ class Material:
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
         texture on the colour), or None. `colour` is then what the program's result is
         approximated by where a constant is needed (its mean).
+    emission_program : a Program whose result replaces `emission` at each point (a textured
+        emission colour, strength included); `emission` then stands for it where a constant
+        is needed (choosing lights by power), so it must be > 0.
     """
 
     name: str
@@ -96,38 +99,46 @@ class Material:
     emission: tuple = (0.0, 0.0, 0.0)
     roughness: float = 0.0
     colour_program: Program | None = field(default=None, compare=False)
+    emission_program: Program | None = field(default=None, compare=False)
 
     @classmethod
-    def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None):
+    def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
+                emission_program=None):
         return cls(name, "diffuse", tuple(colour), emission=tuple(emission),
-                   colour_program=colour_program)
+                   colour_program=colour_program, emission_program=emission_program)
 
     @classmethod
-    def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0), colour_program=None):
+    def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0), colour_program=None,
+               emission_program=None):
         return cls(name, "mirror", tuple(colour), emission=tuple(emission),
-                   colour_program=colour_program)
+                   colour_program=colour_program, emission_program=emission_program)
 
     @classmethod
-    def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None):
+    def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
+              emission_program=None):
         return cls(name, "metal", tuple(base_colour), emission=tuple(emission),
-                   colour_program=colour_program)
+                   colour_program=colour_program, emission_program=emission_program)
 
     @classmethod
-    def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0)):
+    def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
+              emission_program=None):
         """Cycles' Glass BSDF: colour tints reflection and transmission alike."""
         c = tuple(colour)
-        return cls(name, "glass", c, ior, c, c, tuple(emission))
+        return cls(name, "glass", c, ior, c, c, tuple(emission),
+                   emission_program=emission_program)
 
     @classmethod
-    def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0)):
+    def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
+                         emission_program=None):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
         base = np.clip(np.asarray(base_colour, dtype=np.float64), 0.0, 1.0)
         return cls(name, "glass", tuple(base_colour), ior, (1.0, 1.0, 1.0),
-                   tuple(np.sqrt(base)), tuple(emission))
+                   tuple(np.sqrt(base)), tuple(emission), emission_program=emission_program)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
-                   specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None):
+                   specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
+                   emission_program=None):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
         ior = float(ior)
@@ -137,21 +148,24 @@ class Material:
             eta = (1 + np.sqrt(f0)) / max(1 - np.sqrt(f0), 1e-12)
             ior = float(eta if ior >= 1 else 1 / eta)
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
-                   roughness=float(roughness), colour_program=colour_program)
+                   roughness=float(roughness), colour_program=colour_program,
+                   emission_program=emission_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
-               colour_program=None):
+               colour_program=None, emission_program=None):
         """Glossy BSDF: a mirror at (Cycles-)zero roughness, else rough GGX reflection."""
         if roughness <= DELTA_ROUGHNESS:
-            return cls.mirror(name, colour, emission, colour_program)
+            return cls.mirror(name, colour, emission, colour_program, emission_program)
         return cls(name, "glossy", tuple(colour), emission=tuple(emission),
-                   roughness=float(roughness), colour_program=colour_program)
+                   roughness=float(roughness), colour_program=colour_program,
+                   emission_program=emission_program)
 
     @classmethod
-    def emission_only(cls, name, colour=(1, 1, 1), strength=1.0):
+    def emission_only(cls, name, colour=(1, 1, 1), strength=1.0, emission_program=None):
         """Cycles' Emission shader alone: radiance = strength x colour, no BSDF."""
-        return cls(name, "none", (0, 0, 0), emission=tuple(float(strength) * np.asarray(colour)))
+        return cls(name, "none", (0, 0, 0), emission=tuple(float(strength) * np.asarray(colour)),
+                   emission_program=emission_program)
 
 
 @dataclass(frozen=True)
@@ -172,8 +186,9 @@ class Materials:
     emission: np.ndarray
     names: list
     roughness: np.ndarray | None = None
-    # Per material its colour's shading.Program or None (textured colours).
+    # Per material its colour's and its emission's shading.Program or None (textures).
     colour_programs: list | None = None
+    emission_programs: list | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -198,14 +213,19 @@ class Materials:
             materials = [Material("default")]
         k, c, i, rt, tt, e = zip(*rows)
         programs = [m.colour_program for m in materials]
+        emission_programs = [m.emission_program for m in materials]
         for m in materials:
             if m.colour_program is not None and m.kind not in TEXTURED_KINDS:
                 raise ValueError(f"material '{m.name}': a {m.kind} material's colour cannot "
                                  f"vary (textured colours: {', '.join(TEXTURED_KINDS)})")
+            if m.emission_program is not None and not max(m.emission) > 0:
+                raise ValueError(f"material '{m.name}': a textured emission needs a positive "
+                                 f"constant emission standing for it, got {m.emission!r}")
+        textured = any(p is not None for p in programs + emission_programs)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
-                   programs if any(p is not None for p in programs) else None)
+                   programs if textured else None, emission_programs if textured else None)
 
     def __len__(self):
         return len(self.kind)
@@ -654,10 +674,11 @@ class SceneBuilder:
         """The scene's (uv, ProgramTable) for the materials' colour programs, (None, None)
         without any: the UV maps the programs read, gathered over every mesh (a mesh
         without one of them gets coordinates 0 there, as in Cycles, and a warning)."""
-        progs = materials.colour_programs
-        if progs is None:
+        if materials.colour_programs is None:
             return None, None
-        names = sorted({n for p in progs if p is not None for n in p.uv_maps}) or [""]
+        progs = [[p for p in pair if p is not None] for pair in
+                 zip(materials.colour_programs, materials.emission_programs)]
+        names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
         uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
         start = 0
         for (name, *_, mi, _), maps, count in zip(self._meshes, self._uv_maps, counts):
@@ -666,7 +687,7 @@ class SceneBuilder:
                     uv[j, start:start + count] = maps[uv_name]
                     continue
                 users = [materials.names[k] for k in np.unique(mi)
-                         if progs[k] is not None and uv_name in progs[k].uv_maps]
+                         if any(uv_name in p.uv_maps for p in progs[k])]
                 if users:
                     label = f"UV map '{uv_name}'" if uv_name else "UV map"
                     msg = (f"object '{name}' has no {label}, which material '{users[0]}' "
@@ -674,7 +695,7 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        return uv, pack(progs, names.index)
+        return uv, pack(materials.colour_programs, materials.emission_programs, names.index)
 
 
 # -------------------------------------------------------------------- builder passes

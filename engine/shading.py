@@ -139,17 +139,22 @@ class Program:
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
-#   colour (k, 3) int64 per material: first instruction (-1: no program), end, out register.
-ProgramTable = namedtuple("ProgramTable", "code params texels textures colour")
+#   colour, emission (k, 3) int64 per material: the colour's and the emission's program as
+#   first instruction (-1: none), end, result register.
+ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission")
 
 
-def pack(programs: list, uv_index) -> ProgramTable:
-    """Pack the colour programs (one per material, or None) into a ProgramTable; each
-    program's UV map names become scene-wide map indices through `uv_index(name)`."""
+def pack(colour_programs: list, emission_programs: list | None, uv_index) -> ProgramTable:
+    """Pack the materials' colour and emission programs (one per material, or None) into a
+    ProgramTable; each program's UV map names become scene-wide map indices through
+    `uv_index(name)`."""
+    k = len(colour_programs)
+    emission_programs = emission_programs or [None] * k
     code, params, texels, tex_rows = [], [], [], []
-    colour = np.full((len(programs), 3), -1, np.int64)
+    rows = np.full((2, k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
-    for k, prog in enumerate(programs):
+    for slot, mat, prog in [(0, m, p) for m, p in enumerate(colour_programs)] + \
+            [(1, m, p) for m, p in enumerate(emission_programs)]:
         if prog is None:
             continue
         first_tex = len(tex_rows)
@@ -165,14 +170,14 @@ def pack(programs: list, uv_index) -> ProgramTable:
             elif op == OP_IMAGE:
                 b += first_tex
             code.append((op, out, a, b, c, d, e, p + n_params))
-        colour[k] = (n_code, n_code + len(prog.code), prog.out)
+        rows[slot, mat] = (n_code, n_code + len(prog.code), prog.out)
         n_code += len(prog.code)
         params.extend(prog.params)
         n_params += len(prog.params)
     return ProgramTable(np.array(code, np.int64).reshape(-1, WIDTH),
                         np.array(params + [0.0], np.float64),
                         (np.concatenate(texels) if texels else np.zeros((1, 4), np.float32)),
-                        np.array(tex_rows, np.int64).reshape(-1, 6), colour)
+                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1])
 
 
 # ------------------------------------------------------------------ node functions
@@ -465,13 +470,26 @@ def run(first, end, pt, uv, f, u, v, reg):
 
 @njit(**INLINE)
 def colour_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
-    """Material mat's colour at the hit: its program's result (negative or non-finite
-    channels are 0, as Cycles clamps closure weights) or the constant c0, c1, c2."""
-    first = pt.colour[mat, 0]
+    """Material mat's colour at the hit: its colour program's result or the constant c."""
+    return result_at(pt.colour, mat, f, u, v, pt, uv, reg, c0, c1, c2)
+
+
+@njit(**INLINE)
+def emission_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
+    """Material mat's emitted radiance at the hit: its emission program's result or c."""
+    return result_at(pt.emission, mat, f, u, v, pt, uv, reg, c0, c1, c2)
+
+
+@njit(**INLINE)
+def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
+    """The result of program rows[mat] (pt.colour or pt.emission) at the hit (triangle f,
+    barycentrics u, v; negative or non-finite channels are 0, as Cycles clamps closure
+    weights), or the constant c0, c1, c2 where the material has no such program."""
+    first = rows[mat, 0]
     if first < 0:
         return c0, c1, c2
-    run(first, pt.colour[mat, 1], pt, uv, f, u, v, reg)
-    o = pt.colour[mat, 2]
+    run(first, rows[mat, 1], pt, uv, f, u, v, reg)
+    o = rows[mat, 2]
     r0, r1, r2 = reg[o], reg[o + 1], reg[o + 2]
     return (r0 if r0 > 0.0 and math.isfinite(r0) else 0.0,
             r1 if r1 > 0.0 and math.isfinite(r1) else 0.0,
@@ -481,7 +499,7 @@ def colour_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
 def evaluate(program: Program, uv=(0.0, 0.0)):
     """Run a program outside the kernel (tests, constant folding): the registers after it
     ran at UV coordinates `uv` on every map."""
-    pt = pack([program], lambda name: 0)
+    pt = pack([program], None, lambda name: 0)
     corners = np.broadcast_to(np.asarray([[uv[0], uv[1]]] * 3, np.float32),
                               (max(len(program.uv_maps), 1), 1, 3, 2)).copy()
     reg = np.zeros(MAX_REGISTERS)

@@ -205,13 +205,23 @@ def quad_uvs():
 
 
 def textured_box(interpolation="Closest", extension="REPEAT", srgb=False, scale=1.0,
-                 kind="diffuse", texels=None):
+                 kind="diffuse", texels=None, textured_light=False):
     """The Cornell box with spheres whose back wall and floor carry an image texture
-    (`checker_texels`) on their own UVs."""
-    b = cornell_box()
+    (`checker_texels`) on their own UVs; with `textured_light` its ceiling light's emission
+    is the texture too (radiance 10 x texel)."""
+    b = cornell_box(light_mesh=not textured_light)
     texels = checker_texels() if texels is None else texels
     prog = image_program(texels, interpolation, extension, srgb, scale)
     mean = tuple(float(c) for c in texels[..., :3].reshape(-1, 3).mean(axis=0))
+    if textured_light:
+        from engine.shading import OP_BLEND
+        glow = image_program(texels, interpolation, extension, srgb)
+        fac, ten = glow.const([1.0]), glow.const([10.0] * 3)
+        glow.out = glow.emit(OP_BLEND, 3, a=fac, b=glow.out, c=ten, d=2)  # Multiply
+        light = b.add_material(Material.emission_only("textured light", mean, 10.0,
+                                                      emission_program=glow))
+        v, t = quad((-0.4, -0.3, 1.49), (-0.4, 0.3, 1.49), (0.4, 0.3, 1.49), (0.4, -0.3, 1.49))
+        b.add_mesh("textured light", v, t, light, uv_maps={"": quad_uvs()})
     if kind == "diffuse":
         mat = Material.diffuse("textured", mean, colour_program=prog)
     else:

@@ -158,6 +158,28 @@ def _textures_as_their_means(scene, settings):
     return scene, settings
 
 
+def untextured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths):
+    """integrator.textured_emitter that keeps the emitter's mean radiance."""
+    return q0, q1, q2
+
+
+@contextmanager
+def _light_samples_untextured():
+    """Next-event estimation reads a textured emitter's mean, not the texture at the point
+    it sampled (camera and BSDF rays still see the texture; a one-off kernel)."""
+    from tests.patching import one_off_kernels
+
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, textured_emitter=untextured_emitter)
+        yield
+
+
+def _emission_as_its_mean(scene, settings):
+    scene.programs = scene.programs._replace(
+        emission=np.full_like(scene.programs.emission, -1))
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -175,6 +197,8 @@ INJECTIONS = {
     "texture_v_flipped": ("textured_walls", _texture_v_flipped, None),
     "srgb_texture_not_decoded": ("textured_walls", _srgb_not_decoded, None),
     "textures_as_their_means": ("textured_walls", _textures_as_their_means, None),
+    "textured_emission_as_its_mean": ("textured_emitter", _emission_as_its_mean, None),
+    "light_samples_untextured": ("textured_emitter", None, _light_samples_untextured),
 }
 
 

@@ -801,6 +801,23 @@ def textured_walls():
     scene.collection.objects.link(obj2)
 
 
+def textured_emitter():
+    """The Cornell box lit by its ceiling quad whose Emission colour is the 8 x 8 image
+    (Closest): a textured light seen directly, sampled by next-event estimation and starting
+    light paths through the glass sphere (caustics on); a mirror and a glass sphere."""
+    scene = _box(emitter=False)
+    image = _checker_image("LightChecker")
+    light = _textured("TexturedLight", image, "ShaderNodeEmission", Strength=12.0)
+    obj = bs.quad("Emitter", [(-0.4, -0.3, 1.49), (-0.4, 0.3, 1.49), (0.4, 0.3, 1.49),
+                              (0.4, -0.3, 1.49)], light, scene.collection)
+    _quad_uvs(obj)
+    _sphere(bs.material("Mirror", "ShaderNodeBsdfGlossy", Color=(0.9, 0.9, 0.9, 1.0),
+                        Roughness=0.0), (-0.45, 0.2, 0.3), 0.3, "MirrorBall")
+    _sphere(bs.material("Glass", "ShaderNodeBsdfGlass", Color=(1.0, 1.0, 1.0, 1.0),
+                        Roughness=0.0, IOR=1.45), (0.45, -0.2, 0.3), 0.3, "GlassBall")
+    scene.specula.use_light_tracing = True
+
+
 def _gltf(name, direction=(0.6, -1.0, 0.5)):
     """A Khronos glTF sample model (tests/assets/gltf/, licences beside them) imported with
     Blender's own glTF importer, as a user would: framed by a camera from `direction`, lit
@@ -904,6 +921,8 @@ for _setup in (caustic_point_light, caustic_spot):
                  files=(BLEND["cbspheres.blend"],)))
 # Image textures through Blender's own nodes (issue 14).
 _add(Variant("textured_walls", textured_walls, max_bounces=8))
+_add(Variant("textured_emitter", textured_emitter, max_bounces=8, samples=256,
+             cycles_samples=512))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest")):

@@ -72,11 +72,13 @@ def test_light_object_caustics_same_in_both_kernels(scene):
     assert_same_image(a, b)
 
 
-@pytest.mark.parametrize("kind", ["diffuse", "principled"])
-def test_textured_colours_same_in_both_kernels(kind):
+@pytest.mark.parametrize("kind, light", [("diffuse", False), ("principled", True)])
+def test_textured_colours_same_in_both_kernels(kind, light):
     """Image textures through shader programs (engine/shading.py), in the Lambert and the
-    layered lobe, seen directly, in the mirror and through the glass (light paths too)."""
-    a, b = both(scenes.textured_box(interpolation="Cubic", scale=1.5, kind=kind))
+    layered lobe, seen directly, in the mirror and through the glass (light paths too),
+    and on an emitter (seen, sampled by next-event estimation, starting light paths)."""
+    a, b = both(scenes.textured_box(interpolation="Cubic", scale=1.5, kind=kind,
+                                    textured_light=light))
     assert a.plan.textures and a.plan.light_tracing
     assert_same_image(a, b)
 

@@ -19,7 +19,7 @@ def _table(texels, interpolation, extension):
     """A ProgramTable holding just one image (for image_channel)."""
     prog = Program()
     prog.out = prog.image(Texture("t", texels, interpolation, extension), prog.uv(""), False)
-    return shading.pack([prog], lambda name: 0)
+    return shading.pack([prog], None, lambda name: 0)
 
 
 def lookup(texels, x, y, interpolation="Linear", extension="REPEAT"):
@@ -125,7 +125,7 @@ def test_programs_of_several_materials_keep_their_own_images_and_parameters():
         p.out = p.image(Texture(f"t{k}", tex, "Closest"), scaled, False)
         progs.append(p)
     names = ["map0", "map1", "map2"]
-    pt = shading.pack([progs[0], None, progs[1], progs[2]], names.index)
+    pt = shading.pack([progs[0], None, progs[1], progs[2]], None, names.index)
     assert pt.colour[1, 0] == -1
     uv = np.zeros((3, 1, 3, 2), np.float32)
     reg = np.zeros(shading.MAX_REGISTERS)
