@@ -371,6 +371,18 @@ def _n_checker(c, node, out):
     return (reg + 3, "VALUE") if out.identifier == "Fac" else (reg, "RGBA")
 
 
+def _n_color_ramp(c, node, out):
+    """Color Ramp as Cycles bakes it: a table of RAMP_TABLE_SIZE entries from Blender's own
+    ramp evaluation, looked up (linearly unless Constant) at the factor."""
+    ramp = node.color_ramp
+    n = c.sh.RAMP_TABLE_SIZE
+    table = [x for i in range(n) for x in ramp.evaluate(i / (n - 1))]
+    fac = c.input(node.inputs["Fac"], "VALUE")
+    reg = c.program.emit(c.sh.OP_RAMP, 4, a=fac, b=n, c=int(ramp.interpolation != "CONSTANT"),
+                         params=table)
+    return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
+
+
 NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexCoord": _n_tex_coord,
@@ -392,6 +404,7 @@ NODES = {
     "ShaderNodeGamma": _n_gamma,
     "ShaderNodeBrightContrast": _n_bright_contrast,
     "ShaderNodeTexChecker": _n_checker,
+    "ShaderNodeValToRGB": _n_color_ramp,
 }
 
 

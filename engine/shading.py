@@ -47,6 +47,8 @@ OP_GAMMA = 11       # reg[out:out+3] = reg[a:a+3] ** reg[b] where positive
 OP_BRIGHT_CONTRAST = 12  # reg[out:out+3] from colour reg[a:a+3], bright reg[b], contrast reg[c]
 OP_CHECKER = 13     # reg[out:out+3] colour, reg[out+3] fac of Cycles' checker at reg[a:a+3],
 #                     colours reg[b:b+3], reg[c:c+3], scale reg[d]
+OP_RAMP = 14        # reg[out:out+4] RGBA of the ramp table params[p:p+4b] (b entries) at fac
+#                     reg[a]; c: interpolate between entries (Color Ramp)
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
@@ -59,6 +61,8 @@ MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "MINI
 INTERPOLATIONS = ("Closest", "Linear", "Cubic", "Smart")  # Smart is Cubic on the CPU
 EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
 LUMINANCE = (0.2126, 0.7152, 0.0722)
+# Entries of a Color Ramp's table (Cycles' RAMP_TABLE_SIZE).
+RAMP_TABLE_SIZE = 256
 # The registers one program may use (the kernel's scratch per path batch).
 MAX_REGISTERS = 256
 WIDTH = 8  # int64 columns of an instruction
@@ -413,6 +417,21 @@ def node_checker(ins, reg):
 
 
 @njit(**INLINE)
+def node_ramp(ins, reg, params):
+    """Cycles' rgb_ramp_lookup: the table at fac clamped to [0, 1], linear between entries
+    unless the ramp is Constant."""
+    n, p, out = ins[3], ins[7], ins[1]
+    f = min(max(reg[ins[2]], 0.0), 1.0) * (n - 1) if math.isfinite(reg[ins[2]]) else 0.0
+    i = min(max(int(f), 0), n - 1)
+    t = f - i
+    for j in range(4):
+        r = params[p + 4 * i + j]
+        if ins[4] != 0 and t > 0.0:
+            r = (1.0 - t) * r + t * params[p + 4 * (i + 1) + j]
+        reg[out + j] = r
+
+
+@njit(**INLINE)
 def node_colour_ops(ins, reg):
     """The colour adjustments: Mix (blend modes), Invert, Gamma, Bright/Contrast."""
     op, out, a, b, c = ins[0], ins[1], ins[2], ins[3], ins[4]
@@ -464,6 +483,8 @@ def run(first, end, pt, uv, f, u, v, reg):
             reg[out], reg[out + 1], reg[out + 2] = reg[ins[2]], reg[ins[3]], reg[ins[4]]
         elif op == OP_CHECKER:
             node_checker(ins, reg)
+        elif op == OP_RAMP:
+            node_ramp(ins, reg, pt.params)
         else:
             node_colour_ops(ins, reg)
 

@@ -267,6 +267,31 @@ def test_base_colour_from_a_texture_is_a_program(fresh):
         pytest.approx(middle, abs=1e-6)
 
 
+@pytest.mark.parametrize("interpolation", ["LINEAR", "CONSTANT", "EASE"])
+def test_color_ramp_on_a_texture_follows_blenders_ramp(fresh, interpolation):
+    """Texture -> Color Ramp -> Color: the ramp is Cycles' 256-entry table of Blender's own
+    evaluation, looked up per point."""
+    mat, node = node_material("Ramped", "ShaderNodeBsdfDiffuse")
+    img, stored = make_image("Grey", colorspace="Non-Color")
+    ramp = mat.node_tree.nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.interpolation = interpolation
+    ramp.color_ramp.elements[0].color = (0.9, 0.1, 0.0, 1.0)
+    ramp.color_ramp.elements[1].color = (0.0, 0.2, 1.0, 1.0)
+    ramp.color_ramp.elements.new(0.4).color = (0.1, 0.8, 0.1, 1.0)
+    tex = texture(mat, img, ramp, "Fac")
+    tex.interpolation = "Closest"
+    mat.node_tree.links.new(ramp.outputs["Color"], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    for uv, texel in zip(TEXEL_CENTRES, stored):
+        fac = float(np.dot(texel[:3], (0.2126, 0.7152, 0.0722)))  # colour -> float
+        got = _program_at(spec.kwargs["colour_program"], uv)
+        # The table's resolution: 1/255 in the factor.
+        near = [ramp.color_ramp.evaluate(min(max(fac + d, 0.0), 1.0))[:3]
+                for d in (-1 / 255, 0.0, 1 / 255)]
+        assert any(np.allclose(got, n, atol=2e-3) for n in near), (uv, got, near)
+
+
 def test_a_node_without_an_instruction_falls_back_to_the_mean_and_says_so(fresh):
     mat, node = node_material("Tinted", "ShaderNodeBsdfDiffuse")
     img, stored = make_image("Tint")

@@ -147,7 +147,7 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
     from engine.bsdf import DELTA_PDF
     from engine.sampling import LOBE, bounce_dim, sample_1d
 
-    def sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample):
+    def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         """Light paths (told apart from camera paths by their field count) see glass of
         IOR x 1.15."""
         mt = sc.materials
@@ -159,7 +159,8 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
                 x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
                 mt.transmission_tint[x.mat], u, True)
             return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
-        return original_sample_bsdf(row, depth, x, lobe, sc, paths, rev_sample)  # noqa: F821
+        return original_sample_bsdf(row, depth, x, lobe, c, sc, paths,  # noqa: F821
+                                    rev_sample)
 
     from engine.light_tracing import LightPaths
 
