@@ -383,6 +383,13 @@ def _n_color_ramp(c, node, out):
     return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
 
 
+def _n_hue_saturation(c, node, out):
+    hue, sat, val, fac = (c.input(node.inputs[n], "VALUE")
+                          for n in ("Hue", "Saturation", "Value", "Fac"))
+    col = c.input(node.inputs["Color"], "RGBA")
+    return c.program.emit(c.sh.OP_HSV, 3, a=col, b=hue, c=sat, d=val, e=fac), "RGBA"
+
+
 NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexCoord": _n_tex_coord,
@@ -405,6 +412,7 @@ NODES = {
     "ShaderNodeBrightContrast": _n_bright_contrast,
     "ShaderNodeTexChecker": _n_checker,
     "ShaderNodeValToRGB": _n_color_ramp,
+    "ShaderNodeHueSaturation": _n_hue_saturation,
 }
 
 

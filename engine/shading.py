@@ -49,6 +49,8 @@ OP_CHECKER = 13     # reg[out:out+3] colour, reg[out+3] fac of Cycles' checker a
 #                     colours reg[b:b+3], reg[c:c+3], scale reg[d]
 OP_RAMP = 14        # reg[out:out+4] RGBA of the ramp table params[p:p+4b] (b entries) at fac
 #                     reg[a]; c: interpolate between entries (Color Ramp)
+OP_HSV = 15         # reg[out:out+3] Hue/Saturation/Value of colour reg[a:a+3]: hue reg[b],
+#                     saturation reg[c], value reg[d], factor reg[e]
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
@@ -431,6 +433,69 @@ def node_ramp(ins, reg, params):
         reg[out + j] = r
 
 
+@njit(**JIT)
+def rgb_to_hsv(r, g, b):
+    """Cycles' rgb_to_hsv (util/color.h): hue in [0, 1)."""
+    cmax = max(r, max(g, b))
+    cdelta = cmax - min(r, min(g, b))
+    s = cdelta / cmax if cmax != 0.0 else 0.0
+    h = 0.0
+    if s != 0.0:
+        cr, cg, cb = (cmax - r) / cdelta, (cmax - g) / cdelta, (cmax - b) / cdelta
+        if r == cmax:
+            h = cb - cg
+        elif g == cmax:
+            h = 2.0 + cr - cb
+        else:
+            h = 4.0 + cg - cr
+        h /= 6.0
+        if h < 0.0:
+            h += 1.0
+    return h, s, cmax
+
+
+@njit(**JIT)
+def hsv_to_rgb(h, s, v):
+    """Cycles' hsv_to_rgb (util/color.h)."""
+    if s == 0.0:
+        return v, v, v
+    if h == 1.0:
+        h = 0.0
+    h *= 6.0
+    i = math.floor(h)
+    f = h - i
+    p, q, t = v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f))
+    if i == 0.0:
+        return v, t, p
+    if i == 1.0:
+        return q, v, p
+    if i == 2.0:
+        return p, v, t
+    if i == 3.0:
+        return p, q, v
+    if i == 4.0:
+        return t, p, v
+    return v, p, q
+
+
+@njit(**INLINE)
+def node_hsv(ins, reg):
+    """Cycles' Hue/Saturation/Value node (svm/hsv.h): hue shifted (0.5 keeps it),
+    saturation scaled and clamped, value scaled, mixed with the input by the factor, and
+    negative channels clamped."""
+    a, out = ins[2], ins[1]
+    r, g, b = reg[a], reg[a + 1], reg[a + 2]
+    h, s, v = rgb_to_hsv(r, g, b)
+    h += reg[ins[3]] + 0.5
+    h -= math.floor(h)
+    s = min(max(s * reg[ins[4]], 0.0), 1.0)
+    nr, ng, nb = hsv_to_rgb(h, s, v * reg[ins[5]])
+    fac = reg[ins[6]]
+    reg[out] = max(fac * nr + (1.0 - fac) * r, 0.0)
+    reg[out + 1] = max(fac * ng + (1.0 - fac) * g, 0.0)
+    reg[out + 2] = max(fac * nb + (1.0 - fac) * b, 0.0)
+
+
 @njit(**INLINE)
 def node_colour_ops(ins, reg):
     """The colour adjustments: Mix (blend modes), Invert, Gamma, Bright/Contrast."""
@@ -485,6 +550,8 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_checker(ins, reg)
         elif op == OP_RAMP:
             node_ramp(ins, reg, pt.params)
+        elif op == OP_HSV:
+            node_hsv(ins, reg)
         else:
             node_colour_ops(ins, reg)
 

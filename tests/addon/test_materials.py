@@ -295,7 +295,7 @@ def test_color_ramp_on_a_texture_follows_blenders_ramp(fresh, interpolation):
 def test_a_node_without_an_instruction_falls_back_to_the_mean_and_says_so(fresh):
     mat, node = node_material("Tinted", "ShaderNodeBsdfDiffuse")
     img, stored = make_image("Tint")
-    hue = mat.node_tree.nodes.new("ShaderNodeHueSaturation")
+    hue = mat.node_tree.nodes.new("ShaderNodeRGBCurve")
     texture(mat, img, hue, "Color")
     mat.node_tree.links.new(hue.outputs["Color"], node.inputs["Color"])
     spec, warnings = convert(mat)

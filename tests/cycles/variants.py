@@ -757,14 +757,23 @@ def _quad_uvs(obj):
 
 
 def textured_walls():
-    """The Cornell box whose back wall and floor carry an 8 x 8 sRGB image texture (Closest,
-    repeated twice by a Mapping node on the floor), a Principled sphere textured on its own
-    UVs (Linear, Extend) and a Glossy sphere whose colour is the image Mixed (Multiply)
-    with an RGB: the textured colour in Lambert, layered and specular lobes."""
+    """The Cornell box whose back wall (through a Hue/Saturation node) and floor carry an
+    8 x 8 sRGB image texture (Closest, repeated twice by a Mapping node on the floor), a
+    Principled sphere textured on its own UVs (Linear, Extend) and a Glossy sphere whose
+    colour is the image Mixed (Multiply) with an RGB: the textured colour in Lambert,
+    layered and specular lobes."""
     scene = _box()
     image = _checker_image("Checker")
     back = bpy.data.objects["Back"]
     back.data.materials[0] = _textured("BackTex", image, Roughness=0.0)
+    tree = back.data.materials[0].node_tree  # image -> Hue/Saturation -> Color
+    hsv = tree.nodes.new("ShaderNodeHueSaturation")
+    for name, value in (("Hue", 0.62), ("Saturation", 1.4), ("Value", 0.9), ("Fac", 0.8)):
+        hsv.inputs[name].default_value = value
+    tex = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeTexImage")
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    tree.links.new(tex.outputs["Color"], hsv.inputs["Color"])
+    tree.links.new(hsv.outputs["Color"], diffuse.inputs["Color"])
     floor = bpy.data.objects["Floor"]
     floor.data.materials[0] = _textured("FloorTex", image, scale=2.0, Roughness=0.0)
     for obj in (back, floor):
