@@ -516,10 +516,12 @@ def node_colour_ops(ins, reg):
             reg[out + j] = max((1.0 + contrast) * reg[a + j] + reg[b] - contrast * 0.5, 0.0)
 
 
-@njit(**INLINE)
+@njit(**JIT)
 def run(first, end, pt, uv, f, u, v, reg):
     """Execute instructions first..end-1 of the ProgramTable pt at the hit (triangle f,
-    barycentrics u, v) in the register file reg."""
+    barycentrics u, v) in the register file reg. Called, not inlined: a kernel evaluates
+    programs in five places, and five inlined copies of the interpreter cost minutes of
+    compile time."""
     for k in range(first, end):
         ins = pt.code[k]
         op, out = ins[0], ins[1]
