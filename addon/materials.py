@@ -35,7 +35,7 @@ import bpy
 import numpy as np
 
 from . import core, shader_nodes
-from .shader_nodes import COLOUR_SPACES
+from .shader_nodes import COLOUR_SPACES, enabled_input, live_link
 
 DEFAULT_GREY = (0.8, 0.8, 0.8)
 # Cycles treats roughness below this as a perfect delta lobe (alpha = r^2 <= 2e-10 there).
@@ -103,20 +103,6 @@ def _fmt(value):
 
 def _label(node):
     return node.bl_label or node.bl_idname
-
-
-def _live_link(socket):
-    """The link that drives `socket`, or None: muted and invalid links do not count (Blender
-    then evaluates the socket's own value)."""
-    if not socket.is_linked:
-        return None
-    return next((k for k in socket.links if not k.is_muted and k.is_valid), None)
-
-
-def _enabled_input(node, name):
-    """`node`'s input called `name`; nodes like Mix have one per data type, only one enabled."""
-    found = [s for s in node.inputs if s.name == name]
-    return next((s for s in found if s.enabled), found[0] if found else None)
 
 
 def _own_value(socket):
@@ -232,7 +218,7 @@ def _c_image(k, node, out):
 
 def _c_checker(k, node, out):
     # The checker's two colours cover equal areas: its means are their mean and Fac 0.5.
-    c1, c2 = k.input(_enabled_input(node, "Color1")), k.input(_enabled_input(node, "Color2"))
+    c1, c2 = k.input(enabled_input(node, "Color1")), k.input(enabled_input(node, "Color2"))
     if out.name != "Fac" and (c1 is None or c2 is None):
         return None
     k.notes.append(f"the mean of checker '{node.name}'")
@@ -270,13 +256,13 @@ def _mix(k, node, t, a, b, blend_type, clamp):
 
 
 def _c_mix(k, node, out):
-    t = k.input(_enabled_input(node, "Factor"))
+    t = k.input(enabled_input(node, "Factor"))
     if t is not None and node.clamp_factor:
         t = tuple(min(max(f, 0.0), 1.0) for f in t) if isinstance(t, tuple) \
             else min(max(t, 0.0), 1.0)
     colour = node.data_type == "RGBA"
-    return _mix(k, node, t, k.input(_enabled_input(node, "A")),
-                k.input(_enabled_input(node, "B")), node.blend_type if colour else "MIX",
+    return _mix(k, node, t, k.input(enabled_input(node, "A")),
+                k.input(enabled_input(node, "B")), node.blend_type if colour else "MIX",
                 colour and node.clamp_result)
 
 
@@ -399,7 +385,7 @@ class _Constants:
         """Value of an input socket: its own, or its chain's constant converted to its type."""
         if socket is None:
             return None
-        link = _live_link(socket)
+        link = live_link(socket)
         if link is None:
             return _own_value(socket)
         v = self.output(link.from_socket)
@@ -429,7 +415,7 @@ class _Constants:
         RGB Curves, a node group ...) is approximated by that input: the best constant
         at hand. Nodes without such an input (Color Attribute, Noise, Fresnel ...) give None."""
         for s in node.inputs:
-            if s.enabled and s.type == out.type and _live_link(s) is not None:
+            if s.enabled and s.type == out.type and live_link(s) is not None:
                 v = self.input(s)
                 if v is not None:
                     self.notes.append(f"node '{node.name}' ({_label(node)}) taken as its input "
@@ -453,10 +439,10 @@ class _Reader:
         """Value of `node`'s input `socket_name`: its own when unlinked, else the constant its
         node chain reduces to (warned when approximate). A chain that cannot be reduced
         gives `unknown`, or the input's own value when `unknown` is None (warned)."""
-        sock = _enabled_input(node, socket_name)
+        sock = enabled_input(node, socket_name)
         if sock is None:
             return default
-        link = _live_link(sock)
+        link = live_link(sock)
         if link is None:
             return _own_value(sock)
         src = link.from_node
@@ -491,7 +477,7 @@ class _Reader:
         """A colour input that may vary over the surface: (the constant standing for it where
         one is needed, e.g. its image's mean; its shader program, or None when it is one
         constant or its chain does not compile, which is warned)."""
-        sock = _enabled_input(node, socket_name)
+        sock = enabled_input(node, socket_name)
         program, why = (None, "") if sock is None else \
             shader_nodes.compile_colour(sock, self.constants.image_cache)
         if program is None:
@@ -521,10 +507,10 @@ class _Reader:
     def ignored(self, node, socket_name, neutral, rendered):
         """Warn when an input Specula does not render is used: linked, or set away from the
         value at which it has no effect."""
-        sock = _enabled_input(node, socket_name)
+        sock = enabled_input(node, socket_name)
         if sock is None:
             return
-        link = _live_link(sock)
+        link = live_link(sock)
         if link is not None:
             self.warn(f"node '{node.name}' input '{socket_name}' is driven by node "
                       f"'{link.from_node.name}' ({_label(link.from_node)}), which Specula does "
@@ -560,9 +546,9 @@ class _Reader:
         if out is None:
             return self.viewport_fallback("no active Material Output node for Cycles")
         surface = out.inputs.get("Surface")
-        link = None if surface is None else _live_link(surface)
+        link = None if surface is None else live_link(surface)
         volume = out.inputs.get("Volume")
-        volume_link = None if volume is None else _live_link(volume)
+        volume_link = None if volume is None else live_link(volume)
         if link is None and volume_link is not None:
             # A Volume-only material (smoke, fog, an absorbing liquid) has no surface: the
             # closest Specula renders is a boundary that light crosses unchanged.
@@ -575,14 +561,14 @@ class _Reader:
             return self.viewport_fallback(f"nothing is linked to '{out.name}' Surface")
         for socket_name, meaning in OUTPUT_IGNORED:
             sock = out.inputs.get(socket_name)
-            ignored = None if sock is None else _live_link(sock)
+            ignored = None if sock is None else live_link(sock)
             if ignored is not None:
                 src = ignored.from_node
                 self.warn(f"'{out.name}' input '{socket_name}' is driven by node '{src.name}' "
                           f"({_label(src)}), which Specula ignores: {meaning}")
         node = link.from_node
         while node.bl_idname == "NodeReroute":
-            link = _live_link(node.inputs[0])
+            link = live_link(node.inputs[0])
             if link is None:
                 return self.viewport_fallback(f"reroute '{node.name}' leads nowhere")
             node = link.from_node
@@ -646,8 +632,8 @@ class _Reader:
                     and node.inputs[socket_name].type != "RGBA":
                 continue  # a float before 4.0, where 0 meant untinted
             self.ignored(node, socket_name, neutral, rendered)
-        coat = _enabled_input(node, "Coat Weight")
-        if coat is not None and (_live_link(coat) is not None or coat.default_value > 0):
+        coat = enabled_input(node, "Coat Weight")
+        if coat is not None and (live_link(coat) is not None or coat.default_value > 0):
             self.ignored(node, "Coat Normal", None, "no coat is rendered")
 
     def principled(self, node):

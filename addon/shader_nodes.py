@@ -29,13 +29,17 @@ class Unsupported(Exception):
     """A node (or a setting of one) that has no program instruction yet."""
 
 
-def _live_link(socket):
+def live_link(socket):
+    """The link that drives `socket`, or None: muted and invalid links do not count (Blender
+    then evaluates the socket's own value)."""
     if not socket.is_linked:
         return None
     return next((k for k in socket.links if not k.is_muted and k.is_valid), None)
 
 
-def _enabled_input(node, name):
+def enabled_input(node, name):
+    """`node`'s input called `name` (or with that identifier); nodes like Mix have one per
+    data type, only one enabled."""
     found = [s for s in node.inputs if s.name == name or s.identifier == name]
     return next((s for s in found if s.enabled), found[0] if found else None)
 
@@ -43,7 +47,7 @@ def _enabled_input(node, name):
 def varies(socket, seen=None) -> bool:
     """Whether the chain behind `socket` has a node whose output varies over a surface
     (each node looked at once: shared sub-chains are common in big trees)."""
-    link = _live_link(socket)
+    link = live_link(socket)
     seen = set() if seen is None else seen
     if link is None or link.from_node.as_pointer() in seen:
         return False
@@ -72,7 +76,7 @@ class Compiler:
         """The register holding input `socket`'s value converted to `to_type`."""
         if socket is None:
             raise Unsupported("a missing input")
-        link = _live_link(socket)
+        link = live_link(socket)
         if link is None:
             value = getattr(socket, "default_value", None)
             if value is None or isinstance(value, str):
@@ -216,8 +220,8 @@ def image_texels(image):
 def _n_image(c, node, out):
     if node.projection != "FLAT":
         raise Unsupported(f"image texture '{node.name}' projection {node.projection}")
-    vec = _enabled_input(node, "Vector")
-    coord = c.input(vec, "VECTOR") if _live_link(vec) is not None else c.program.uv("")
+    vec = enabled_input(node, "Vector")
+    coord = c.input(vec, "VECTOR") if live_link(vec) is not None else c.program.uv("")
     unassociate = (node.outputs["Alpha"].is_linked and node.image is not None
                    and not node.image.colorspace_settings.is_data
                    and node.image.alpha_mode not in ("CHANNEL_PACKED", "NONE"))
@@ -241,8 +245,8 @@ def _n_mapping(c, node, out):
     kind = node.vector_type
     values = {}
     for name in ("Location", "Rotation", "Scale"):
-        s = _enabled_input(node, name)
-        if s is not None and _live_link(s) is not None:
+        s = enabled_input(node, name)
+        if s is not None and live_link(s) is not None:
             raise Unsupported(f"mapping '{node.name}' with a linked {name}")
         values[name] = np.array(s.default_value[:3] if s is not None else (0, 0, 0), float)
     rot = np.array(mathutils.Euler(values["Rotation"], "XYZ").to_matrix())
@@ -255,7 +259,7 @@ def _n_mapping(c, node, out):
         t = -m @ loc
     else:
         raise Unsupported(f"mapping '{node.name}' type {kind}")
-    vec = c.input(_enabled_input(node, "Vector"), "VECTOR")
+    vec = c.input(enabled_input(node, "Vector"), "VECTOR")
     return c.program.emit(c.sh.OP_MAPPING, 3, a=vec,
                           params=np.hstack([m, t[:, None]]).ravel()), "VECTOR"
 
@@ -274,18 +278,18 @@ def _n_mix(c, node, out):
     sh = c.sh
     data = node.data_type
     if data == "RGBA":
-        return _blend(c, node, _enabled_input(node, "Factor_Float"), "A_Color", "B_Color",
+        return _blend(c, node, enabled_input(node, "Factor_Float"), "A_Color", "B_Color",
                       node.blend_type, node.clamp_factor, node.clamp_result)
     if data not in ("FLOAT", "VECTOR"):
         raise Unsupported(f"mix '{node.name}' of {data}")
     width = 1 if data == "FLOAT" else 3
     per_axis = data == "VECTOR" and node.factor_mode == "NON_UNIFORM"
-    fac_socket = _enabled_input(node, "Factor_Vector" if per_axis else "Factor_Float")
+    fac_socket = enabled_input(node, "Factor_Vector" if per_axis else "Factor_Float")
     fac = c.input(fac_socket, "VECTOR" if per_axis else "VALUE")
     if node.clamp_factor:
         fac = _clamped(c, fac, 3 if per_axis else 1)
-    a = c.input(_enabled_input(node, f"A_{'Float' if width == 1 else 'Vector'}"), data)
-    b = c.input(_enabled_input(node, f"B_{'Float' if width == 1 else 'Vector'}"), data)
+    a = c.input(enabled_input(node, f"A_{'Float' if width == 1 else 'Vector'}"), data)
+    b = c.input(enabled_input(node, f"B_{'Float' if width == 1 else 'Vector'}"), data)
     return c.program.emit(sh.OP_LERP, width, a=fac, b=a, c=b, d=width, e=int(per_axis)), data
 
 
@@ -300,8 +304,8 @@ def _blend(c, node, fac_socket, a_name, b_name, blend_type, clamp_factor, clamp_
     fac = c.input(fac_socket, "VALUE")
     if clamp_factor:
         fac = _clamped(c, fac, 1)
-    a = c.input(_enabled_input(node, a_name), "RGBA")
-    b = c.input(_enabled_input(node, b_name), "RGBA")
+    a = c.input(enabled_input(node, a_name), "RGBA")
+    b = c.input(enabled_input(node, b_name), "RGBA")
     return c.program.emit(c.sh.OP_BLEND, 3, a=fac, b=a, c=b, d=c.sh.BLENDS.index(blend_type),
                           e=int(clamp_result)), "RGBA"
 
@@ -361,8 +365,8 @@ def _n_bright_contrast(c, node, out):
 
 
 def _n_checker(c, node, out):
-    vec = _enabled_input(node, "Vector")
-    if _live_link(vec) is None:
+    vec = enabled_input(node, "Vector")
+    if live_link(vec) is None:
         raise Unsupported(f"checker '{node.name}' on Generated coordinates")
     co = c.input(vec, "VECTOR")
     c1, c2 = c.input(node.inputs["Color1"], "RGBA"), c.input(node.inputs["Color2"], "RGBA")

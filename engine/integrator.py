@@ -78,8 +78,8 @@ STAGE_NAMES = ("", "generate camera rays", "handle light hits", "handle escaped 
 Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index normals "
                                   "smooth object_index terminator_offset uv")
 # kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
-# rough materials' bsdf.LayerTables (None without rough materials) and the colour programs'
-# shading.ProgramTable (None without textures).
+# rough materials' bsdf.LayerTables (None without rough materials) and the colour and
+# emission programs' shading.ProgramTable (None without textures).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs")
 # caustics: caustics.CausticData (n_light 0 without light tracing).

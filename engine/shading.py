@@ -136,11 +136,6 @@ class Program:
         self.textures.append(texture)
         return self.emit(OP_IMAGE, 4, a=coordinate, b=len(self.textures) - 1, c=int(unassociate))
 
-    @property
-    def varies(self) -> bool:
-        """Whether the result depends on the surface point (else it is one constant)."""
-        return any(row[0] in (OP_UV,) for row in self.code)
-
 
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
