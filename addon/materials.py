@@ -1,11 +1,12 @@
 """Blender materials -> Specula material descriptions.
 
-The core understands Lambert diffuse, perfect mirror, smooth metal, smooth glass and
-emission (see engine/scene.py `Material`). This module reads a material's Cycles output
-and maps the nodes it knows onto those; anything else becomes a documented fallback with
-a warning that names the material, the node and the input, so nothing renders silently black
-and no fallback changes what kind of thing an object is (a surface never becomes a light, a
-volume never becomes an opaque wall).
+The core understands Lambert diffuse, perfect mirror, smooth metal, smooth and rough glass,
+rough Glossy, the dielectric Principled BSDF and emission (see engine/scene.py
+`Material`). This module reads a material's Cycles output and maps the nodes it knows
+onto those; anything else becomes a documented fallback with a warning that names the
+material, the node and the input, so nothing renders silently black and no fallback
+changes what kind of thing an object is (a surface never becomes a light, a volume never
+becomes an opaque wall).
 
 Fallbacks:
   * no node tree / no Cycles output / nothing linked to Surface: diffuse of the
@@ -13,10 +14,10 @@ Fallbacks:
     Volume: an invisible boundary (glass of IOR 1, white), since volumes are not rendered.
   * Volume or Displacement linked beside a Surface: ignored, warned.
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
-  * Glass BSDF with roughness > 0: smooth glass.
-  * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR), else Metallic >= 0.5 ->
-    metal, else a Lambert base under a GGX dielectric layer; roughness ignored for metal and
-    glass (warned). Inputs Specula does not render (Alpha, Coat, Sheen, Subsurface,
+  * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
+  * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR, roughness), else Metallic
+    >= 0.5 -> metal, else a Lambert base under a GGX dielectric layer; roughness ignored
+    for metal (warned). Inputs Specula does not render (Alpha, Coat, Sheen, Subsurface,
     Anisotropic, Specular Tint, Thin Film, Diffuse Roughness, normal maps) warn when used.
   * any other shader node (Mix, Add, Toon, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
@@ -585,18 +586,16 @@ class _Reader:
             colour, program = self.textured_colour(node, "Color")
             return MaterialSpec("diffuse", name, {"colour": colour, **_with(program)})
         if kind in GLOSSY_NODES:
-            # Rough Glossy is Multiscatter GGX (Cycles' default for the node); at Cycles'
-            # delta threshold it is a perfect mirror.
+            # Rough Glossy is GGX; at Cycles' delta threshold it is a perfect mirror.
             colour, program = self.textured_colour(node, "Color")
             return MaterialSpec("glossy", name, {"colour": colour, **_with(program),
-                                                 "roughness": self.unit(node, "Roughness")})
+                                                 "roughness": self.unit(node, "Roughness"),
+                                                 "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeBsdfGlass":
-            r = self.unit(node, "Roughness")
-            if r > ROUGHNESS_EPSILON:
-                self.warn(f"node '{node.name}' roughness {r:.3g} is not supported; rendered as "
-                          f"smooth glass (roughness 0)")
             return MaterialSpec("glass", name, {"colour": self.colour(node, "Color"),
-                                                "ior": self.ior(node)})
+                                                "ior": self.ior(node),
+                                                "roughness": self.unit(node, "Roughness"),
+                                                "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
             # the socket's own colour.
@@ -614,6 +613,16 @@ class _Reader:
         self.warn(f"node '{node.name}' ({node.bl_label or kind}) is not supported; rendered as "
                   f"diffuse {'grey 0.8' if colour_socket is None else 'of its ' + colour_socket}")
         return MaterialSpec("diffuse", name, {"colour": colour})
+
+    def multiscatter(self, node):
+        """Whether a microfacet node is Multiscatter GGX (energy compensated) or plain GGX;
+        other distributions render as GGX, with a warning."""
+        distribution = getattr(node, "distribution", "MULTI_GGX")
+        if distribution not in ("GGX", "MULTI_GGX") and self.unit(node, "Roughness") > \
+                ROUGHNESS_EPSILON:
+            self.warn(f"node '{node.name}' distribution {distribution} is not supported; "
+                      f"rendered as GGX")
+        return distribution == "MULTI_GGX"
 
     def ior(self, node):
         ior = self.number(node, "IOR", 1.5)
@@ -659,8 +668,9 @@ class _Reader:
                 self.warn(f"node '{node.name}' {label} {w:.3g} is not supported (only 0 or 1); "
                           f"treated as {1 if w >= 0.5 else 0}")
         if transmission >= 0.5:
-            ctor, kwargs = "principled_glass", {"base_colour": self.colour(node, "Base Color"),
-                                                "ior": self.ior(node), **kwargs}
+            return MaterialSpec("principled_glass", name, {
+                "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
+                "roughness": roughness, "multiscatter": self.multiscatter(node), **kwargs})
         elif metallic >= 0.5:
             base, program = self.textured_colour(node, "Base Color")
             ctor, kwargs = "metal", {"base_colour": base, **_with(program), **kwargs}

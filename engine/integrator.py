@@ -38,7 +38,7 @@ from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SU
 from .sampling import (BSDF, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE, ROULETTE,
                        bounce_dim, pixel_seed, power_heuristic, reverse_bits, sample_1d,
                        sample_2d)
-from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED
+from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED, ROUGH_GLASS
 
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
 # a few float32 ulps (embree intersects in float32), so the offset scales with the scene.
@@ -49,12 +49,13 @@ ROULETTE_MIN_BOUNCE = 2
 # ------------------------------------------------------------------ the plan's constants
 # What a kernel compiles in (Plan.kernel_key): the generic kernel's values, all on.
 PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_ROUGH",
+                  "HAS_ROUGH_GLASS",
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
-HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = True
+HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
 HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
 HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
@@ -299,6 +300,22 @@ def surface_colour(x, sc, paths):
     return c0, c1, c2
 
 
+def rough_lobe(x, k, c, sc):
+    """The rough lobe (bsdf.Layer) of vertex x of kind k with surface colour c: the
+    Principled or Glossy layer, or rough glass on the side wo sees; empty for others."""
+    mt = sc.materials
+    mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
+    if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
+        textured = False
+        if HAS_TEXTURES:
+            textured = mt.programs.colour[x.mat, 0] >= 0
+        return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2])
+    if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
+        return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers,
+                                   mt.reflection_tint[x.mat], mt.transmission_tint[x.mat])
+    return bsdf.no_layer()
+
+
 def handle_emission(i, row, depth, x, sc, paths, mis):
     """Emission of the hit triangle (two-sided), MIS-weighted against light sampling after
     soft bounces, and against light tracing at the end of a diffuse -> specular chain
@@ -368,6 +385,14 @@ def emitter_pmf(px, py, pz, normal, entry, em):
     return em.pmf[entry]
 
 
+def lit_side(x, sc):
+    """The normal whose side light reaches vertex x from, for choosing emitters by their
+    importance there: the shading normal, or zeros (both sides) where the BSDF transmits."""
+    if HAS_ROUGH_GLASS and sc.materials.kind[x.mat] == ROUGH_GLASS:
+        return 0.0, 0.0, 0.0
+    return x.sx, x.sy, x.sz
+
+
 def sample_emitter(x, u_sel, ua, ub, sc, paths):
     """An emitter chosen from the vertex (by power, or by the grid's local distribution)
     and a point or direction on it: (wi, distance (inf: none), radiance / (selection x
@@ -379,8 +404,9 @@ def sample_emitter(x, u_sel, ua, ub, sc, paths):
         e, p_sel = lights.choose(x.px, x.py, x.pz, u_sel, em.pmf, em.cdf, em.grid, em.lo,
                                  em.cell, em.local_pmf, em.local_cdf_flat, em.has_mass)
     elif HAS_LIGHT_IMPORTANCE and len(em.bounds) > 0:
-        e, p_sel = lights.choose_by_importance(x.px, x.py, x.pz, x.sx, x.sy, x.sz, u_sel,
-                                               em.pmf, em.cdf, em.bounds)
+        nx, ny, nz = lit_side(x, sc)
+        e, p_sel = lights.choose_by_importance(x.px, x.py, x.pz, nx, ny, nz, u_sel, em.pmf,
+                                               em.cdf, em.bounds)
     else:
         e = lights.sample_cdf(em.cdf, u_sel)
         p_sel = em.pmf[e]
@@ -454,6 +480,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         g0, g1, g2, pdf_b = bsdf.eval_layered(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz,
                                               x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False)
+    elif HAS_ROUGH_GLASS and k == ROUGH_GLASS:
+        g0, g1, g2, pdf_b = bsdf.eval_rough_dielectric(x.wox, x.woy, x.woz, wx, wy, wz, x.mx,
+                                                       x.my, x.mz, lobe)
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
         g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
@@ -497,6 +526,11 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         return bsdf.sample_layered(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.mx, x.my, x.mz,
                                    x.nx, x.ny, x.nz, lobe, u_lobe, ua, ub)
+    if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
+        u_lobe = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        return bsdf.sample_rough_dielectric(x.wox, x.woy, x.woz, x.mx, x.my, x.mz, x.nx, x.ny,
+                                            x.nz, lobe, u_lobe, ua, ub)
     if HAS_DIFFUSE and k == DIFFUSE:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
@@ -552,7 +586,7 @@ def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
         abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)), eta
 
 
-def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
+def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
     """Continue the path as row `out` of the compacted batch: leave the surface toward the
     side of the new direction, into embree's buffers."""
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
@@ -567,10 +601,10 @@ def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths):
     paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
     paths.throughput[out, 0], paths.throughput[out, 1], paths.throughput[out, 2] = t0, t1, t2
     paths.prev_pdf[out] = pdf
-    # Light choice by importance weighs emitters by the cosine at this vertex's shading
-    # normal (on wo's side: the NEE vertices only reflect); MIS at the next hit re-weighs.
+    # Light choice by importance weighs emitters by the cosine at this vertex's normal
+    # (lit_side); MIS at the next hit re-weighs.
     paths.prev_normal[out, 0], paths.prev_normal[out, 1], paths.prev_normal[out, 2] = (
-        x.sx, x.sy, x.sz)
+        lit_side(x, sc))
     paths.live[out] = row
 
 
@@ -612,17 +646,11 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             continue
         paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = t0, t1, t2
         c = surface_colour(x, sc, paths)
-        lobe = bsdf.Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0)
-        if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
-            mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
-            textured = False
-            if HAS_TEXTURES:
-                textured = sc.materials.programs.colour[x.mat, 0] >= 0
-            lobe = bsdf.layer_at(x.mat, mu, sc.materials.ior[x.mat], sc.materials.layers,
-                                 textured, c[0], c[1], c[2])
+        lobe = rough_lobe(x, k, c, sc)
         if PROFILE:
             c_light = _cycles()
-        if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY):
+        if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
+                                   or k == ROUGH_GLASS):
             n_shadow = sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:
@@ -637,7 +665,7 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             if HAS_LIGHT_TRACING:
                 cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
                 paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
-            spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, paths)
+            spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
             out += 1
         if PROFILE:
             profile[2] += _cycles() - c_bsdf
@@ -673,8 +701,8 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
-    surface_colour, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
-    sample_emitter, textured_emitter,
+    surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
+    lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

@@ -30,7 +30,7 @@ from .film import filter_density
 from .integrator import (DIFFUSE, GLASS, METAL, MIRROR, ray_offset, russian_roulette,
                          sample_bsdf, surface_colour, surface_interaction)
 from .jit import ALLOCATING, INLINE, JIT
-from .bsdf import Layer
+from .bsdf import no_layer
 from .sampling import (LIGHT_POINT, LIGHT_SELECT, bounce_dim, build_frame, concentric_disk,
                        cosine_hemisphere, hash_combine, pixel_seed, reverse_bits, sample_1d,
                        sample_2d, sample_cdf, uniform_triangle)
@@ -223,7 +223,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
     Lambertian vertex after a specular one, go on through specular vertices, end
     otherwise. Returns (paths that go on, connections queued)."""
     out = 0
-    no_lobe = Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0)
+    no_lobe = no_layer()
     for i in range(m):
         row = lp.live[i]
         f = prim[i]

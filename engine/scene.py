@@ -21,11 +21,13 @@ from .jit import ALLOCATING, njit
 from .shading import Program, ProgramTable, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
-NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY = 0, 1, 2, 3, 4, 5, 6
+NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS = 0, 1, 2, 3, 4, 5, 6, 7
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
-              PRINCIPLED: "principled", GLOSSY: "glossy"}
+              PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
+# Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
+DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
 TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal")
@@ -80,6 +82,9 @@ class Material:
           GGX energy compensation); the base keeps 1 - the layer's albedo.
         - glossy: Glossy BSDF with roughness > 0: Multiscatter GGX reflection tinted by
           `colour`, no Fresnel.
+        - rough_glass: glass with roughness > 0: GGX reflection and refraction (Walter et
+          al. 2007) with the tints and the dielectric Fresnel of glass, Multiscatter GGX
+          energy compensation from the glass' own albedo tables (bsdf.py).
         - none: no BSDF (a pure Emission shader): paths end here.
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
@@ -98,6 +103,9 @@ class Material:
     transmission_tint: tuple = (1.0, 1.0, 1.0)
     emission: tuple = (0.0, 0.0, 0.0)
     roughness: float = 0.0
+    # Multiscatter GGX (Cycles' default distribution): the energy single scattering misses
+    # is given back (Kulla-Conty); False is Cycles' plain GGX.
+    multiscatter: bool = True
     colour_program: Program | None = field(default=None, compare=False)
     emission_program: Program | None = field(default=None, compare=False)
 
@@ -121,19 +129,21 @@ class Material:
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
-              emission_program=None):
+              emission_program=None, roughness=0.0, multiscatter=True):
         """Cycles' Glass BSDF: colour tints reflection and transmission alike."""
         c = tuple(colour)
-        return cls(name, "glass", c, ior, c, c, tuple(emission),
+        return cls(name, _glass_kind(roughness, ior), c, ior, c, c, tuple(emission),
+                   roughness=float(roughness), multiscatter=bool(multiscatter),
                    emission_program=emission_program)
 
     @classmethod
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
-                         emission_program=None):
+                         emission_program=None, roughness=0.0, multiscatter=True):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
         base = np.clip(np.asarray(base_colour, dtype=np.float64), 0.0, 1.0)
-        return cls(name, "glass", tuple(base_colour), ior, (1.0, 1.0, 1.0),
-                   tuple(np.sqrt(base)), tuple(emission), emission_program=emission_program)
+        return cls(name, _glass_kind(roughness, ior), tuple(base_colour), ior, (1.0, 1.0, 1.0),
+                   tuple(np.sqrt(base)), tuple(emission), roughness=float(roughness),
+                   multiscatter=bool(multiscatter), emission_program=emission_program)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
@@ -153,13 +163,13 @@ class Material:
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
-               colour_program=None, emission_program=None):
+               colour_program=None, emission_program=None, multiscatter=True):
         """Glossy BSDF: a mirror at (Cycles-)zero roughness, else rough GGX reflection."""
         if roughness <= DELTA_ROUGHNESS:
             return cls.mirror(name, colour, emission, colour_program, emission_program)
         return cls(name, "glossy", tuple(colour), emission=tuple(emission),
-                   roughness=float(roughness), colour_program=colour_program,
-                   emission_program=emission_program)
+                   roughness=float(roughness), multiscatter=bool(multiscatter),
+                   colour_program=colour_program, emission_program=emission_program)
 
     @classmethod
     def emission_only(cls, name, colour=(1, 1, 1), strength=1.0, emission_program=None):
@@ -168,14 +178,21 @@ class Material:
                    emission_program=emission_program)
 
 
+def _glass_kind(roughness, ior) -> str:
+    """Smooth glass at Cycles' delta roughness, or at an IOR refracting straight through."""
+    rough = roughness > DELTA_ROUGHNESS and abs(float(ior) - 1.0) >= DELTA_IOR
+    return "rough_glass" if rough else "glass"
+
+
 @dataclass(frozen=True)
 class Materials:
     """The materials table as arrays; row i describes material index i.
 
-    kind : (k,) int32, one of NONE, DIFFUSE, MIRROR, METAL, GLASS
+    kind : (k,) int32, one of the kinds above (KIND_NAMES)
     colour, reflection_tint, transmission_tint, emission : (k, 3) float64
     ior : (k,) float64
     names : list of k str
+    roughness : (k,) float64; multiscatter : (k,) bool (Material.multiscatter)
     """
 
     kind: np.ndarray
@@ -186,6 +203,7 @@ class Materials:
     emission: np.ndarray
     names: list
     roughness: np.ndarray | None = None
+    multiscatter: np.ndarray | None = None
     # Per material its colour's and its emission's shading.Program or None (textures).
     colour_programs: list | None = None
     emission_programs: list | None = None
@@ -225,6 +243,7 @@ class Materials:
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
+                   np.array([bool(m.multiscatter) for m in materials]),
                    programs if textured else None, emission_programs if textured else None)
 
     def __len__(self):

@@ -55,7 +55,7 @@ def lens_for_fov(fov_deg, sensor=36.0):
 
 def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, spheres=True,
                 glass_ior=1.45, mirror=True, glass=True, light_half=(0.4, 0.3), light_z=1.49,
-                light_mesh=True):
+                light_mesh=True, glass_roughness=0.0):
     b = builder or SceneBuilder()
     grey = b.add_material(Material.diffuse("white", (0.6, 0.6, 0.6)))
     red = b.add_material(Material.diffuse("red", (0.6, 0.2, 0.2)))
@@ -80,7 +80,8 @@ def cornell_box(builder: SceneBuilder | None = None, emitter_radiance=10.0, sphe
             v, t, n = uv_sphere((-0.45, 0.2, 0.3), 0.3)
             b.add_mesh("mirror sphere", v, t, mm, corner_normals=n)
         if glass:
-            gm = b.add_material(Material.glass("glass", (1, 1, 1), glass_ior))
+            gm = b.add_material(Material.glass("glass", (1, 1, 1), glass_ior,
+                                               roughness=glass_roughness))
             v, t, n = uv_sphere((0.45, -0.2, 0.3), 0.3)
             b.add_mesh("glass sphere", v, t, gm, corner_normals=n)
     return b

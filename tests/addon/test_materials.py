@@ -19,11 +19,11 @@ def convert(mat):
     ("ShaderNodeBsdfDiffuse", {"Color": (0.6, 0.2, 0.2, 1), "Roughness": 0.0}, "diffuse",
      {"colour": (0.6, 0.2, 0.2)}),
     ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.0}, "glossy",
-     {"colour": (1.0, 0.8, 0.4), "roughness": 0.0}),
+     {"colour": (1.0, 0.8, 0.4), "roughness": 0.0, "multiscatter": True}),
     ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.3}, "glossy",
-     {"colour": (1.0, 0.8, 0.4), "roughness": 0.3}),
+     {"colour": (1.0, 0.8, 0.4), "roughness": 0.3, "multiscatter": True}),
     ("ShaderNodeBsdfGlass", {"Color": WHITE, "Roughness": 0.0, "IOR": 1.45}, "glass",
-     {"colour": (1.0, 1.0, 1.0), "ior": 1.45}),
+     {"colour": (1.0, 1.0, 1.0), "ior": 1.45, "roughness": 0.0, "multiscatter": True}),
     ("ShaderNodeEmission", {"Color": WHITE, "Strength": 10.0}, "emission_only",
      {"colour": (1.0, 1.0, 1.0), "strength": 10.0}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
@@ -34,7 +34,7 @@ def convert(mat):
                                   "Roughness": 0.0}, "metal", {"base_colour": (0.9, 0.6, 0.2)}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": WHITE, "Transmission Weight": 1.0,
                                   "Roughness": 0.0, "IOR": 1.33}, "principled_glass",
-     {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33}),
+     {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33, "roughness": 0.0, "multiscatter": True}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.1, 0.1, 0.1, 1), "Emission Color":
                                   (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "principled",
      {"base_colour": (0.1, 0.1, 0.1), "roughness": 0.5, "ior": 1.5, "specular_ior_level": 0.5,
@@ -80,13 +80,36 @@ def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     assert spec.kwargs["colour"] == pytest.approx(expected, abs=1e-6)
 
 
-@pytest.mark.parametrize("shader, ctor", [("ShaderNodeBsdfGlass", "glass"),
-                                          ("ShaderNodeBsdfDiffuse", "diffuse")])
-def test_rough_nodes_warn_and_render_smooth(fresh, shader, ctor):
-    mat, node = node_material("Rough", shader, Roughness=0.4)
+def test_rough_diffuse_warns_and_renders_lambert(fresh):
+    mat, node = node_material("Rough", "ShaderNodeBsdfDiffuse", Roughness=0.4)
     spec, warnings = convert(mat)
-    assert spec.ctor == ctor
+    assert spec.ctor == "diffuse"
     assert len(warnings) == 1 and "roughness" in warnings[0] and "'Rough'" in warnings[0]
+
+
+@pytest.mark.parametrize("distribution, multiscatter, warned", [
+    ("MULTI_GGX", True, False), ("GGX", False, False), ("BECKMANN", False, True)])
+def test_rough_glass_keeps_its_roughness_and_distribution(fresh, core, distribution, multiscatter,
+                                                          warned):
+    mat, node = node_material("Frosted", "ShaderNodeBsdfGlass", Roughness=0.4, IOR=1.33,
+                              Color=(0.5, 0.9, 0.7, 1.0))
+    node.distribution = distribution
+    spec, warnings = convert(mat)
+    assert spec.ctor == "glass" and spec.kwargs["roughness"] == pytest.approx(0.4)
+    assert spec.kwargs["multiscatter"] is multiscatter
+    assert (len(warnings) == 1 and "BECKMANN" in warnings[0]) if warned else warnings == []
+    m = spec.to_core(core)
+    assert m.kind == "rough_glass" and m.colour == pytest.approx((0.5, 0.9, 0.7))
+    assert m.ior == pytest.approx(1.33) and m.multiscatter is multiscatter
+
+
+def test_rough_principled_glass_is_rough_glass(fresh, core):
+    mat, node = node_material("Frosted", "ShaderNodeBsdfPrincipled", Roughness=0.3,
+                              **{"Transmission Weight": 1.0, "Base Color": (0.6, 0.8, 1.0, 1)})
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    assert warnings == [] and m.kind == "rough_glass" and m.roughness == pytest.approx(0.3)
+    assert m.transmission_tint == pytest.approx(tuple(np.sqrt((0.6, 0.8, 1.0))))
 
 
 def test_linked_checker_uses_the_mean_of_its_colours(fresh):

@@ -58,6 +58,9 @@ def _all_features(seeds, avoid_known=False):
                      if o["material"].get("emission_strength"))
         found.update("rough glossy" for o in p["objects"]
                      if o["material"]["kind"] == "glossy" and o["material"]["roughness"] > 0)
+        found.update("rough glass" for o in p["objects"]
+                     if o["material"]["kind"] in ("glass", "principled_glass")
+                     and o["material"]["roughness"] > 0)
         found.update("smooth monkey" for o in p["objects"]
                      if o["shape"] == "monkey" and o["smooth"])
         found.update(f"known:{k}" for k in fuzz.known_issue_features(p))
@@ -69,8 +72,8 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "sun angle", "spread", "visible light", "hard falloff", "world:black",
               "world:colour", "world:map", "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
-              "principled emission", "rough glossy", "smooth monkey", "bounces:0", "bounces:12",
-              "known:a", "known:b", "known:c"}
+              "principled emission", "rough glossy", "rough glass", "smooth monkey", "bounces:0",
+              "bounces:12",              "known:a", "known:b", "known:c"}
 
 
 def test_generator_covers_every_supported_feature():
@@ -87,7 +90,7 @@ def test_ci_seeds_cover_the_features():
     # What the fixed CI seeds exercise together; the rest is for `make fuzz`.
     found = _all_features(CI_SEEDS)
     wanted = {*fuzz.MATERIAL_KINDS, *fuzz.LIGHT_TYPES, "ORTHO", "PERSP", "world:map",
-              "world:colour", "dof blades"}
+              "world:colour", "dof blades", "rough glass"}
     assert wanted <= found, f"CI seeds miss {sorted(wanted - found)}"
 
 

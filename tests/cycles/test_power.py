@@ -180,6 +180,57 @@ def _emission_as_its_mean(scene, settings):
     return scene, settings
 
 
+def _rough_glass_roughness_plus_10_percent(scene, settings):
+    m = scene.materials
+    rough = m.kind == renderers.core().scene.ROUGH_GLASS
+    scene.materials = dataclasses.replace(
+        m, roughness=np.where(rough, np.minimum(m.roughness * 1.1, 1.0), m.roughness))
+    return scene, settings
+
+
+@contextmanager
+def _glass_fss_white():
+    """Rough glass compensated with Fss = 1 whatever its tints: a tinted glass' colour would
+    not darken what multiple scattering gives back (bsdf.glass_fss builds the kernel's
+    tables, in Python)."""
+    bsdf = renderers.core().bsdf
+    glass_fss = bsdf.glass_fss
+    bsdf.glass_fss = lambda r, t, eta: np.ones(3)
+    try:
+        yield
+    finally:
+        bsdf.glass_fss = glass_fss
+
+
+def physical_refraction(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
+    """bsdf.eval_rough_dielectric that is zero where the microfacet joining wo and wi faces
+    away from either (the check Cycles' eval leaves as a TODO; its sampling never goes
+    there)."""
+    g0, g1, g2, pdf = original_eval(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe)  # noqa
+    transmit = mx * wix + my * wiy + mz * wiz < 0.0
+    s = lobe.eta if transmit else 1.0
+    hx, hy, hz = -(s * wix + wox), -(s * wiy + woy), -(s * wiz + woz)
+    if hx * mx + hy * my + hz * mz < 0.0:
+        hx, hy, hz = -hx, -hy, -hz
+    if not (hx * wox + hy * woy + hz * woz > 0.0
+            and (hx * wix + hy * wiy + hz * wiz < 0.0) == transmit):
+        return 0.0, 0.0, 0.0, 0.0
+    return g0, g1, g2, pdf
+
+
+@contextmanager
+def _refraction_validity_checked():
+    """Rough glass evaluated only where a microfacet can join the two directions (a one-off
+    kernel): next-event estimation at rough glass then misses what Cycles' eval adds."""
+    from tests.patching import module_with, one_off_kernels
+
+    bsdf = renderers.core().bsdf
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, bsdf=module_with(bsdf, eval_rough_dielectric=physical_refraction,
+                                             original_eval=bsdf.eval_rough_dielectric))
+        yield
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -199,6 +250,11 @@ INJECTIONS = {
     "textures_as_their_means": ("textured_walls", _textures_as_their_means, None),
     "textured_emission_as_its_mean": ("textured_emitter", _emission_as_its_mean, None),
     "light_samples_untextured": ("textured_emitter", None, _light_samples_untextured),
+    "rough_glass_roughness_plus_10_percent": ("rough_glass_roughness",
+                                              _rough_glass_roughness_plus_10_percent, None),
+    "rough_glass_fss_white": ("rough_glass_tinted", None, _glass_fss_white),
+    "refraction_validity_checked": ("rough_glass_roughness", None,
+                                    _refraction_validity_checked),
 }
 
 

@@ -592,6 +592,41 @@ def glossy_roughness():
     _glossy_balls((((0.2, 0.3, 0.6), 0.2), ((0.2, 0.3, 0.6), 0.5), ((0.2, 0.3, 0.6), 1.0)))
 
 
+def _rough_glass_balls(materials):
+    """Spheres of the given materials on the floor of the box (built first, as it clears the
+    file) under its ceiling emitter, seen against the red, grey and blue walls."""
+    xs = np.linspace(-0.6, 0.6, len(materials))
+    for i, mat in enumerate(materials):
+        _sphere(mat, (float(xs[i]), 0.0, 0.27), 0.27, f"Ball{i}")
+
+
+def _glass(name, colour, roughness, distribution="MULTI_GGX", ior=1.45):
+    mat = bs.material(name, "ShaderNodeBsdfGlass", Color=colour + (1.0,), Roughness=roughness,
+                      IOR=ior)
+    next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfGlass").distribution = \
+        distribution
+    return mat
+
+
+def rough_glass_roughness():
+    """Clear Glass BSDF (Multiscatter GGX, IOR 1.45) at roughness 0.15, 0.4 and 0.8."""
+    _box()
+    _rough_glass_balls([_glass(f"Frosted{i}", (1.0, 1.0, 1.0), r)
+                        for i, r in enumerate((0.15, 0.4, 0.8))])
+
+
+def rough_glass_tinted():
+    """A tinted Multiscatter GGX glass, a plain GGX one (no energy compensation) and a
+    very rough Principled glass (sqrt(base) transmission tint, which also darkens what
+    the energy compensation gives back; IOR 1.5)."""
+    _box()
+    _rough_glass_balls([
+        _glass("Tinted", (0.5, 0.9, 0.7), 0.5),
+        _glass("PlainGGX", (1.0, 1.0, 1.0), 0.5, "GGX"),
+        _principled("PFrosted", **{"Base Color": (0.3, 0.8, 1.0, 1.0), "Roughness": 0.8,
+                                   "IOR": 1.5, "Transmission Weight": 1.0})])
+
+
 def _low_poly_sphere(name, centre, radius, mat, segments=10):
     """A smooth-shaded UV sphere coarse enough that its terminator shows the facets."""
     import bmesh
@@ -919,6 +954,10 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
                spot_scaled, spot_seen_glass_mirror, spot_through_ceiling, glossy_colours,
                glossy_roughness):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
+# Rough glass (issue 14): light reaches the floor and the camera through two rough
+# interfaces, mostly by next-event estimation at the inner one.
+for _setup in (rough_glass_roughness, rough_glass_tinted):
+    _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,
              files=(BLEND["cbspheres.blend"],)))

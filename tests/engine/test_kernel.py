@@ -137,6 +137,24 @@ def test_principled_and_rough_glossy_same_in_both_kernels(emitters):
     assert_same_image(a, c)
 
 
+def test_rough_glass_same_in_both_kernels():
+    """Rough glass on both sides of its surface: light sampling through it (emitters
+    chosen by their importance on both sides), compensation tables per side."""
+    b = scenes.cornell_box(spheres=False)
+    mats = [b.add_material(Material.glass("frosted", (0.9, 0.6, 0.8), 1.6, roughness=0.4)),
+            b.add_material(Material.principled_glass("pfrost", (0.4, 0.9, 0.7), 1.33,
+                                                     roughness=0.8)),
+            b.add_material(Material.glass("plain", (1, 1, 1), 1.45, roughness=0.2,
+                                          multiscatter=False))]
+    for m, x in zip(mats, (-0.55, 0.0, 0.55)):
+        v, t, n = scenes.uv_sphere((x, 0.1, 0.3), 0.25)
+        b.add_mesh(f"sphere {x}", v, t, m, corner_normals=n)
+    scene = b.build(scenes.cornell_camera(), World((0, 0, 0)))
+    a, c = both(scene)
+    assert a.combined[..., :3].mean() > 0.05
+    assert_same_image(a, c)
+
+
 @pytest.mark.parametrize("light", ["area", "point"])
 def test_shadow_terminator_offset_same_in_both_kernels(light):
     """Coarse smooth spheres with terminator offsets 0, 0.1 and 1 lit from the side: the
@@ -328,6 +346,7 @@ def _fresh_kernel(scene, constants):
 
 # A formula only a feature uses (compiled on its own, so its name is in the kernel's IR).
 MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
+           "HAS_ROUGH_GLASS": "rough_dielectric",
            "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",

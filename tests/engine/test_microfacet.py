@@ -17,7 +17,8 @@ RES = 31
 def specular_lobe(alpha):
     """A layered lobe that is GGX reflection alone: no base, white tint, no Fresnel and no
     compensation, chosen with probability 1."""
-    return bsdf.Layer(0.0, 0.0, 0.0, 1.0, 1.0, 1.0, alpha, 1.5, False, 1.0, 1.0, 1.0, 1.0)
+    return bsdf.Layer(0.0, 0.0, 0.0, 1.0, 1.0, 1.0, alpha, 1.5, False, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
+                      0.0)
 
 
 @njit(cache=True)
