@@ -16,9 +16,9 @@ Fallbacks:
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
   * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR, roughness), else Metallic
-    >= 0.5 -> metal, else a Lambert base under a GGX dielectric layer; roughness ignored
-    for metal (warned). Inputs Specula does not render (Alpha, Coat, Sheen, Subsurface,
-    Anisotropic, Specular Tint, Thin Film, Diffuse Roughness, normal maps) warn when used.
+    >= 0.5 -> metal (roughness), else a Lambert base under a GGX dielectric layer. Inputs
+    Specula does not render (Alpha, Coat, Sheen, Subsurface, Anisotropic, Specular Tint,
+    Thin Film, Diffuse Roughness, normal maps) warn when used.
   * any other shader node (Mix, Add, Toon, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
@@ -671,21 +671,20 @@ class _Reader:
             return MaterialSpec("principled_glass", name, {
                 "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
                 "roughness": roughness, "multiscatter": self.multiscatter(node), **kwargs})
-        elif metallic >= 0.5:
-            base, program = self.textured_colour(node, "Base Color")
-            ctor, kwargs = "metal", {"base_colour": base, **_with(program), **kwargs}
-        else:
-            # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
-            base, program = self.textured_colour(node, "Base Color")
-            level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
-                if "Specular IOR Level" in node.inputs else 0.5
-            return MaterialSpec("principled", name, {
+        base, program = self.textured_colour(node, "Base Color")
+        if metallic >= 0.5:
+            return MaterialSpec("metal", name, {
                 "base_colour": base, **_with(program), "roughness": roughness,
-                "ior": self.ior(node), "specular_ior_level": level, **kwargs})
-        if roughness > ROUGHNESS_EPSILON:
-            self.warn(f"node '{node.name}' roughness {roughness:.3g} is not supported; "
-                      f"rendered smooth (roughness 0)")
-        return MaterialSpec(ctor, name, kwargs)
+                "multiscatter": self.multiscatter(node), **kwargs})
+        # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
+        if not self.multiscatter(node) and roughness > ROUGHNESS_EPSILON:
+            self.warn(f"node '{node.name}' distribution GGX is not supported for the "
+                      f"dielectric layer; rendered as Multiscatter GGX")
+        level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
+            if "Specular IOR Level" in node.inputs else 0.5
+        return MaterialSpec("principled", name, {
+            "base_colour": base, **_with(program), "roughness": roughness,
+            "ior": self.ior(node), "specular_ior_level": level, **kwargs})
 
 
 def convert(material, image_cache=None):

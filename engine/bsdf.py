@@ -24,7 +24,7 @@ import numpy as np
 
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
-from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS
+from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL
 
 DELTA_PDF = np.inf
 
@@ -425,6 +425,12 @@ def layer_tables(materials, used) -> LayerTables:
                 (fms, fms_back)[side][j] = f
                 (missing, missing_back)[side][j] = table
             continue
+        if materials.kind[j] == ROUGH_METAL:
+            tables = MicrofacetTables(max(float(roughness[j]) ** 2, MIN_ALPHA), "none")
+            alpha[j], tint[j], e_avg[j] = tables.alpha, materials.colour[j], tables.e_avg
+            fms[j] = tables.multiscatter_fresnel([schlick_fss(c) for c in materials.colour[j]])
+            missing[j] = tables.missing_table if multiscatter[j] else 0.0
+            continue
         if materials.kind[j] not in (PRINCIPLED, GLOSSY):
             continue
         principled = materials.kind[j] == PRINCIPLED
@@ -482,6 +488,32 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2):
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, lt.alpha[mat], eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
+                 0.0, 0.0, 0.0)
+
+
+@njit(**JIT)
+def schlick_fss(f0):
+    """The hemispherical average 2 int F mu dmu of Schlick's F = F0 + (1 - F0)(1 - mu)^5
+    (Cycles' fresnel_f82_Fss with a white tint): F0 + (1 - F0) / 21."""
+    g = min(max(f0, 0.0), 1.0)
+    return g + (1.0 - g) / 21.0
+
+
+@njit(**INLINE)
+def metal_layer_at(mat, mu, lt, textured, c0, c1, c2):
+    """The rough metal lobe of material `mat` at view cosine mu from its LayerTables lt:
+    tint is the Fresnel's F0 (the base colour, or c where it is textured)."""
+    missing = guided_interp(mu, lt.mu, lt.missing[mat], lt.mu_guide)
+    f0, f1, f2 = lt.fms[mat, 0], lt.fms[mat, 1], lt.fms[mat, 2]
+    tint0, tint1, tint2 = lt.tint[mat, 0], lt.tint[mat, 1], lt.tint[mat, 2]
+    if textured:
+        tint0, tint1, tint2 = c0, c1, c2
+        e = lt.e_avg[mat]
+        f0, f1, f2 = (multiscatter_fresnel(schlick_fss(c0), e),
+                      multiscatter_fresnel(schlick_fss(c1), e),
+                      multiscatter_fresnel(schlick_fss(c2), e))
+    return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, lt.alpha[mat], 1.0, False,
+                 1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  0.0, 0.0, 0.0)
 
 
@@ -643,5 +675,46 @@ def sample_rough_dielectric(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, u_lobe,
         return wx, wy, wz, 0.0, 0.0, 0.0, 0.0, False
     g0, g1, g2, pdf = eval_rough_dielectric(wox, woy, woz, wx, wy, wz, mx, my, mz, lobe)
     if pdf > 0:
+        return wx, wy, wz, g0 / pdf, g1 / pdf, g2 / pdf, pdf, True
+    return wx, wy, wz, 0.0, 0.0, 0.0, pdf, False
+
+
+# ----------------------------------------------------------------- rough metal
+# Cycles' Principled metallic at roughness > 0: GGX reflection (as the Glossy lobe) whose
+# Fresnel is the metal's F82-tint (white tint: Schlick with F0 = base colour) at the
+# microfacet, per channel.
+
+
+@njit(**JIT)
+def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, lobe):
+    """The rough metal lobe's f * cos_i per channel and its pdf toward wi (lobe.tint the
+    F0 per channel), above the geometric surface as the layered lobe's specular part."""
+    hx, hy, hz = wox + wix, woy + wiy, woz + wiz
+    hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
+    hx, hy, hz = hx / hl, hy / hl, hz / hl
+    cos_hv = hx * wox + hy * woy + hz * woz
+    spec, pdf = eval_ggx(mx * wox + my * woy + mz * woz, mx * wix + my * wiy + mz * wiz,
+                         mx * hx + my * hy + mz * hz, cos_hv, lobe.alpha * lobe.alpha, 1.0,
+                         False)
+    if not wix * nx + wiy * ny + wiz * nz > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return (spec * fresnel_schlick_conductor(cos_hv, lobe.tint0) * lobe.comp0,
+            spec * fresnel_schlick_conductor(cos_hv, lobe.tint1) * lobe.comp1,
+            spec * fresnel_schlick_conductor(cos_hv, lobe.tint2) * lobe.comp2, pdf)
+
+
+@njit(**JIT)
+def sample_rough_conductor(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, ua, ub):
+    """Sample the rough metal lobe about m: a visible normal, the mirror direction.
+    Returns (w, weight (3 values), pdf, ok)."""
+    s, t = build_frame(mx, my, mz)
+    hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
+                                    wox * t[0] + woy * t[1] + woz * t[2],
+                                    wox * mx + woy * my + woz * mz, lobe.alpha, ua, ub)
+    wx, wy, wz, _ = reflect(wox, woy, woz, hx * s[0] + hy * t[0] + hz * mx,
+                            hx * s[1] + hy * t[1] + hz * my, hx * s[2] + hy * t[2] + hz * mz)
+    g0, g1, g2, pdf = eval_rough_conductor(wox, woy, woz, wx, wy, wz, mx, my, mz, nx, ny, nz,
+                                           lobe)
+    if pdf > 0 and max(g0, max(g1, g2)) > 0:
         return wx, wy, wz, g0 / pdf, g1 / pdf, g2 / pdf, pdf, True
     return wx, wy, wz, 0.0, 0.0, 0.0, pdf, False

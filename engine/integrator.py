@@ -38,7 +38,8 @@ from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SU
 from .sampling import (BSDF, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE, ROULETTE,
                        bounce_dim, pixel_seed, power_heuristic, reverse_bits, sample_1d,
                        sample_2d)
-from .scene import DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED, ROUGH_GLASS
+from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED, ROUGH_GLASS,
+                    ROUGH_METAL)
 
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
 # a few float32 ulps (embree intersects in float32), so the offset scales with the scene.
@@ -49,13 +50,14 @@ ROULETTE_MIN_BOUNCE = 2
 # ------------------------------------------------------------------ the plan's constants
 # What a kernel compiles in (Plan.kernel_key): the generic kernel's values, all on.
 PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_ROUGH",
-                  "HAS_ROUGH_GLASS",
+                  "HAS_ROUGH_GLASS", "HAS_ROUGH_METAL",
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
+HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
 HAS_LIGHT_SAMPLING = HAS_LIGHT_OBJECTS = HAS_LIGHT_HITS = HAS_SUN_DISCS = True
 HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
@@ -302,7 +304,8 @@ def surface_colour(x, sc, paths):
 
 def rough_lobe(x, k, c, sc):
     """The rough lobe (bsdf.Layer) of vertex x of kind k with surface colour c: the
-    Principled or Glossy layer, or rough glass on the side wo sees; empty for others."""
+    Principled or Glossy layer, rough metal, or rough glass on the side wo sees; empty for
+    others."""
     mt = sc.materials
     mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
@@ -310,6 +313,11 @@ def rough_lobe(x, k, c, sc):
         if HAS_TEXTURES:
             textured = mt.programs.colour[x.mat, 0] >= 0
         return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2])
+    if HAS_ROUGH_METAL and k == ROUGH_METAL:
+        textured = False
+        if HAS_TEXTURES:
+            textured = mt.programs.colour[x.mat, 0] >= 0
+        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2])
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers,
                                    mt.reflection_tint[x.mat], mt.transmission_tint[x.mat])
@@ -480,6 +488,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         g0, g1, g2, pdf_b = bsdf.eval_layered(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz,
                                               x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False)
+    elif HAS_ROUGH_METAL and k == ROUGH_METAL:
+        g0, g1, g2, pdf_b = bsdf.eval_rough_conductor(x.wox, x.woy, x.woz, wx, wy, wz, x.mx,
+                                                      x.my, x.mz, x.nx, x.ny, x.nz, lobe)
     elif HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         g0, g1, g2, pdf_b = bsdf.eval_rough_dielectric(x.wox, x.woy, x.woz, wx, wy, wz, x.mx,
                                                        x.my, x.mz, lobe)
@@ -526,6 +537,10 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         return bsdf.sample_layered(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.mx, x.my, x.mz,
                                    x.nx, x.ny, x.nz, lobe, u_lobe, ua, ub)
+    if HAS_ROUGH_METAL and k == ROUGH_METAL:
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        return bsdf.sample_rough_conductor(x.wox, x.woy, x.woz, x.mx, x.my, x.mz, x.nx, x.ny,
+                                           x.nz, lobe, ua, ub)
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         u_lobe = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
@@ -650,7 +665,7 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         if PROFILE:
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
-                                   or k == ROUGH_GLASS):
+                                   or k == ROUGH_GLASS or k == ROUGH_METAL):
             n_shadow = sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:

@@ -204,7 +204,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
                         normals, smooth, obj, offset, uv)
     m = scene.materials
-    rough = plan.principled or plan.glossy or plan.rough_glass
+    rough = plan.principled or plan.glossy or plan.rough_glass or plan.rough_metal
     used = np.unique(scene.material_index)
     layers = layer_tables(m, used) if (rough or generic) else None
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,

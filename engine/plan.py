@@ -22,6 +22,7 @@ from .scene import (
     NONE,
     PRINCIPLED,
     ROUGH_GLASS,
+    ROUGH_METAL,
     RenderSettings,
     Scene,
 )
@@ -63,12 +64,14 @@ class Plan:
     textures: bool = False
     # Glass with roughness > 0 (GGX reflection and refraction).
     rough_glass: bool = False
+    # Principled metallic with roughness > 0 (GGX reflection, per-channel Schlick Fresnel).
+    rough_metal: bool = False
 
     @property
     def light_sampling(self) -> bool:
         """Next-event estimation runs only where a non-delta surface can see an emitter."""
         return self.emitters and (self.diffuse or self.principled or self.glossy
-                                  or self.rough_glass)
+                                  or self.rough_glass or self.rough_metal)
 
     def stages(self) -> list[str]:
         s = ["generate camera rays"]
@@ -91,7 +94,8 @@ class Plan:
         kinds = [n for n, f in (("diffuse", self.diffuse), ("principled", self.principled),
                                 ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass),
-                                ("rough glass", self.rough_glass)) if f]
+                                ("rough glass", self.rough_glass),
+                                ("rough metal", self.rough_metal)) if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
         if self.light_tracing:
@@ -105,7 +109,8 @@ class Plan:
         return dict(
             HAS_DIFFUSE=self.diffuse, HAS_MIRROR=self.mirror, HAS_METAL=self.metal,
             HAS_GLASS=self.glass, HAS_ROUGH=self.principled or self.glossy,
-            HAS_ROUGH_GLASS=self.rough_glass, HAS_DOF=self.dof,
+            HAS_ROUGH_GLASS=self.rough_glass, HAS_ROUGH_METAL=self.rough_metal,
+            HAS_DOF=self.dof,
             HAS_POLYGON_APERTURE=self.polygon_aperture,
             HAS_SHADING_NORMALS=self.shading_normals, HAS_EMISSION=self.num_emitters > 0,
             HAS_LIGHT_SAMPLING=self.light_sampling, HAS_LIGHT_OBJECTS=self.light_objects > 0,
@@ -151,7 +156,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
-        rough_glass=ROUGH_GLASS in kinds,
+        rough_glass=ROUGH_GLASS in kinds, rough_metal=ROUGH_METAL in kinds,
         absorber=NONE in kinds,
         emitters=num_emitters + len(lights) > 0 or environment,
         num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,

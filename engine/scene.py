@@ -21,16 +21,17 @@ from .jit import ALLOCATING, njit
 from .shading import Program, ProgramTable, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
-NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS = 0, 1, 2, 3, 4, 5, 6, 7
+NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL = range(9)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
-              PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass"}
+              PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
+              ROUGH_METAL: "rough_metal"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
 DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
-TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal")
+TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal")
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
@@ -68,7 +69,7 @@ def _positive(value, what: str) -> float:
 class Material:
     """One row of the materials table, with Cycles' semantics (roughness 0 throughout).
 
-    kind : "none", "diffuse", "mirror", "metal" or "glass".
+    kind : one of KIND_NAMES' values.
         - diffuse: Lambert, f = colour / pi (per-bounce weight = colour).
         - mirror: Glossy BSDF at roughness 0: reflectance = colour at every angle.
         - metal: Principled metallic at roughness 0: F82-tint with white tint, i.e.
@@ -82,6 +83,9 @@ class Material:
           GGX energy compensation); the base keeps 1 - the layer's albedo.
         - glossy: Glossy BSDF with roughness > 0: Multiscatter GGX reflection tinted by
           `colour`, no Fresnel.
+        - rough_metal: Principled metallic with roughness > 0: GGX reflection with the
+          metal's Schlick (F82, white tint) Fresnel per channel, Multiscatter GGX energy
+          compensation with Fss its hemispherical average.
         - rough_glass: glass with roughness > 0: GGX reflection and refraction (Walter et
           al. 2007) with the tints and the dielectric Fresnel of glass, Multiscatter GGX
           energy compensation from the glass' own albedo tables (bsdf.py).
@@ -123,8 +127,11 @@ class Material:
 
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
-              emission_program=None):
-        return cls(name, "metal", tuple(base_colour), emission=tuple(emission),
+              emission_program=None, roughness=0.0, multiscatter=True):
+        """Principled metallic: smooth at Cycles' delta roughness, else rough."""
+        kind = "rough_metal" if roughness > DELTA_ROUGHNESS else "metal"
+        return cls(name, kind, tuple(base_colour), emission=tuple(emission),
+                   roughness=float(roughness), multiscatter=bool(multiscatter),
                    colour_program=colour_program, emission_program=emission_program)
 
     @classmethod

@@ -31,7 +31,8 @@ def convert(mat):
      {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.45,
       "specular_ior_level": 0.5}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.9, 0.6, 0.2, 1), "Metallic": 1.0,
-                                  "Roughness": 0.0}, "metal", {"base_colour": (0.9, 0.6, 0.2)}),
+                                  "Roughness": 0.0}, "metal",
+     {"base_colour": (0.9, 0.6, 0.2), "roughness": 0.0, "multiscatter": True}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": WHITE, "Transmission Weight": 1.0,
                                   "Roughness": 0.0, "IOR": 1.33}, "principled_glass",
      {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33, "roughness": 0.0, "multiscatter": True}),
@@ -101,6 +102,14 @@ def test_rough_glass_keeps_its_roughness_and_distribution(fresh, core, distribut
     m = spec.to_core(core)
     assert m.kind == "rough_glass" and m.colour == pytest.approx((0.5, 0.9, 0.7))
     assert m.ior == pytest.approx(1.33) and m.multiscatter is multiscatter
+
+
+def test_rough_principled_metal_is_rough_metal(fresh, core):
+    mat, node = node_material("Brushed", "ShaderNodeBsdfPrincipled", Roughness=0.3,
+                              **{"Metallic": 1.0, "Base Color": (0.9, 0.6, 0.2, 1)})
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    assert warnings == [] and m.kind == "rough_metal" and m.roughness == pytest.approx(0.3)
 
 
 def test_rough_principled_glass_is_rough_glass(fresh, core):

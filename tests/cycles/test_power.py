@@ -180,12 +180,14 @@ def _emission_as_its_mean(scene, settings):
     return scene, settings
 
 
-def _rough_glass_roughness_plus_10_percent(scene, settings):
-    m = scene.materials
-    rough = m.kind == renderers.core().scene.ROUGH_GLASS
-    scene.materials = dataclasses.replace(
-        m, roughness=np.where(rough, np.minimum(m.roughness * 1.1, 1.0), m.roughness))
-    return scene, settings
+def _roughness_plus_10_percent(kind):
+    def inject(scene, settings):
+        m = scene.materials
+        rough = m.kind == getattr(renderers.core().scene, kind)
+        scene.materials = dataclasses.replace(
+            m, roughness=np.where(rough, np.minimum(m.roughness * 1.1, 1.0), m.roughness))
+        return scene, settings
+    return inject
 
 
 @contextmanager
@@ -251,7 +253,9 @@ INJECTIONS = {
     "textured_emission_as_its_mean": ("textured_emitter", _emission_as_its_mean, None),
     "light_samples_untextured": ("textured_emitter", None, _light_samples_untextured),
     "rough_glass_roughness_plus_10_percent": ("rough_glass_roughness",
-                                              _rough_glass_roughness_plus_10_percent, None),
+                                              _roughness_plus_10_percent("ROUGH_GLASS"), None),
+    "rough_metal_roughness_plus_10_percent": ("rough_metal",
+                                              _roughness_plus_10_percent("ROUGH_METAL"), None),
     "rough_glass_fss_white": ("rough_glass_tinted", None, _glass_fss_white),
     "refraction_validity_checked": ("rough_glass_roughness", None,
                                     _refraction_validity_checked),

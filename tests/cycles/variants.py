@@ -592,7 +592,7 @@ def glossy_roughness():
     _glossy_balls((((0.2, 0.3, 0.6), 0.2), ((0.2, 0.3, 0.6), 0.5), ((0.2, 0.3, 0.6), 1.0)))
 
 
-def _rough_glass_balls(materials):
+def _balls(materials):
     """Spheres of the given materials on the floor of the box (built first, as it clears the
     file) under its ceiling emitter, seen against the red, grey and blue walls."""
     xs = np.linspace(-0.6, 0.6, len(materials))
@@ -611,7 +611,7 @@ def _glass(name, colour, roughness, distribution="MULTI_GGX", ior=1.45):
 def rough_glass_roughness():
     """Clear Glass BSDF (Multiscatter GGX, IOR 1.45) at roughness 0.15, 0.4 and 0.8."""
     _box()
-    _rough_glass_balls([_glass(f"Frosted{i}", (1.0, 1.0, 1.0), r)
+    _balls([_glass(f"Frosted{i}", (1.0, 1.0, 1.0), r)
                         for i, r in enumerate((0.15, 0.4, 0.8))])
 
 
@@ -620,11 +620,26 @@ def rough_glass_tinted():
     very rough Principled glass (sqrt(base) transmission tint, which also darkens what
     the energy compensation gives back; IOR 1.5)."""
     _box()
-    _rough_glass_balls([
+    _balls([
         _glass("Tinted", (0.5, 0.9, 0.7), 0.5),
         _glass("PlainGGX", (1.0, 1.0, 1.0), 0.5, "GGX"),
         _principled("PFrosted", **{"Base Color": (0.3, 0.8, 1.0, 1.0), "Roughness": 0.8,
                                    "IOR": 1.5, "Transmission Weight": 1.0})])
+
+
+def rough_metal():
+    """Principled metallic spheres (F82 with a white tint: Schlick on the base colour):
+    gold at roughness 0.2, copper at 0.5 and a plain-GGX grey at 0.9."""
+    _box()
+    grey = _principled("Grey", **{"Base Color": (0.6, 0.6, 0.6, 1.0), "Metallic": 1.0,
+                                  "Roughness": 0.9})
+    next(n for n in grey.node_tree.nodes
+         if n.bl_idname == "ShaderNodeBsdfPrincipled").distribution = "GGX"
+    _balls([
+        _principled("Gold", **{"Base Color": (1.0, 0.75, 0.35, 1.0), "Metallic": 1.0,
+                               "Roughness": 0.2}),
+        _principled("Copper", **{"Base Color": (0.95, 0.64, 0.54, 1.0), "Metallic": 1.0,
+                                 "Roughness": 0.5}), grey])
 
 
 def _low_poly_sphere(name, centre, radius, mat, segments=10):
@@ -954,9 +969,9 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
                spot_scaled, spot_seen_glass_mirror, spot_through_ceiling, glossy_colours,
                glossy_roughness):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
-# Rough glass (issue 14): light reaches the floor and the camera through two rough
+# Rough glass and metal (issue 14): light reaches the floor and the camera through two rough
 # interfaces, mostly by next-event estimation at the inner one.
-for _setup in (rough_glass_roughness, rough_glass_tinted):
+for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,

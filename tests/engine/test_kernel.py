@@ -137,17 +137,18 @@ def test_principled_and_rough_glossy_same_in_both_kernels(emitters):
     assert_same_image(a, c)
 
 
-def test_rough_glass_same_in_both_kernels():
+def test_rough_glass_and_metal_same_in_both_kernels():
     """Rough glass on both sides of its surface: light sampling through it (emitters
-    chosen by their importance on both sides), compensation tables per side."""
+    chosen by their importance on both sides), compensation tables per side; rough metal."""
     b = scenes.cornell_box(spheres=False)
     mats = [b.add_material(Material.glass("frosted", (0.9, 0.6, 0.8), 1.6, roughness=0.4)),
             b.add_material(Material.principled_glass("pfrost", (0.4, 0.9, 0.7), 1.33,
                                                      roughness=0.8)),
             b.add_material(Material.glass("plain", (1, 1, 1), 1.45, roughness=0.2,
-                                          multiscatter=False))]
-    for m, x in zip(mats, (-0.55, 0.0, 0.55)):
-        v, t, n = scenes.uv_sphere((x, 0.1, 0.3), 0.25)
+                                          multiscatter=False)),
+            b.add_material(Material.metal("gold", (1.0, 0.75, 0.35), roughness=0.3))]
+    for m, x in zip(mats, (-0.6, -0.2, 0.2, 0.6)):
+        v, t, n = scenes.uv_sphere((x, 0.1, 0.3), 0.18)
         b.add_mesh(f"sphere {x}", v, t, m, corner_normals=n)
     scene = b.build(scenes.cornell_camera(), World((0, 0, 0)))
     a, c = both(scene)
@@ -346,7 +347,7 @@ def _fresh_kernel(scene, constants):
 
 # A formula only a feature uses (compiled on its own, so its name is in the kernel's IR).
 MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
-           "HAS_ROUGH_GLASS": "rough_dielectric",
+           "HAS_ROUGH_GLASS": "rough_dielectric", "HAS_ROUGH_METAL": "rough_conductor",
            "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from engine import Camera, Material, RenderSettings, SceneBuilder, World, bsdf, render
+from engine.scene import Materials
 from engine.jit import njit
 from tests.scenes import look_at, uv_sphere
 from tests.stats import SIGNIFICANCE, chi2_test, expected_2d, histogram_2d, sidak
@@ -132,3 +133,36 @@ def test_principled_specular_ior_level_rescales_f0():
     assert f0 == pytest.approx(0.08)
     assert Material.principled("p", ior=1.5).ior == 1.5
     assert Material.glossy("g", roughness=0.001).kind == "mirror"
+
+
+@njit(cache=True)
+def sample_metal_about_z(wo, lobe, u):
+    """sample_rough_conductor about +z for stratum points u (m, 2): wi (m, 3), weight
+    (m, 3), pdf (m,), ok (m,)."""
+    wi, w, pdf = np.empty((len(u), 3)), np.empty((len(u), 3)), np.empty(len(u))
+    ok = np.empty(len(u), np.bool_)
+    for k in range(len(u)):
+        r = bsdf.sample_rough_conductor(wo[0], wo[1], wo[2], 0.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+                                        lobe, u[k, 0], u[k, 1])
+        wi[k, 0], wi[k, 1], wi[k, 2] = r[0], r[1], r[2]
+        w[k, 0], w[k, 1], w[k, 2], pdf[k], ok[k] = r[3], r[4], r[5], r[6], r[7]
+    return wi, w, pdf, ok
+
+
+def test_rough_metal_white_furnace_and_schlick_per_channel(rng):
+    """Rough metal: with F0 = 1 the compensated lobe reflects everything; a channel's
+    albedo grows with its F0 (Schlick at the microfacet), and its pdf is the GGX one."""
+    lt = bsdf.layer_tables(Materials.from_list(
+        [Material.metal("m", (1.0, 0.6, 0.1), roughness=0.5)]), [0])
+    assert Material.metal("s", (1, 1, 1), roughness=0.001).kind == "metal"
+    for mu in (0.3, 0.9):
+        comp = 1.0 + lt.fms[0] * np.interp(mu, lt.mu, lt.missing[0])
+        lobe = bsdf.Layer(0.0, 0.0, 0.0, 1.0, 0.6, 0.1, lt.alpha[0], 1.0, False, *comp, 1.0,
+                          0.0, 0.0, 0.0)
+        wo = np.array([np.sqrt(1 - mu * mu), 0.0, mu])
+        wi, w, pdf, ok = sample_metal_about_z(wo, lobe, rng.random((100_000, 2)))
+        albedo = np.where(ok[:, None], w, 0.0).mean(axis=0)
+        assert albedo[0] == pytest.approx(1.0, abs=5e-3)
+        assert albedo[0] > albedo[1] > albedo[2] > 0.05
+        up = ok & (wi[:, 2] > 0)
+        assert np.allclose(pdf[up], eval_ggx_about_z(wo, wi[up], lt.alpha[0], 1.0, False)[1])
