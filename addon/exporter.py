@@ -40,6 +40,8 @@ class MeshData:
         object has no slots, e.g. materials set by geometry nodes)
     uv_maps : UV map name -> (t, 3, 2) float32 per-corner coordinates, "" the render-active
         map; read only when some material has a texture
+    tangents : UV map name -> (t, 3, 4) float32 per-corner tangent (xyz) and bitangent sign
+        (Blender's own, mikktspace), for the maps normal-mapped materials read
     """
 
     vertices: np.ndarray
@@ -49,6 +51,7 @@ class MeshData:
     smooth: np.ndarray
     material_lut: np.ndarray
     uv_maps: dict = field(default_factory=dict)
+    tangents: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -113,9 +116,35 @@ def _uv_maps(mesh, tri_loops) -> dict:
     return maps
 
 
-def read_mesh(mesh, material_lut, uv=False) -> MeshData:
+def _tangents(mesh, tri_loops, names, warn) -> dict:
+    """Blender's tangents (Mesh.calc_tangents) per triangle corner for the UV maps `names`
+    ("" the render-active one): (t, 3, 4) float32, xyz and the bitangent sign."""
+    out = {}
+    for name in names:
+        layer = next((u for u in mesh.uv_layers if (u.name == name if name else
+                                                    u.active_render)), None)
+        if layer is None:
+            continue  # the missing map is warned where the texture reads it
+        try:
+            mesh.calc_tangents(uvmap=layer.name)
+        except RuntimeError as exc:
+            warn(f"mesh '{mesh.name}': no tangents for UV map '{layer.name}' ({exc}): its "
+                 f"normal map is not applied")
+            continue
+        n = len(mesh.loops)
+        tangent, sign = np.zeros(n * 3, np.float32), np.zeros(n, np.float32)
+        mesh.loops.foreach_get("tangent", tangent)
+        mesh.loops.foreach_get("bitangent_sign", sign)
+        corners = np.concatenate([tangent.reshape(-1, 3), sign[:, None]], axis=1)
+        out[name] = corners[tri_loops.reshape(-1, 3)]
+    if names:
+        mesh.free_tangents()
+    return out
+
+
+def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None) -> MeshData:
     """Read a bpy Mesh into numpy with foreach_get (no per-triangle Python); `uv`: its UV
-    maps too."""
+    maps too; `tangent_maps`: the UV maps whose tangents normal maps need."""
     n_vert, n_loops = len(mesh.vertices), len(mesh.loops)
     co = np.zeros(n_vert * 3, np.float32)
     mesh.vertices.foreach_get("co", co)
@@ -133,9 +162,10 @@ def read_mesh(mesh, material_lut, uv=False) -> MeshData:
     # Custom normals apply to flat faces too (4.1+ keeps them regardless of sharp_face).
     if getattr(mesh, "has_custom_normals", False):
         smooth[:] = True
+    tangents = _tangents(mesh, tri_loops, tangent_maps, warn or (lambda msg: None))
     return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
                     mat_index, normals.astype(np.float64), smooth, material_lut,
-                    _uv_maps(mesh, tri_loops) if uv else {})
+                    _uv_maps(mesh, tri_loops) if uv else {}, tangents)
 
 
 def to_world(mesh: MeshData, matrix_world):
@@ -201,7 +231,9 @@ class _Exporter:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
         self.textured = any("colour_program" in m.kwargs or "emission_program" in m.kwargs
-                            for m in self.out.materials)
+                            or "normal_program" in m.kwargs for m in self.out.materials)
+        self.tangent_maps = sorted({m.kwargs["normal_uv"] for m in self.out.materials
+                                    if "normal_program" in m.kwargs})
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             if obj.type in GEOMETRY_TYPES:
@@ -271,7 +303,8 @@ class _Exporter:
                 data = MeshData(np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32),
                                 np.zeros((0, 3, 3)), np.zeros(0, bool), np.zeros(0, np.int32))
             else:
-                data = read_mesh(mesh, self.slot_lut(mesh.materials), self.textured)
+                data = read_mesh(mesh, self.slot_lut(mesh.materials), self.textured,
+                                 self.tangent_maps, self.warn)
         finally:
             obj.to_mesh_clear()
         self.out.meshes[key] = data
@@ -584,6 +617,32 @@ def _instance_uvs(mesh: MeshData, insts) -> dict:
             for name, m in mesh.uv_maps.items()}
 
 
+def _instance_tangents(mesh: MeshData, insts, mat_index, specs):
+    """(k t, 3, 4) world-space tangents of k instances of `mesh`, each triangle's from the
+    UV map its material's normal map reads (zeros where it has none), or None. Tangents
+    turn with the object (M t); a mirroring matrix flips the bitangent sign along with the
+    winding, so the bitangent keeps pointing along the map's v."""
+    if not mesh.tangents:
+        return None
+    t = len(mesh.triangles)
+    local = np.zeros((t, 3, 4), np.float32)
+    for k, spec in enumerate(specs):
+        name = spec.kwargs.get("normal_uv")
+        if name in mesh.tangents:
+            rows = mat_index == k
+            local[rows] = mesh.tangents[name][rows]
+    out = []
+    for inst in insts:
+        linear = np.asarray(inst.matrix_world, np.float64)[:3, :3]
+        world = local.copy()
+        world[..., :3] = local[..., :3] @ linear.T
+        if np.linalg.det(linear) < 0:
+            world = world[:, [0, 2, 1]]
+            world[..., 3] *= -1.0
+        out.append(world)
+    return np.concatenate(out)
+
+
 def to_core(exported: ExportedScene, core):
     """Build the core's `Scene`; returns (scene, builder warnings)."""
     builder = core.SceneBuilder()
@@ -602,7 +661,9 @@ def to_core(exported: ExportedScene, core):
                          corner_normals=normals,
                          smooth=np.tile(mesh.smooth, k) if normals is not None else False,
                          terminator_offset=insts[0].terminator_offset,
-                         uv_maps=_instance_uvs(mesh, insts))
+                         uv_maps=_instance_uvs(mesh, insts),
+                         tangents=_instance_tangents(mesh, insts, mat_index,
+                                                     exported.materials))
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
     world = core.World(exported.world_colour, **(exported.environment or {}))

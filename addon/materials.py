@@ -29,6 +29,7 @@ Fallbacks:
 """
 
 import colorsys
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -75,7 +76,11 @@ class MaterialSpec:
     kwargs: dict = field(default_factory=dict)
 
     def to_core(self, core):
-        return getattr(core.Material, self.ctor)(self.name, **self.kwargs)
+        kwargs = dict(self.kwargs)
+        kwargs.pop("normal_uv", None)
+        normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength") if k in kwargs}
+        m = getattr(core.Material, self.ctor)(self.name, **kwargs)
+        return dataclasses.replace(m, **normal) if normal else m
 
 
 def default_material():
@@ -432,6 +437,7 @@ class _Reader:
         self.material = material
         self.warnings = []
         self.constants = _Constants({} if image_cache is None else image_cache)
+        self.normal_map = None  # set by normal(): the shader's tangent-space normal map
 
     def warn(self, text):
         self.warnings.append(f"material '{self.material.name}': {text}")
@@ -524,8 +530,30 @@ class _Reader:
                       f"{rendered}")
 
     def normal(self, node):
+        """The shader's Normal input: a tangent-space Normal Map node is compiled (its
+        colour as a program, its strength and UV map, into self.normal_map); anything else
+        there is warned and the mesh's normals are used."""
+        sock = enabled_input(node, "Normal")
+        link = None if sock is None else live_link(sock)
+        src = None if link is None else link.from_node
+        if src is not None and src.bl_idname == "ShaderNodeNormalMap" and \
+                src.space == "TANGENT":
+            colour, program = self.textured_colour(src, "Color", (0.5, 0.5, 1.0))
+            if program is None:
+                program = shader_nodes.constant(colour)
+            strength = self.number(src, "Strength", 1.0)
+            if not strength >= 0.0:
+                self.warn(f"node '{src.name}' strength {strength:.3g} is negative; using 0")
+                strength = 0.0
+            self.normal_map = {"normal_program": program, "normal_strength": strength,
+                               "normal_uv": src.uv_map}
+            return
+        if src is not None and src.bl_idname == "ShaderNodeNormalMap":
+            self.warn(f"node '{src.name}' space {src.space} is not supported (only Tangent "
+                      f"Space); rendered with the mesh's normals")
+            return
         self.ignored(node, "Normal", None,
-                     "normal and bump maps are not supported: rendered with the mesh's normals")
+                     "bump maps are not supported: rendered with the mesh's normals")
 
     def viewport_fallback(self, why):
         self.warn(f"{why}; rendered as diffuse of its viewport colour")
@@ -573,7 +601,10 @@ class _Reader:
             if link is None:
                 return self.viewport_fallback(f"reroute '{node.name}' leads nowhere")
             node = link.from_node
-        return self.shader(node)
+        spec = self.shader(node)
+        if self.normal_map is not None:
+            spec.kwargs.update(self.normal_map)
+        return spec
 
     def shader(self, node):
         name, kind = self.material.name, node.bl_idname

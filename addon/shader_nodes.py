@@ -430,6 +430,13 @@ def scaled(program, strength):
     return program
 
 
+def constant(colour):
+    """A program whose result is the constant `colour` (a normal map of one colour)."""
+    program = core.load().shading.Program()
+    program.out = program.const([float(c) for c in colour])
+    return program
+
+
 def compile_colour(socket, texture_cache):
     """(program or None, why not): the program for colour input `socket` when its chain
     varies over the surface and every node in it compiles; (None, "") for a chain that does

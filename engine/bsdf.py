@@ -534,16 +534,44 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint):
                  t_tint[0], t_tint[1], t_tint[2])
 
 
+@njit(**JIT)
+def bump_shadowing(bx, by, bz, sx, sy, sz, wx, wy, wz, diffuse, evaluated):
+    """Cycles' bump_shadowing_term for a lobe whose normal s a normal map tilted away from
+    the mesh's shading normal b, toward light direction w. Zero where w and s lie on
+    different sides of the smooth surface b (any lobe when evaluated, a diffuse one when
+    sampled too: light must not leak to the back of opaque geometry); for a diffuse lobe,
+    else the GGX masking G1 at w's cosine to b for a roughness growing with the tilt,
+    alpha^2 = tan^2(b, s) / 8 (Conty Estevez et al., "A Microfacet-Based Shadowing Function
+    to Solve the Bump Terminator Problem"; Bump Map Correction, a material's default)."""
+    if bx == sx and by == sy and bz == sz:
+        return 1.0
+    cos_bw = bx * wx + by * wy + bz * wz
+    cos_bs = bx * sx + by * sy + bz * sz
+    cos_sw = sx * wx + sy * wy + sz * wz
+    if cos_bw * cos_bs * cos_sw < 0.0 and (evaluated or diffuse):
+        return 0.0
+    if not diffuse:
+        return 1.0
+    cos_i, cos_d = abs(cos_bw), abs(cos_bs)
+    if cos_d >= 1.0 or cos_i >= 1.0:
+        return 1.0
+    if cos_i < 1e-6:
+        return 0.0
+    alpha2 = min(max(0.125 * (1.0 / (cos_d * cos_d) - 1.0), 0.0), 1.0)
+    return 1.0 / (1.0 + ggx_lambda(cos_i, alpha2))
+
+
 @njit(**INLINE)
 def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe,
-                 sampled):
+                 sampled, bx, by, bz):
     """The layered lobe's f * cos_i per channel and its lobe-mixture pdf for shading normal
     s (the diffuse base's), specular normal m and geometric normal n (all on wo's side).
 
     sampled : wi was sampled from the lobe (nothing below the geometric surface, as Cycles'
     sampling routines); otherwise it is a light direction, where the specular lobe still
     needs wi above the geometric surface but the diffuse base only above the shading
-    horizon (Cycles' microfacet and diffuse eval; see eval_lambert)."""
+    horizon (Cycles' microfacet and diffuse eval; see eval_lambert). b: the mesh's own
+    shading normal, which shadows the base where a normal map tilted s (bump_shadowing)."""
     hx, hy, hz = wox + wix, woy + wiy, woz + wiz
     hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
     hx, hy, hz = hx / hl, hy / hl, hz / hl
@@ -556,7 +584,9 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
         pdf_s = 0.0
         if sampled:
             cos_d = 0.0
-    c = cos_d / np.pi
+    c = cos_d / np.pi * bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, True, True)
+    if not sampled:
+        spec *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
     return (lobe.dw0 * c + lobe.tint0 * (spec * lobe.comp0),
             lobe.dw1 * c + lobe.tint1 * (spec * lobe.comp1),
             lobe.dw2 * c + lobe.tint2 * (spec * lobe.comp2),
@@ -564,7 +594,8 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
 
 
 @njit(**INLINE)
-def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lobe, ua, ub):
+def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lobe, ua, ub,
+                   bx, by, bz):
     """Sample the layered lobe: pick the specular or the diffuse layer, then evaluate the
     mixture (one-sample MIS over the lobes). Returns (w, weight (3 values), pdf, ok)."""
     if u_lobe < lobe.p_spec:
@@ -583,7 +614,7 @@ def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lo
         wy = lx * s[1] + ly * t[1] + lz * sy
         wz = lx * s[2] + ly * t[2] + lz * sz
     g0, g1, g2, pdf = eval_layered(wox, woy, woz, wx, wy, wz, sx, sy, sz, mx, my, mz, nx, ny,
-                                   nz, lobe, True)
+                                   nz, lobe, True, bx, by, bz)
     if pdf > 0:
         return wx, wy, wz, g0 / pdf, g1 / pdf, g2 / pdf, pdf, True
     return wx, wy, wz, 0.0, 0.0, 0.0, pdf, False

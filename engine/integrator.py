@@ -54,7 +54,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_DOF", "HAS_POLYGON_APERTURE", "HAS_SHADING_NORMALS", "HAS_EMISSION",
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
-                  "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES",
+                  "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
@@ -64,6 +64,7 @@ HAS_ENVIRONMENT = HAS_WORLD_COLOUR = HAS_TERMINATOR = HAS_LIGHT_GRID = True
 HAS_LIGHT_IMPORTANCE = True
 HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
 HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
+HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -77,14 +78,16 @@ STAGE_NAMES = ("", "generate camera rays", "handle light hits", "handle escaped 
 #   vertices (t, 3, 3), tri_normal (t, 3), tri_scale (t,), material_index (t,);
 #   normals (t, 3, 3) and smooth (t,) with shading normals; object_index (t,) and
 #   terminator_offset (objects,) with the terminator offset; uv (maps, t, 3, 2) float32
-#   with textures.
+#   with textures; tangents (t, 3, 4) float32 (xyz, bitangent sign) with normal maps.
 Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index normals "
-                                  "smooth object_index terminator_offset uv")
+                                  "smooth object_index terminator_offset uv tangents")
 # kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
-# emission programs' shading.ProgramTable (None without textures).
+# emission programs' shading.ProgramTable (None without textures), and each normal map's
+# strength (k,).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
-                                            "transmission_tint emission layers programs")
+                                            "transmission_tint emission layers programs "
+                                            "normal_strength")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -101,10 +104,11 @@ Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput
                             "camera_near prev_normal svm")
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
-# incoming side), the specular lobes' normal m, wo, front face, triangle, barycentrics,
-# material, distance and the offset scale.
+# incoming side; s after the material's normal map), the specular lobes' normal m, wo,
+# front face, triangle, barycentrics, material, distance, the offset scale and the mesh's
+# own shading normal b (s without the normal map).
 Vertex = namedtuple("Vertex", "px py pz nx ny nz sx sy sz mx my mz wox woy woz front f u v "
-                              "mat t scale")
+                              "mat t scale bx by bz")
 
 
 @intrinsic
@@ -283,12 +287,48 @@ def surface_interaction(i, f, tfar, bu, bv, sc, paths):
             if length > 1e-12:
                 sx, sy, sz = ax / length, ay / length, az / length
     mat = sc.geometry.material_index[f]
+    bx, by, bz = sx, sy, sz
+    if HAS_NORMAL_MAPS and sc.materials.programs.normal[mat, 0] >= 0:
+        sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
     if sc.materials.kind[mat] != DIFFUSE:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
     scale = max(g.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
-                  v, mat, np.float64(tfar), scale)
+                  v, mat, np.float64(tfar), scale, bx, by, bz)
+
+
+def mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths):
+    """The shading normal after material mat's tangent-space normal map at the hit (Cycles'
+    svm_node_normal_map): the map's colour on the interpolated tangent frame around the
+    mesh's front-side normal (unnormalised, the geometric one on flat triangles), turned
+    to the incoming side (sign) and blended toward s by the node's strength; s itself
+    where that degenerates."""
+    g = sc.geometry
+    w0 = 1.0 - u - v
+    c0, c1, c2 = shading.normal_at(mat, f, u, v, sc.materials.programs, g.uv, paths.svm,
+                                   0.5, 0.5, 1.0)
+    tg = g.tangents
+    tx = w0 * tg[f, 0, 0] + u * tg[f, 1, 0] + v * tg[f, 2, 0]
+    ty = w0 * tg[f, 0, 1] + u * tg[f, 1, 1] + v * tg[f, 2, 1]
+    tz = w0 * tg[f, 0, 2] + u * tg[f, 1, 2] + v * tg[f, 2, 2]
+    bitangent_sign = w0 * tg[f, 0, 3] + u * tg[f, 1, 3] + v * tg[f, 2, 3]
+    nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
+    if HAS_SHADING_NORMALS and g.smooth[f]:
+        nm = g.normals
+        nx = w0 * nm[f, 0, 0] + u * nm[f, 1, 0] + v * nm[f, 2, 0]
+        ny = w0 * nm[f, 0, 1] + u * nm[f, 1, 1] + v * nm[f, 2, 1]
+        nz = w0 * nm[f, 0, 2] + u * nm[f, 1, 2] + v * nm[f, 2, 2]
+    ax, ay, az = shading.normal_map(c0, c1, c2, tx, ty, tz, bitangent_sign, nx, ny, nz)
+    ax, ay, az = ax * sign, ay * sign, az * sign
+    strength = sc.materials.normal_strength[mat]
+    if strength != 1.0:
+        ax, ay, az = sx + (ax - sx) * strength, sy + (ay - sy) * strength, \
+            sz + (az - sz) * strength
+    length = math.sqrt(ax * ax + ay * ay + az * az)
+    if not (length > 1e-12 and math.isfinite(length)):
+        return sx, sy, sz
+    return ax / length, ay / length, az / length
 
 
 def surface_colour(x, sc, paths):
@@ -487,7 +527,8 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     k = sc.materials.kind[x.mat]
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         g0, g1, g2, pdf_b = bsdf.eval_layered(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz,
-                                              x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False)
+                                              x.mx, x.my, x.mz, x.nx, x.ny, x.nz, lobe, False,
+                                              x.bx, x.by, x.bz)
     elif HAS_ROUGH_METAL and k == ROUGH_METAL:
         g0, g1, g2, pdf_b = bsdf.eval_rough_conductor(x.wox, x.woy, x.woz, wx, wy, wz, x.mx,
                                                       x.my, x.mz, x.nx, x.ny, x.nz, lobe)
@@ -496,7 +537,15 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
                                                        x.my, x.mz, lobe)
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
-        g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
+        shadowing = pdf_b
+        if HAS_NORMAL_MAPS:
+            shadowing *= bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
+                                             True, True)
+        g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
+    if HAS_NORMAL_MAPS and (k == ROUGH_GLASS or k == ROUGH_METAL):
+        shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz, False,
+                                        True)
+        g0, g1, g2 = g0 * shadowing, g1 * shadowing, g2 * shadowing
     if not (max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0):
         return n_shadow
     w = 1.0 if math.isinf(pdf_l) else power_heuristic(pdf_l, pdf_b)
@@ -536,7 +585,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         u_lobe = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         return bsdf.sample_layered(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.mx, x.my, x.mz,
-                                   x.nx, x.ny, x.nz, lobe, u_lobe, ua, ub)
+                                   x.nx, x.ny, x.nz, lobe, u_lobe, ua, ub, x.bx, x.by, x.bz)
     if HAS_ROUGH_METAL and k == ROUGH_METAL:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         return bsdf.sample_rough_conductor(x.wox, x.woy, x.woz, x.mx, x.my, x.mz, x.nx, x.ny,
@@ -549,7 +598,11 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_DIFFUSE and k == DIFFUSE:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
-        return wx, wy, wz, c[0], c[1], c[2], pdf, ok
+        shadowing = 1.0
+        if HAS_NORMAL_MAPS:
+            shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
+                                            True, False)
+        return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
     if HAS_GLASS and k == GLASS:
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
@@ -716,6 +769,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
+    mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}

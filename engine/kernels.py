@@ -200,15 +200,23 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         programs = ProgramTable(np.zeros((0, 8), np.int64), np.zeros(1), np.zeros((1, 4), F32),
                                 np.zeros((0, 6), np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64),
+                                np.full((len(scene.materials), 3), -1, np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64))
+    tangents = None
+    if scene.tangents is not None and (plan.normal_maps or generic):
+        tangents = scene.tangents
+    elif generic:
+        tangents = np.zeros((1, 3, 4), F32)
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
-                        normals, smooth, obj, offset, uv)
+                        normals, smooth, obj, offset, uv, tangents)
     m = scene.materials
     rough = plan.principled or plan.glossy or plan.rough_glass or plan.rough_metal
     used = np.unique(scene.material_index)
     layers = layer_tables(m, used) if (rough or generic) else None
+    strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
-                              m.transmission_tint, m.emission, layers, programs)
+                              m.transmission_tint, m.emission, layers, programs,
+                              np.asarray(strength, np.float64))
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

@@ -94,6 +94,8 @@ class Material:
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
         texture on the colour), or None. `colour` is then what the program's result is
         approximated by where a constant is needed (its mean).
+    normal_program, normal_strength : a tangent-space normal map (Cycles' Normal Map node)
+        over the shading normal, for any kind.
     emission_program : a Program whose result replaces `emission` at each point (a textured
         emission colour, strength included); `emission` then stands for it where a constant
         is needed (choosing lights by power), so it must be > 0.
@@ -112,6 +114,11 @@ class Material:
     multiscatter: bool = True
     colour_program: Program | None = field(default=None, compare=False)
     emission_program: Program | None = field(default=None, compare=False)
+    # A tangent-space normal map: the program of the colour feeding the Normal Map node
+    # (shading.normal_map) and the node's strength; its tangents come with the mesh
+    # (SceneBuilder.add_mesh).
+    normal_program: Program | None = field(default=None, compare=False)
+    normal_strength: float = 1.0
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -214,6 +221,8 @@ class Materials:
     # Per material its colour's and its emission's shading.Program or None (textures).
     colour_programs: list | None = None
     emission_programs: list | None = None
+    normal_programs: list | None = None
+    normal_strength: np.ndarray | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -246,12 +255,19 @@ class Materials:
             if m.emission_program is not None and not max(m.emission) > 0:
                 raise ValueError(f"material '{m.name}': a textured emission needs a positive "
                                  f"constant emission standing for it, got {m.emission!r}")
-        textured = any(p is not None for p in programs + emission_programs)
+        normal_programs = [m.normal_program for m in materials]
+        for m in materials:
+            if not (math.isfinite(float(m.normal_strength)) and m.normal_strength >= 0):
+                raise ValueError(f"material '{m.name}': normal map strength must be >= 0, "
+                                 f"got {m.normal_strength!r}")
+        textured = any(p is not None for p in programs + emission_programs + normal_programs)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
                    np.array([bool(m.multiscatter) for m in materials]),
-                   programs if textured else None, emission_programs if textured else None)
+                   programs if textured else None, emission_programs if textured else None,
+                   normal_programs if textured else None,
+                   np.array([float(m.normal_strength) for m in materials]))
 
     def __len__(self):
         return len(self.kind)
@@ -527,6 +543,8 @@ class Scene:
     uv : (maps, t, 3, 2) float32 per-corner texture coordinates of the UV maps the colour
         programs read, or None without programs
     programs : the materials' shading.ProgramTable, or None without textured materials
+    tangents : (t, 3, 4) float32 per-corner world-space tangents and bitangent signs for
+        normal maps (zeros where a mesh has none), or None without normal maps
     """
 
     vertices: np.ndarray
@@ -546,6 +564,7 @@ class Scene:
     terminator_offset: np.ndarray | None = None
     uv: np.ndarray | None = None
     programs: ProgramTable | None = None
+    tangents: np.ndarray | None = None
 
     def __post_init__(self):
         if self.terminator_offset is None:
@@ -575,6 +594,7 @@ class SceneBuilder:
         self._materials: list[Material] = []
         self._meshes: list[tuple] = []
         self._uv_maps: list[dict] = []
+        self._tangents: list = []
         self.warnings: list[str] = []
 
     def add_material(self, material: Material) -> int:
@@ -588,7 +608,7 @@ class SceneBuilder:
 
     def add_mesh(self, name: str, vertices, triangles, material_index=0,
                  corner_normals=None, smooth=None, terminator_offset=0.0,
-                 uv_maps=None) -> int:
+                 uv_maps=None, tangents=None) -> int:
         """Add one object's triangles in world space; returns how many were kept.
 
         vertices : (n, 3) float, world-space positions
@@ -601,6 +621,8 @@ class SceneBuilder:
         uv_maps : optional dict, UV map name -> (t, 3, 2) per-corner coordinates; the name ""
             is the map an Image Texture without a Vector input reads (Blender's render-active
             map)
+        tangents : optional (t, 3, 4) per-corner world-space tangent (xyz, unnormalised as
+            Blender's) and bitangent sign of the UV map the triangle's normal map reads
 
         Only the checks run here; `build` gathers the corners of every mesh straight into
         the scene's arrays (a million-triangle mesh is 72 MB per copy of its corners).
@@ -637,14 +659,17 @@ class SceneBuilder:
             sm &= _normals_usable(normals)
         uvs = {str(k): np.asarray(m, np.float32).reshape(t, 3, 2)
                for k, m in (uv_maps or {}).items()}
+        tan = None if tangents is None else np.asarray(tangents, np.float32).reshape(t, 3, 4)
         if not keep.all():
             sm, mi, tri = sm[keep], mi[keep], tri[keep]
             normals = None if normals is None else normals[keep]
             uvs = {k: m[keep] for k, m in uvs.items()}
+            tan = None if tan is None else tan[keep]
         if not finite_v.all():  # unreferenced now, but embree should see no NaN at all
             v = np.where(finite_v[:, None], v, 0.0)
         self._meshes.append((name, v, tri, normals, sm, mi, terminator_offset))
         self._uv_maps.append(uvs)
+        self._tangents.append(tan)
         return int(keep.sum())
 
     def build(self, camera: Camera, world: World | None = None) -> Scene:
@@ -694,7 +719,21 @@ class SceneBuilder:
                              else np.zeros((0, 3))),
             shared_triangles=(np.concatenate([m[2] + o for m, o in zip(meshes, offsets)])
                               .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)),
-            uv=uv, programs=programs)
+            uv=uv, programs=programs, tangents=self._gathered_tangents(materials, counts))
+
+    def _gathered_tangents(self, materials: Materials, counts):
+        """The scene's (t, 3, 4) tangents where some material has a normal map, else None.
+        Tangents with non-finite values are zeros (their normal map leaves the normal)."""
+        if materials.normal_programs is None or all(
+                p is None for p in materials.normal_programs):
+            return None
+        out = np.zeros((sum(counts), 3, 4), np.float32)
+        start = 0
+        for tan, count in zip(self._tangents, counts):
+            if tan is not None:
+                out[start:start + count] = np.where(np.isfinite(tan), tan, 0.0)
+            start += count
+        return out
 
     def _programs(self, materials: Materials, counts) -> tuple:
         """The scene's (uv, ProgramTable) for the materials' colour programs, (None, None)
@@ -703,7 +742,8 @@ class SceneBuilder:
         if materials.colour_programs is None:
             return None, None
         progs = [[p for p in pair if p is not None] for pair in
-                 zip(materials.colour_programs, materials.emission_programs)]
+                 zip(materials.colour_programs, materials.emission_programs,
+                     materials.normal_programs)]
         names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
         uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
         start = 0
@@ -721,7 +761,8 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        return uv, pack(materials.colour_programs, materials.emission_programs, names.index)
+        return uv, pack(materials.colour_programs, materials.emission_programs, names.index,
+                        materials.normal_programs)
 
 
 # -------------------------------------------------------------------- builder passes

@@ -142,20 +142,22 @@ class Program:
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
 #   colour, emission (k, 3) int64 per material: the colour's and the emission's program as
 #   first instruction (-1: none), end, result register.
-ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission")
+ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission normal")
 
 
-def pack(colour_programs: list, emission_programs: list | None, uv_index) -> ProgramTable:
-    """Pack the materials' colour and emission programs (one per material, or None) into a
-    ProgramTable; each program's UV map names become scene-wide map indices through
-    `uv_index(name)`."""
+def pack(colour_programs: list, emission_programs: list | None, uv_index,
+         normal_programs: list | None = None) -> ProgramTable:
+    """Pack the materials' colour, emission and normal-map programs (one per material, or
+    None) into a ProgramTable; each program's UV map names become scene-wide map indices
+    through `uv_index(name)`."""
     k = len(colour_programs)
     emission_programs = emission_programs or [None] * k
+    normal_programs = normal_programs or [None] * k
     code, params, texels, tex_rows = [], [], [], []
-    rows = np.full((2, k, 3), -1, np.int64)
+    rows = np.full((3, k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
-    for slot, mat, prog in [(0, m, p) for m, p in enumerate(colour_programs)] + \
-            [(1, m, p) for m, p in enumerate(emission_programs)]:
+    for slot, mat, prog in [(j, m, p) for j, progs in enumerate(
+            (colour_programs, emission_programs, normal_programs)) for m, p in enumerate(progs)]:
         if prog is None:
             continue
         first_tex = len(tex_rows)
@@ -178,7 +180,7 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index) -> Pro
     return ProgramTable(np.array(code, np.int64).reshape(-1, WIDTH),
                         np.array(params + [0.0], np.float64),
                         (np.concatenate(texels) if texels else np.zeros((1, 4), np.float32)),
-                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1])
+                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1], rows[2])
 
 
 # ------------------------------------------------------------------ node functions
@@ -566,8 +568,33 @@ def emission_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
 
 
 @njit(**INLINE)
+def normal_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
+    """The colour feeding material mat's Normal Map node at the hit, or c without one."""
+    return result_at(pt.normal, mat, f, u, v, pt, uv, reg, c0, c1, c2)
+
+
+@njit(**JIT)
+def normal_map(cx, cy, cz, tx, ty, tz, sign, nx, ny, nz):
+    """Cycles' tangent-space Normal Map node (svm_node_normal_map): colour c in [0, 1]
+    read as 2c - 1 on the frame of the interpolated tangent t, B = sign (n x t) and the
+    mesh's front-side normal n (all unnormalised, as interpolated). Returns the unit
+    normal, or n itself where the result degenerates."""
+    ax, ay, az = 2.0 * cx - 1.0, 2.0 * cy - 1.0, 2.0 * cz - 1.0
+    bx, by, bz = (sign * (ny * tz - nz * ty), sign * (nz * tx - nx * tz),
+                  sign * (nx * ty - ny * tx))
+    x = ax * tx + ay * bx + az * nx
+    y = ax * ty + ay * by + az * ny
+    z = ax * tz + ay * bz + az * nz
+    length = math.sqrt(x * x + y * y + z * z)
+    if not (length > 0.0 and math.isfinite(length)):
+        length = math.sqrt(nx * nx + ny * ny + nz * nz)
+        return nx / length, ny / length, nz / length
+    return x / length, y / length, z / length
+
+
+@njit(**INLINE)
 def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
-    """The result of program rows[mat] (pt.colour or pt.emission) at the hit (triangle f,
+    """The result of program rows[mat] (pt.colour, .emission or .normal) at the hit (triangle f,
     barycentrics u, v; negative or non-finite channels are 0, as Cycles clamps closure
     weights), or the constant c0, c1, c2 where the material has no such program."""
     first = rows[mat, 0]

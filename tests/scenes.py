@@ -235,3 +235,32 @@ def textured_box(interpolation="Closest", extension="REPEAT", srgb=False, scale=
         v, t = quad(*corners)
         b.add_mesh(name, v, t, m, uv_maps={"": quad_uvs()})
     return b.build(cornell_camera(), World((0, 0, 0)))
+
+
+def normal_map_texels(n=8, tilt=0.6):
+    """An n x n tangent-space normal map (h, w, 4) of vertical stripes tilted alternately
+    toward +u and -u by `tilt` (the normal (+-tilt, 0, sqrt(1 - tilt^2)) as (N + 1) / 2)."""
+    z = np.sqrt(1.0 - tilt * tilt)
+    ix = np.mgrid[0:n, 0:n][1]
+    x = np.where(ix % 2 == 0, tilt, -tilt)
+    texels = np.stack([(x + 1) / 2, np.full_like(x, 0.5), np.full_like(x, (z + 1) / 2),
+                       np.ones_like(x)], axis=-1)
+    return texels.astype(np.float32)
+
+
+def normal_mapped_box(kind="diffuse", strength=1.0, texels=None):
+    """The Cornell box (no spheres) whose floor carries a striped normal map on its UVs
+    (tangent +x, bitangent sign +1), in a diffuse or a rough Principled material."""
+    b = cornell_box(spheres=False)
+    prog = image_program(normal_map_texels() if texels is None else texels, "Linear")
+    if kind == "diffuse":
+        mat = Material.diffuse("bumpy", (0.7, 0.7, 0.7))
+    else:
+        mat = Material.principled("bumpy", (0.7, 0.7, 0.7), roughness=0.3)
+    from dataclasses import replace
+    m = b.add_material(replace(mat, normal_program=prog, normal_strength=strength))
+    v, t = quad((-1, -1, 0.001), (1, -1, 0.001), (1, 1, 0.001), (-1, 1, 0.001))
+    tangents = np.zeros((2, 3, 4))
+    tangents[..., 0], tangents[..., 3] = 1.0, 1.0
+    b.add_mesh("bumpy floor", v, t, m, uv_maps={"": quad_uvs()}, tangents=tangents)
+    return b.build(cornell_camera(), World((0, 0, 0)))

@@ -435,3 +435,48 @@ def test_missing_environment_image_warns_and_uses_a_constant_world(fresh, tmp_pa
     assert exp.environment is None
     assert any("world 'Sky'" in w and "cannot be read" in w for w in exp.warnings)
     assert np.allclose(exp.world_colour, (0.1, 0.2, 0.3))
+
+
+@pytest.mark.parametrize("mirror", [False, True])
+def test_normal_map_tangents_are_blenders(fresh, core, mirror):
+    """A normal-mapped material's triangles carry Blender's own tangents and bitangent signs
+    (Mesh.calc_tangents) in world space; a mirroring object flips the sign with the
+    winding, so the bitangent still follows the map's v in the world."""
+    import bmesh
+    from addon_helpers import node_material
+    mesh = bpy.data.meshes.new("Ball")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")
+    bmesh.ops.create_uvsphere(bm, u_segments=16, v_segments=8, radius=1.0, calc_uvs=True)
+    for f in bm.faces:
+        f.smooth = True
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = link(bpy.data.objects.new("Ball", mesh))
+    obj.rotation_euler = (0.3, 0.2, 0.1)
+    obj.scale = (1.0, -1.0, 1.0) if mirror else (1.0, 1.0, 1.0)
+    mat, node = node_material("Bumpy", "ShaderNodeBsdfDiffuse")
+    nmap = mat.node_tree.nodes.new("ShaderNodeNormalMap")
+    mat.node_tree.links.new(nmap.outputs[0], node.inputs["Normal"])
+    obj.data.materials.append(mat)
+    exp = export(fresh)
+    scene, _ = exporter.to_core(exp, core)
+    ev = obj.evaluated_get(depsgraph())
+    me = ev.to_mesh()
+    me.calc_tangents()
+    linear = np.array(ev.matrix_world)[:3, :3]
+    tangent = np.array([[tuple(me.loops[i].tangent) for i in t.loops] for t in me.loop_triangles])
+    sign = np.array([[me.loops[i].bitangent_sign for i in t.loops] for t in me.loop_triangles])
+    normal = np.array([[tuple(me.loops[i].normal) for i in t.loops] for t in me.loop_triangles])
+    ev.to_mesh_clear()
+    world_t = tangent @ linear.T
+    world_b = sign[..., None] * np.cross(normal, tangent) @ linear.T  # Blender's bitangent
+    got = scene.tangents
+    order = [0, 2, 1] if mirror else [0, 1, 2]
+    np.testing.assert_allclose(got[..., :3], world_t[:, order], atol=1e-5)
+    # The core forms B = sign (n x t) from its world-space normal and tangent.
+    n_world = scene.normals
+    b = got[..., 3:] * np.cross(n_world, got[..., :3])
+    cos = np.sum(b * world_b[:, order], axis=-1) / (
+        np.linalg.norm(b, axis=-1) * np.linalg.norm(world_b[:, order], axis=-1))
+    assert np.all(cos > 0.99), cos.min()

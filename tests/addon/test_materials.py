@@ -484,14 +484,15 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "normal map"), ("Alpha", 0.5), ("Alpha", "link"), ("Coat Weight", 1.0),
+    ("Normal", "bump"), ("Alpha", 0.5), ("Alpha", "link"), ("Coat Weight", 1.0),
     ("Coat Weight", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
     ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")
-    if value == "normal map":
-        add_normal_map(mat, node)
+    if value == "bump":
+        bump = mat.node_tree.nodes.new("ShaderNodeBump")
+        mat.node_tree.links.new(bump.outputs[0], node.inputs[socket])
     elif value == "link":
         link_value(mat, node, socket)
     else:
@@ -516,14 +517,31 @@ def test_default_principled_has_no_ignored_input_warnings(fresh):
 
 
 @pytest.mark.parametrize("shader", ["ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlossy",
-                                    "ShaderNodeBsdfGlass"])
-def test_normal_map_on_other_bsdfs_warns(fresh, shader):
+                                    "ShaderNodeBsdfGlass", "ShaderNodeBsdfPrincipled"])
+def test_tangent_space_normal_maps_are_compiled(fresh, core, shader):
+    """A Normal Map node (tangent space) on a shader's Normal: its colour becomes the
+    material's normal program (one colour: a constant program), with its strength and UV
+    map; other spaces warn and use the mesh's normals."""
     mat, node = node_material("Bumpy", shader)
     nmap = add_normal_map(mat, node)
-    _, warnings = convert(mat)
-    assert len(warnings) == 1
-    assert "'Bumpy'" in warnings[0] and "input 'Normal'" in warnings[0] \
-        and nmap.name in warnings[0]
+    nmap.inputs["Color"].default_value = (0.8, 0.5, 0.9, 1.0)
+    nmap.inputs["Strength"].default_value = 0.7
+    nmap.uv_map = "Second"
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.kwargs["normal_strength"] == pytest.approx(0.7)
+    assert spec.kwargs["normal_uv"] == "Second"
+    from engine import shading
+    reg = shading.evaluate(spec.kwargs["normal_program"])
+    out = spec.kwargs["normal_program"].out
+    assert reg[out:out + 3] == pytest.approx((0.8, 0.5, 0.9))
+    m = spec.to_core(core)
+    assert m.normal_program is spec.kwargs["normal_program"]
+    assert m.normal_strength == pytest.approx(0.7)
+    nmap.space = "OBJECT"
+    spec, warnings = convert(mat)
+    assert "normal_program" not in spec.kwargs
+    assert len(warnings) == 1 and "OBJECT" in warnings[0] and nmap.name in warnings[0]
 
 
 def test_linked_displacement_warns(fresh):

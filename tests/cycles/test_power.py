@@ -233,6 +233,18 @@ def _refraction_validity_checked():
         yield
 
 
+def _normal_maps_ignored(scene, settings):
+    pt = scene.programs
+    scene.programs = pt._replace(normal=np.full_like(pt.normal, -1))
+    return scene, settings
+
+
+def _normal_map_strength_halved(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, normal_strength=m.normal_strength * 0.5)
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -259,6 +271,8 @@ INJECTIONS = {
     "rough_glass_fss_white": ("rough_glass_tinted", None, _glass_fss_white),
     "refraction_validity_checked": ("rough_glass_roughness", None,
                                     _refraction_validity_checked),
+    "normal_maps_ignored": ("normal_maps", _normal_maps_ignored, None),
+    "normal_map_strength_halved": ("normal_maps", _normal_map_strength_halved, None),
 }
 
 

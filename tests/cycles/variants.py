@@ -860,6 +860,60 @@ def textured_walls():
     scene.collection.objects.link(obj2)
 
 
+def _stripes_normal_image(name, n=8, tilt=0.6):
+    """An n x n packed float Non-Color tangent-space normal map: vertical stripes whose
+    normals lean alternately toward +u and -u by `tilt` (tests/scenes.normal_map_texels)."""
+    image = bpy.data.images.new(name, n, n, alpha=True, float_buffer=True)
+    ix = np.mgrid[0:n, 0:n][1]
+    x = np.where(ix % 2 == 0, tilt, -tilt)
+    z = math.sqrt(1.0 - tilt * tilt)
+    px = np.stack([(x + 1) / 2, np.full_like(x, 0.5), np.full_like(x, (z + 1) / 2),
+                   np.ones_like(x)], axis=-1)
+    image.pixels.foreach_set(px.astype(np.float32).ravel())
+    image.pack()
+    image.colorspace_settings.name = "Non-Color"
+    return image
+
+
+def _normal_mapped(mat, image, strength=1.0):
+    """Link a tangent-space Normal Map of `image` (Linear, on the UV map) into the Normal
+    input of `mat`'s shader."""
+    tree = mat.node_tree
+    shader_node = next(n for n in tree.nodes if n.bl_idname != "ShaderNodeOutputMaterial")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation = image, "Linear"
+    normal_map = tree.nodes.new("ShaderNodeNormalMap")
+    normal_map.inputs["Strength"].default_value = strength
+    tree.links.new(tex.outputs["Color"], normal_map.inputs["Color"])
+    tree.links.new(normal_map.outputs["Normal"], shader_node.inputs["Normal"])
+    return mat
+
+
+def normal_maps():
+    """Issue 14's normal maps: the floor (Diffuse, strength 1) and a smooth UV sphere
+    (rough Principled, strength 0.7) carry a striped tangent-space normal map, with
+    Blender's own tangents; the stripes tilt the shading normal by 37 degrees."""
+    scene = _box()
+    image = _stripes_normal_image("Stripes")
+    floor = bpy.data.objects["Floor"]
+    floor.data.materials[0] = _normal_mapped(bs.diffuse("BumpyFloor", (0.7, 0.7, 0.7)),
+                                             image)
+    _quad_uvs(floor)
+    mesh = bpy.data.meshes.new("Ball")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")  # calc_uvs fills an existing layer
+    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=0.35, calc_uvs=True)
+    for face in bm.faces:
+        face.smooth = True
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new("Ball", mesh)
+    obj.location = (0.1, 0.1, 0.35)
+    obj.data.materials.append(_normal_mapped(_principled("BumpyBall", **{
+        "Base Color": (0.8, 0.5, 0.3, 1.0), "Roughness": 0.4}), image, 0.7))
+    scene.collection.objects.link(obj)
+
+
 def textured_emitter():
     """The Cornell box lit by its ceiling quad whose Emission colour is the 8 x 8 image
     (Closest): a textured light seen directly, sampled by next-event estimation and starting
@@ -986,6 +1040,7 @@ for _setup in (caustic_point_light, caustic_spot):
 _add(Variant("textured_walls", textured_walls, max_bounces=8))
 _add(Variant("textured_emitter", textured_emitter, max_bounces=8, samples=256,
              cycles_samples=512))
+_add(Variant("normal_maps", normal_maps, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest")):

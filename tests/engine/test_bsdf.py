@@ -172,3 +172,23 @@ def test_lambert_weight_and_pdf(rng):
         u[:, 0], u[:, 1])
     assert np.array_equal(ok, wz > 0) and 0 < ok.mean() < 1
     assert np.all(wx * s[0] + wy * s[1] + wz * s[2] > 0)
+
+
+def test_bump_shadowing_follows_cycles():
+    """Cycles' bump_shadowing_term (Conty Estevez et al.): 1 without a normal map; 0 where
+    the light and the mapped normal lie on different sides of the smooth surface (any lobe
+    evaluated, a diffuse one sampled too); a diffuse lobe's GGX masking G1 by the tilt."""
+    b = (0.0, 0.0, 1.0)
+    assert bsdf.bump_shadowing(*b, *b, 0.3, 0.1, 0.9, True, True) == 1.0
+    s = (np.sin(0.5), 0.0, np.cos(0.5))  # tilted 0.5 rad toward +x
+    w = (np.cos(1.3), 0.0, -np.sin(0.05))  # under the smooth surface, over s
+    w = np.array(w) / np.linalg.norm(w)
+    assert np.dot(s, w) > 0 and w[2] < 0
+    assert bsdf.bump_shadowing(*b, *s, *w, True, False) == 0.0
+    assert bsdf.bump_shadowing(*b, *s, *w, False, True) == 0.0
+    assert bsdf.bump_shadowing(*b, *s, *w, False, False) == 1.0
+    w = np.array((0.3, 0.0, 0.5)) / np.linalg.norm((0.3, 0.0, 0.5))
+    alpha2 = 0.125 * (1 / np.cos(0.5) ** 2 - 1)
+    g1 = 1 / (1 + 0.5 * (np.sqrt(1 + alpha2 * (1 / w[2] ** 2 - 1)) - 1))
+    assert bsdf.bump_shadowing(*b, *s, *w, True, True) == pytest.approx(g1)
+    assert bsdf.bump_shadowing(*b, *s, *w, False, True) == 1.0

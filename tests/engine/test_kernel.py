@@ -156,6 +156,13 @@ def test_rough_glass_and_metal_same_in_both_kernels():
     assert_same_image(a, c)
 
 
+@pytest.mark.parametrize("kind", ["diffuse", "principled"])
+def test_normal_maps_same_in_both_kernels(kind):
+    a, c = both(scenes.normal_mapped_box(kind, strength=0.8))
+    assert a.combined[..., :3].mean() > 0.05
+    assert_same_image(a, c)
+
+
 @pytest.mark.parametrize("light", ["area", "point"])
 def test_shadow_terminator_offset_same_in_both_kernels(light):
     """Coarse smooth spheres with terminator offsets 0, 0.1 and 1 lit from the side: the
@@ -348,6 +355,7 @@ def _fresh_kernel(scene, constants):
 # A formula only a feature uses (compiled on its own, so its name is in the kernel's IR).
 MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_ROUGH_GLASS": "rough_dielectric", "HAS_ROUGH_METAL": "rough_conductor",
+           "HAS_NORMAL_MAPS": "normal_map",
            "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",

@@ -28,7 +28,7 @@ def sample_ggx_about_z(wo, lobe, u):
     wi, pdf = np.empty((len(u), 3)), np.empty(len(u))
     for k in range(len(u)):
         r = bsdf.sample_layered(wo[0], wo[1], wo[2], 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0,
-                                1.0, lobe, 0.0, u[k, 0], u[k, 1])
+                                1.0, lobe, 0.0, u[k, 0], u[k, 1], 0.0, 0.0, 1.0)
         wi[k, 0], wi[k, 1], wi[k, 2], pdf[k] = r[0], r[1], r[2], r[6]
     return wi, pdf
 

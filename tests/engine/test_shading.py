@@ -166,3 +166,40 @@ def test_uv_maps_follow_their_triangles_and_a_missing_map_is_named():
     np.testing.assert_array_equal(scene.uv[0, :2], scenes.quad_uvs())
     np.testing.assert_array_equal(scene.uv[0, 2:], 0.0)
     assert any("'plain'" in w and "UV map" in w and "'tex'" in w for w in scene.warnings)
+
+
+def test_normal_map_reads_the_colour_on_the_tangent_frame(rng):
+    """Cycles' tangent-space Normal Map: (0.5, 0.5, 1) keeps the normal; a colour c gives
+    (2c - 1) on (t, sign n x t, n), unnormalised frames included; a degenerate result
+    keeps n."""
+    for _ in range(20):
+        n = rng.normal(size=3)
+        t = np.cross(n, rng.normal(size=3))
+        n *= rng.uniform(0.5, 2.0)
+        sign = rng.choice([-1.0, 1.0])
+        assert shading.normal_map(0.5, 0.5, 1.0, *t, sign, *n) == pytest.approx(
+            n / np.linalg.norm(n))
+        c = rng.uniform(0, 1, 3)
+        expect = (2 * c[0] - 1) * t + (2 * c[1] - 1) * sign * np.cross(n, t) + \
+            (2 * c[2] - 1) * n
+        assert shading.normal_map(*c, *t, sign, *n) == pytest.approx(
+            expect / np.linalg.norm(expect))
+    assert shading.normal_map(0.5, 0.5, 0.5, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 2.0) == \
+        pytest.approx((0.0, 0.0, 1.0))
+
+
+def test_normal_mapped_floor_leans_toward_its_map():
+    """A floor whose normal map leans every normal toward +x (under the centred ceiling
+    light): its left half faces the light and is brighter than its right half, where the
+    plain floor (strength 0) is symmetric."""
+    from engine import render
+    lean = np.broadcast_to(np.float32((0.8, 0.5, 0.9, 1.0)), (2, 2, 4)).copy()
+    st = scenes.settings(samples=32, max_bounces=0)
+    halves = []
+    for strength in (0.0, 1.0):
+        r = render(scenes.normal_mapped_box(strength=strength, texels=lean), st)
+        floor = r.combined[1:8, :, 0]  # the bottom rows: floor only
+        halves.append((floor[:, 10:40].mean(), floor[:, 56:86].mean()))
+    (flat_l, flat_r), (lean_l, lean_r) = halves
+    assert abs(flat_l / flat_r - 1.0) < 0.05, halves
+    assert lean_l / lean_r > 1.3, halves

@@ -33,7 +33,7 @@ def _poisoned_interaction(field, value):
         if i == 0 and paths.depth[paths.live[0]] == 1e10:
             return Vertex(x.px + px, x.py, x.pz, x.nx, x.ny, x.nz, x.sx + sx,  # noqa: F821
                           x.sy, x.sz, x.mx, x.my, x.mz, x.wox, x.woy, x.woz, x.front, x.f,
-                          x.u, x.v, x.mat, x.t, x.scale)
+                          x.u, x.v, x.mat, x.t, x.scale, x.bx, x.by, x.bz)
         return x
     return surface_interaction
 
