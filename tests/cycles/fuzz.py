@@ -238,13 +238,14 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
               "objects": _objects(rng, avoid_known)}
     params["lights"] = [_light(rng, i, params["objects"], avoid_known)
                         for i in range(int(rng.integers(0, 4)))]
-    # Glass roughness from a stream of its own, so the scenes drawn before rough glass
-    # existed keep everything else (the CI seeds were chosen on them).
-    rough = np.random.default_rng([seed, 0x9a55])
-    for o in params["objects"]:
-        if o["material"]["kind"] in ("glass", "principled_glass"):
-            o["material"]["roughness"] = 0.0 if rough.random() < 0.5 else \
-                _r(rough.uniform(0.05, 1.0), 3)
+    # Glass and metal roughness from streams of their own, so the scenes drawn before rough
+    # glass and metal existed keep everything else (the CI seeds were chosen on them).
+    for kinds, stream in ((("glass", "principled_glass"), 0x9a55), (("metal",), 0x3e7a)):
+        rough = np.random.default_rng([seed, stream])
+        for o in params["objects"]:
+            if o["material"]["kind"] in kinds:
+                o["material"]["roughness"] = 0.0 if rough.random() < 0.5 else \
+                    _r(rough.uniform(0.05, 1.0), 3)
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene

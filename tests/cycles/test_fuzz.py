@@ -61,6 +61,8 @@ def _all_features(seeds, avoid_known=False):
         found.update("rough glass" for o in p["objects"]
                      if o["material"]["kind"] in ("glass", "principled_glass")
                      and o["material"]["roughness"] > 0)
+        found.update("rough metal" for o in p["objects"]
+                     if o["material"]["kind"] == "metal" and o["material"]["roughness"] > 0)
         found.update("smooth monkey" for o in p["objects"]
                      if o["shape"] == "monkey" and o["smooth"])
         found.update(f"known:{k}" for k in fuzz.known_issue_features(p))
@@ -72,8 +74,8 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "sun angle", "spread", "visible light", "hard falloff", "world:black",
               "world:colour", "world:map", "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
-              "principled emission", "rough glossy", "rough glass", "smooth monkey", "bounces:0",
-              "bounces:12",              "known:a", "known:b", "known:c"}
+              "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
+              "bounces:0", "bounces:12", "known:a", "known:b", "known:c"}
 
 
 def test_generator_covers_every_supported_feature():
