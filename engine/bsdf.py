@@ -584,9 +584,11 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
         pdf_s = 0.0
         if sampled:
             cos_d = 0.0
-    c = cos_d / np.pi * bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, True, True)
-    if not sampled:
-        spec *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
+    c = cos_d / np.pi
+    if bx != sx or by != sy or bz != sz:  # a normal map tilted s (no call without one)
+        c *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, True, True)
+        if not sampled:
+            spec *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
     return (lobe.dw0 * c + lobe.tint0 * (spec * lobe.comp0),
             lobe.dw1 * c + lobe.tint1 * (spec * lobe.comp1),
             lobe.dw2 * c + lobe.tint2 * (spec * lobe.comp2),
