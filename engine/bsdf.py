@@ -245,6 +245,17 @@ def ggx_visible_normal(v0, v1, v2, alpha, ua, ub):
     return hx / norm, hy / norm, hz / norm
 
 
+@njit(**JIT)
+def sample_visible_normal(wox, woy, woz, mx, my, mz, alpha, ua, ub):
+    """A GGX visible normal (world space) for view wo about the lobe's normal m."""
+    s, t = build_frame(mx, my, mz)
+    hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
+                                    wox * t[0] + woy * t[1] + woz * t[2],
+                                    wox * mx + woy * my + woz * mz, alpha, ua, ub)
+    return (hx * s[0] + hy * t[0] + hz * mx, hx * s[1] + hy * t[1] + hz * my,
+            hx * s[2] + hy * t[2] + hz * mz)
+
+
 @njit(**ALLOCATING)
 def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
     """White-furnace integrands of the GGX lobe at view cosine mu for the stratified
@@ -601,13 +612,7 @@ def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lo
     """Sample the layered lobe: pick the specular or the diffuse layer, then evaluate the
     mixture (one-sample MIS over the lobes). Returns (w, weight (3 values), pdf, ok)."""
     if u_lobe < lobe.p_spec:
-        s, t = build_frame(mx, my, mz)
-        hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
-                                        wox * t[0] + woy * t[1] + woz * t[2],
-                                        wox * mx + woy * my + woz * mz, lobe.alpha, ua, ub)
-        hwx = hx * s[0] + hy * t[0] + hz * mx
-        hwy = hx * s[1] + hy * t[1] + hz * my
-        hwz = hx * s[2] + hy * t[2] + hz * mz
+        hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
         wx, wy, wz, _ = reflect(wox, woy, woz, hwx, hwy, hwz)
     else:
         s, t = build_frame(sx, sy, sz)
@@ -680,13 +685,7 @@ def eval_rough_dielectric(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
 def sample_rough_dielectric(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, u_lobe, ua, ub):
     """Sample the rough glass lobe about its normal m (geometric normal n, both on wo's
     side). Returns (w, weight (3 values), pdf, ok)."""
-    s, t = build_frame(mx, my, mz)
-    hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
-                                    wox * t[0] + woy * t[1] + woz * t[2],
-                                    wox * mx + woy * my + woz * mz, lobe.alpha, ua, ub)
-    hwx = hx * s[0] + hy * t[0] + hz * mx
-    hwy = hx * s[1] + hy * t[1] + hz * my
-    hwz = hx * s[2] + hy * t[2] + hz * mz
+    hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
     cos_ho = hwx * wox + hwy * woy + hwz * woz
     fr, cos_t = fresnel_dielectric(cos_ho, lobe.eta, True)
     r = fr * (lobe.tint0 + lobe.tint1 + lobe.tint2)
@@ -740,12 +739,8 @@ def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, l
 def sample_rough_conductor(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, ua, ub):
     """Sample the rough metal lobe about m: a visible normal, the mirror direction.
     Returns (w, weight (3 values), pdf, ok)."""
-    s, t = build_frame(mx, my, mz)
-    hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
-                                    wox * t[0] + woy * t[1] + woz * t[2],
-                                    wox * mx + woy * my + woz * mz, lobe.alpha, ua, ub)
-    wx, wy, wz, _ = reflect(wox, woy, woz, hx * s[0] + hy * t[0] + hz * mx,
-                            hx * s[1] + hy * t[1] + hz * my, hx * s[2] + hy * t[2] + hz * mz)
+    hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
+    wx, wy, wz, _ = reflect(wox, woy, woz, hwx, hwy, hwz)
     g0, g1, g2, pdf = eval_rough_conductor(wox, woy, woz, wx, wy, wz, mx, my, mz, nx, ny, nz,
                                            lobe)
     if pdf > 0 and max(g0, max(g1, g2)) > 0:

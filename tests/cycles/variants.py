@@ -800,6 +800,19 @@ def _textured(name, image, shader="ShaderNodeBsdfDiffuse", socket="Color", scale
     return mat
 
 
+def _uv_sphere_mesh(name, radius):
+    """A smooth 32 x 16 UV sphere mesh with its UV map (bmesh's calc_uvs)."""
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")  # calc_uvs fills an existing layer
+    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=radius, calc_uvs=True)
+    for face in bm.faces:
+        face.smooth = True
+    bm.to_mesh(mesh)
+    bm.free()
+    return mesh
+
+
 def _quad_uvs(obj):
     layer = obj.data.uv_layers.new(name="UVMap")
     for loop, uv in zip(layer.data, ((0, 0), (1, 0), (1, 1), (0, 1))):
@@ -830,14 +843,7 @@ def textured_walls():
         _quad_uvs(obj)
     ball = _textured("BallTex", image, "ShaderNodeBsdfPrincipled", "Base Color",
                      interpolation="Linear", extension="EXTEND", Roughness=0.4)
-    mesh = bpy.data.meshes.new("Ball")
-    bm = bmesh.new()
-    bm.loops.layers.uv.new("UVMap")  # calc_uvs fills an existing layer
-    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=0.3, calc_uvs=True)
-    for face in bm.faces:
-        face.smooth = True
-    bm.to_mesh(mesh)
-    bm.free()
+    mesh = _uv_sphere_mesh("Ball", 0.3)
     obj = bpy.data.objects.new("Ball", mesh)
     obj.location = (-0.45, 0.2, 0.3)
     obj.data.materials.append(ball)
@@ -899,15 +905,7 @@ def normal_maps():
     floor.data.materials[0] = _normal_mapped(bs.diffuse("BumpyFloor", (0.7, 0.7, 0.7)),
                                              image)
     _quad_uvs(floor)
-    mesh = bpy.data.meshes.new("Ball")
-    bm = bmesh.new()
-    bm.loops.layers.uv.new("UVMap")  # calc_uvs fills an existing layer
-    bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=0.35, calc_uvs=True)
-    for face in bm.faces:
-        face.smooth = True
-    bm.to_mesh(mesh)
-    bm.free()
-    obj = bpy.data.objects.new("Ball", mesh)
+    obj = bpy.data.objects.new("Ball", _uv_sphere_mesh("Ball", 0.35))
     obj.location = (0.1, 0.1, 0.35)
     obj.data.materials.append(_normal_mapped(_principled("BumpyBall", **{
         "Base Color": (0.8, 0.5, 0.3, 1.0), "Roughness": 0.4}), image, 0.7))
