@@ -328,17 +328,28 @@ class Tracer:
                                 self.data, lp)
         rev_sample = reverse_bits(np.uint64(sample))
         self._count("light paths", time.perf_counter() - t0)
-        n_conn = 0
+        parts = []
         for depth in range(s.max_bounces + 1):
             if m == 0:
                 break
             prim, tfar, bu, bv = self._closest_hits(lp, m)
             t0 = time.perf_counter()
             m, n_conn = k.light_bounce(depth, rev_sample, s.max_bounces, self.data, prim, tfar,
-                                       bu, bv, m, lp, conn, n_conn)
+                                       bu, bv, m, lp, conn, 0)
             self._count("light paths", time.perf_counter() - t0)
-        if n_conn == 0:
+            # A path connects at most once per bounce (a Lambertian vertex), so the buffer
+            # holds one bounce's connections: splat them before the next bounce refills it.
+            if n_conn:
+                parts.append(self._splat(conn, n_conn))
+        if not parts:
             return np.zeros(0, np.int64), np.zeros((0, 3))
+        return (np.concatenate([p for p, _ in parts]),
+                np.concatenate([v for _, v in parts]))
+
+    def _splat(self, conn, n_conn: int):
+        """The first n_conn camera connections, occlusion-tested and splatted through the
+        pixel filter: (window-local pixel ids (k,), values (k, 3))."""
+        k, s = self.kernel, self.settings
         t0 = time.perf_counter()
         blocked = self.accel.occluded_raw(conn.origin[:n_conn], conn.direction[:n_conn],
                                           conn.tmax[:n_conn])

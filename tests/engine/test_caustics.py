@@ -258,3 +258,30 @@ def test_weights_sum_to_one_and_go_to_each_side_where_it_samples_better():
     # A tiny emitter (large p_A) seen through glass: the light tracer takes nearly all.
     assert caustics.light_tracing_weight(1e4, 1e3, 1.0, 1.0) > 0.999
     assert math.isinf(caustics.light_tracing_ratio(1.0, 1.0, 1.0, 0.0))
+
+
+def test_light_paths_connecting_at_several_vertices_stay_in_their_buffer(monkeypatch):
+    """A light path connects to the camera at every Lambertian vertex after a specular one
+    and goes on, so n paths can queue more than n connections over their bounces. Traced
+    one path at a time (as a kernel's first compile does) by a kernel with bounds checking,
+    none writes past the connection buffer: it holds one bounce's connections and is
+    splatted after each (it once held n for all bounces; fuzz seed 52's compile overran it
+    and crashed)."""
+    from engine import integrator, kernels, light_tracing
+    from engine.accel import Accel
+    from engine.lights import LightSampler
+
+    for module in (integrator, light_tracing):
+        monkeypatch.setattr(module, "STAGES", {name: (f, dict(options, boundscheck=True))
+                                               for name, (f, options) in module.STAGES.items()})
+    box = scenes.caustic_box(light_half=0.2)
+    st = scenes.settings(width=16, height=12, max_bounces=8, light_tracing=True)
+    plan = make_plan(box, st)
+    assert plan.light_tracing
+    emitters = LightSampler(box)
+    kernel = kernels.Kernel(plan.kernel_constants(hasattr(emitters, "local_pmf")), cache=False)
+    data = kernels.scene_data(box, st, plan, emitters,
+                              CameraModel(box.camera, st.width, st.height, box.origin), False)
+    tracer = kernels.Tracer(kernel, data, Accel(box), st, lambda stage, seconds: None)
+    splats = [len(tracer.trace_light(first, 1, 0)[0]) for first in range(400)]
+    assert sum(splats) > 0
