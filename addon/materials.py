@@ -11,8 +11,10 @@ becomes an opaque wall).
 Fallbacks:
   * no node tree / no Cycles output / nothing linked to Surface: diffuse of the
     material's viewport colour (`diffuse_color`); but nothing on Surface and something on
-    Volume: an invisible boundary (glass of IOR 1, white), since volumes are not rendered.
-  * Volume or Displacement linked beside a Surface: ignored, warned.
+    Volume: an invisible boundary (glass of IOR 1, white) around the volume's medium.
+  * Volume: its absorption fills the mesh (Volume Absorption; a Principled Volume's
+    absorption, its scattering and emission warned); other volume shaders warned, ignored.
+  * Displacement linked beside a Surface: ignored, warned.
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
   * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR, roughness), else Metallic
@@ -62,8 +64,7 @@ PRINCIPLED_IGNORED = (
     ("Diffuse Roughness", 0.0, "rendered Lambert"),
 )
 # Material Output inputs beside Surface that Specula ignores, with what that means.
-OUTPUT_IGNORED = (("Volume", "volumes are not rendered"),
-                  ("Displacement", "displacement is not applied"),
+OUTPUT_IGNORED = (("Displacement", "displacement is not applied"),
                   ("Thickness", "thickness is not used"))
 
 
@@ -78,7 +79,8 @@ class MaterialSpec:
     def to_core(self, core):
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
-        normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength") if k in kwargs}
+        normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength", "absorption")
+                  if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
         return dataclasses.replace(m, **normal) if normal else m
 
@@ -92,9 +94,11 @@ def _with(program):
     return {} if program is None else {"colour_program": program}
 
 
-def invisible_boundary(name):
-    """What a Volume-only material renders as: glass of IOR 1 refracts and reflects nothing."""
-    return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0})
+def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
+    """What a Volume-only material renders as: glass of IOR 1 (it refracts and reflects
+    nothing) around its medium's absorption."""
+    return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0,
+                                        "absorption": tuple(absorption)})
 
 
 def _rgb(value):
@@ -578,14 +582,12 @@ class _Reader:
         link = None if surface is None else live_link(surface)
         volume = out.inputs.get("Volume")
         volume_link = None if volume is None else live_link(volume)
+        absorption = None if volume_link is None else self.volume(volume_link)
         if link is None and volume_link is not None:
-            # A Volume-only material (smoke, fog, an absorbing liquid) has no surface: the
-            # closest Specula renders is a boundary that light crosses unchanged.
-            src = volume_link.from_node
-            self.warn(f"'{out.name}' has only a Volume, from node '{src.name}' ({_label(src)}); "
-                      f"volumes are not rendered: rendered as an invisible boundary (glass of "
-                      f"IOR 1)")
-            return invisible_boundary(mat.name)
+            # A Volume-only material (smoke, fog, an absorbing liquid) has no surface: a
+            # boundary light crosses unchanged, around the medium (Cycles: the same, except
+            # that shadow rays cross it too; Specula's reach lights by BSDF sampling).
+            return invisible_boundary(mat.name, absorption)
         if link is None:
             return self.viewport_fallback(f"nothing is linked to '{out.name}' Surface")
         for socket_name, meaning in OUTPUT_IGNORED:
@@ -604,7 +606,39 @@ class _Reader:
         spec = self.shader(node)
         if self.normal_map is not None:
             spec.kwargs.update(self.normal_map)
+        if absorption is not None and max(absorption) > 0:
+            spec.kwargs["absorption"] = absorption
         return spec
+
+    def volume(self, link):
+        """The medium of the Material Output's Volume as an absorption coefficient (3,) per
+        world unit: Volume Absorption exactly (density x (1 - colour)); the absorption part
+        of a Principled Volume (Cycles: density x (1 - colour) x (1 - sqrt(absorption
+        colour))), its scattering and emission warned and left out; other volume shaders
+        warned and not rendered."""
+        node = link.from_node
+        while node.bl_idname == "NodeReroute" and live_link(node.inputs[0]) is not None:
+            node = live_link(node.inputs[0]).from_node
+        kind = node.bl_idname
+        if kind == "ShaderNodeVolumeAbsorption":
+            colour = self.colour(node, "Color", (0.8, 0.8, 0.8))
+            density = max(self.number(node, "Density", 1.0), 0.0)
+            return tuple(density * max(1.0 - c, 0.0) for c in colour)
+        if kind == "ShaderNodeVolumePrincipled":
+            colour = self.colour(node, "Color", (0.5, 0.5, 0.5))
+            density = max(self.number(node, "Density", 1.0), 0.0)
+            tint = self.colour(node, "Absorption Color", (0.0, 0.0, 0.0))
+            if density * max(colour) > 0:
+                self.warn(f"node '{node.name}' scatters (Color {_fmt(colour)} x Density "
+                          f"{density:.3g}); volume scattering is not rendered: only its "
+                          f"absorption is")
+            for socket_name in ("Emission Strength", "Blackbody Intensity"):
+                self.ignored(node, socket_name, 0.0, "volume emission is not rendered")
+            return tuple(density * max(1.0 - c, 0.0) * max(1.0 - math.sqrt(a), 0.0)
+                         for c, a in zip(colour, tint))
+        self.warn(f"Volume from node '{node.name}' ({_label(node)}) is not rendered (Specula "
+                  f"renders Volume Absorption and the Principled Volume's absorption)")
+        return (0.0, 0.0, 0.0)
 
     def shader(self, node):
         name, kind = self.material.name, node.bl_idname

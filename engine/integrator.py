@@ -29,7 +29,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, camera, caustics, environment, lights, sampling, shading, terminator
+from . import bsdf, camera, caustics, environment, lights, media, sampling, shading, terminator
 from .bsdf import DELTA_PDF
 from .film import filter_offset
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
@@ -55,7 +55,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_VOLUMES", "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -65,6 +65,7 @@ HAS_LIGHT_IMPORTANCE = True
 HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
 HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
+HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -84,10 +85,10 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
-# strength (k,).
+# strength (k,) and its medium's absorption coefficient (k, 3).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
-                                            "normal_strength")
+                                            "normal_strength absorption")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -98,10 +99,11 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # then camera_side_density at the path's diffuse first vertex while every vertex after it
 # is specular (0 otherwise), the chain's product of relative IORs, and the distance from
 # the lens point to where the camera ray starts (per row); svm: the shader programs'
-# registers (shading.MAX_REGISTERS floats, reused by every path of the batch).
+# registers (shading.MAX_REGISTERS floats, reused by every path of the batch); the media
+# each path is inside (media.MEDIA_STACK material indices, -1 empty).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
-                            "camera_near prev_normal svm")
+                            "camera_near prev_normal svm media")
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side; s after the material's normal map), the specular lobes' normal m, wo,
@@ -553,6 +555,10 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     c0, c1, c2 = t[i, 0] * g0 * q0 * w, t[i, 1] * g1 * q1 * w, t[i, 2] * g2 * q2 * w
     if DEBUG:
         _debug_mark(paths, row, 6, c0, c1, c2)
+    if HAS_VOLUMES:  # the shadow ray crosses the media on the light's side of the surface
+        a0, a1, a2 = medium_transmittance(i, x.mat, x.front, wx * x.nx + wy * x.ny + wz * x.nz
+                                          < 0.0, dist, sc, paths)
+        c0, c1, c2 = c0 * a0, c1 * a1, c2 * a2
     if not max(c0, max(c1, c2)) > 0:
         return n_shadow
     ox, oy, oz = shadow_origin(x, wx, wy, wz, sc)
@@ -654,6 +660,25 @@ def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
         abs(x.nx * x.wox + x.ny * x.woy + x.nz * x.woz)), eta
 
 
+def medium_transmittance(i, mat, entering, crossed, t, sc, paths):
+    """Beer-Lambert over length t (inf: to infinity) in the media path i is inside, after it
+    crosses (if `crossed`) a surface of material `mat` from its front (`entering`)."""
+    s0, s1, s2 = media.extinction(paths.media, i, sc.materials.absorption, mat, entering,
+                                  crossed)
+    return media.transmittance(s0, s1, s2, t)
+
+
+def absorb_along_ray(i, f, tfar, sc, paths):
+    """The segment just traced lay in the path's media: its throughput is attenuated by their
+    transmittance up to the hit (a light object crossed on the way is attenuated as the
+    surface behind it: lights inside a medium are not exact)."""
+    t = np.float64(tfar) if f >= 0 else np.inf
+    a0, a1, a2 = medium_transmittance(i, -1, False, False, t, sc, paths)
+    paths.throughput[i, 0] *= a0
+    paths.throughput[i, 1] *= a1
+    paths.throughput[i, 2] *= a2
+
+
 def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
     """Continue the path as row `out` of the compacted batch: leave the surface toward the
     side of the new direction, into embree's buffers."""
@@ -690,6 +715,8 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         row = paths.live[i]
         f = prim[i]
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
+        if HAS_VOLUMES:
+            absorb_along_ray(i, f, tfar[i], sc, paths)
         if HAS_LIGHT_HITS or HAS_SUN_DISCS:
             handle_light_hits(i, row, depth, f, tfar[i], sc, paths, mis)
         if f < 0:
@@ -733,6 +760,9 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             if HAS_LIGHT_TRACING:
                 cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
                 paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
+            if HAS_VOLUMES:
+                media.carry(paths.media, i, out, sc.materials.absorption, x.mat, x.front,
+                            wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
             spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
             out += 1
         if PROFILE:
@@ -772,6 +802,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
-    shadow_origin, sample_light, sample_bsdf, caustic_state, spawn)}
+    shadow_origin, sample_light, sample_bsdf, caustic_state, medium_transmittance,
+    absorb_along_ray, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, all_finite)})

@@ -29,6 +29,7 @@ from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, P
                          SceneData, ShadowRays)
 from .jit import INLINE
 from .lights import BOUND_COLUMNS, COLUMNS, Emitters
+from .media import MEDIA_STACK
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
 from .shading import MAX_REGISTERS, ProgramTable
@@ -214,9 +215,12 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     used = np.unique(scene.material_index)
     layers = layer_tables(m, used) if (rough or generic) else None
     strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
+    absorption = None
+    if plan.volumes or generic:
+        absorption = m.absorption if m.absorption is not None else np.zeros((len(m.kind), 3))
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
                               m.transmission_tint, m.emission, layers, programs,
-                              np.asarray(strength, np.float64))
+                              np.asarray(strength, np.float64), absorption)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -273,7 +277,7 @@ class Tracer:
                       np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
                       np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
                       np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
-                      np.zeros(MAX_REGISTERS))
+                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64))
         t0 = time.perf_counter()
         k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
                                replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,

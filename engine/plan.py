@@ -68,6 +68,8 @@ class Plan:
     rough_metal: bool = False
     # Some material used has a tangent-space normal map (shading.normal_map).
     normal_maps: bool = False
+    # Some transmitting material used encloses an absorbing medium (media.py).
+    volumes: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -88,6 +90,8 @@ class Plan:
             s.append("evaluate shader programs (textures)")
         if self.normal_maps:
             s.append("apply normal maps")
+        if self.volumes:
+            s.append("absorb in media")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
@@ -124,7 +128,7 @@ class Plan:
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
-            HAS_NORMAL_MAPS=self.normal_maps,
+            HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -158,6 +162,10 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     dof = cam.aperture_radius > 0
     specular = bool(kinds & {MIRROR, METAL, GLASS})
     normal_maps = scene.programs is not None and bool(np.any(scene.programs.normal[used, 0] >= 0))
+    # Only a transmitting surface lets a path into its medium (Cycles: the same).
+    transmits = np.isin(scene.materials.kind[used], (GLASS, ROUGH_GLASS))
+    volumes = scene.materials.absorption is not None and bool(
+        np.any(scene.materials.absorption[used][transmits] > 0))
     assert all(k in KIND_NAMES for k in kinds)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
@@ -177,15 +185,17 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
             np.any(scene.programs.colour[used, 0] >= 0)
             or np.any(scene.programs.emission[used, 0] >= 0)
             or np.any(scene.programs.normal[used, 0] >= 0)),
-        normal_maps=normal_maps,
+        normal_maps=normal_maps, volumes=volumes,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not), and
-        # a normal map's shadowing term is not (light paths are not weighted by it).
+        # a normal map's shadowing term is not (light paths are not weighted by it), nor
+        # are paths through media (light paths carry no volume stack).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
+                           and not volumes
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

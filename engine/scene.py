@@ -99,6 +99,9 @@ class Material:
     emission_program : a Program whose result replaces `emission` at each point (a textured
         emission colour, strength included); `emission` then stands for it where a constant
         is needed (choosing lights by power), so it must be > 0.
+    absorption : (3,) sigma_a per world unit of the homogeneous medium inside the meshes
+        wearing the material (Cycles' Volume Absorption: density x (1 - colour)); paths
+        reach it through a transmitting surface (glass), media.py.
     """
 
     name: str
@@ -119,6 +122,7 @@ class Material:
     # (SceneBuilder.add_mesh).
     normal_program: Program | None = field(default=None, compare=False)
     normal_strength: float = 1.0
+    absorption: tuple = (0.0, 0.0, 0.0)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -223,6 +227,7 @@ class Materials:
     emission_programs: list | None = None
     normal_programs: list | None = None
     normal_strength: np.ndarray | None = None
+    absorption: np.ndarray | None = None  # (k, 3), Material.absorption
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -260,6 +265,8 @@ class Materials:
             if not (math.isfinite(float(m.normal_strength)) and m.normal_strength >= 0):
                 raise ValueError(f"material '{m.name}': normal map strength must be >= 0, "
                                  f"got {m.normal_strength!r}")
+        absorption = np.array([_colour(m.absorption, f"material '{m.name}' absorption")
+                               for m in materials])
         textured = any(p is not None for p in programs + emission_programs + normal_programs)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
@@ -267,7 +274,7 @@ class Materials:
                    np.array([bool(m.multiscatter) for m in materials]),
                    programs if textured else None, emission_programs if textured else None,
                    normal_programs if textured else None,
-                   np.array([float(m.normal_strength) for m in materials]))
+                   np.array([float(m.normal_strength) for m in materials]), absorption)
 
     def __len__(self):
         return len(self.kind)

@@ -18,6 +18,16 @@ def quad(p0, p1, p2, p3):
     return np.array([p0, p1, p2, p3], float), np.array([[0, 1, 2], [0, 2, 3]])
 
 
+def closed_box(lo, hi):
+    """Vertices (8, 3) and triangles (12, 3) of the box lo..hi, wound counter-clockwise seen
+    from outside (outward geometric normals: crossing into it is crossing a front face)."""
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    v = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                  [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]], float)
+    faces = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (2, 3, 7, 6), (1, 2, 6, 5), (0, 4, 7, 3)]
+    return v, np.array([t for a, b, c, d in faces for t in ((a, b, c), (a, c, d))])
+
+
 def uv_sphere(centre, radius, segments=48, rings=24):
     """Vertices (n, 3), triangles (t, 3) and per-corner normals (t, 3, 3)."""
     th = np.linspace(0, np.pi, rings + 1)

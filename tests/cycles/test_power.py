@@ -245,6 +245,12 @@ def _normal_map_strength_halved(scene, settings):
     return scene, settings
 
 
+def _absorption_plus_10_percent(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, absorption=m.absorption * 1.1)
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -273,6 +279,8 @@ INJECTIONS = {
                                     _refraction_validity_checked),
     "normal_maps_ignored": ("normal_maps", _normal_maps_ignored, None),
     "normal_map_strength_halved": ("normal_maps", _normal_map_strength_halved, None),
+    "absorption_plus_10_percent": ("coloured_glass", _absorption_plus_10_percent, None),
+    "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
 }
 
 

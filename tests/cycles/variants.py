@@ -642,6 +642,34 @@ def rough_metal():
                                  "Roughness": 0.5}), grey])
 
 
+def _with_volume(mat, shader, **inputs):
+    """`mat` with a `shader` volume node on its Material Output's Volume."""
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    vol = tree.nodes.new(shader)
+    for key, value in inputs.items():
+        vol.inputs[key].default_value = value
+    tree.links.new(vol.outputs[0], out.inputs["Volume"])
+    return mat
+
+
+def coloured_glass():
+    """Glass filled with absorbing media (issue 14, point 3): a Glass BSDF over Volume
+    Absorption, a Principled glass over Volume Absorption (what the glTF importer makes of
+    KHR_materials_volume) and a rough glass over an absorption-only Principled Volume."""
+    _box()
+    _balls([
+        _with_volume(_glass("Amber", (1.0, 1.0, 1.0), 0.0), "ShaderNodeVolumeAbsorption",
+                     Color=(0.8, 0.5, 0.2, 1.0), Density=2.0),
+        _with_volume(_principled("Bottle", **{"Base Color": (1.0, 1.0, 1.0, 1.0),
+                                              "Roughness": 0.0, "IOR": 1.5,
+                                              "Transmission Weight": 1.0}),
+                     "ShaderNodeVolumeAbsorption", Color=(0.3, 0.8, 0.5, 1.0), Density=3.0),
+        _with_volume(_glass("Frosted", (1.0, 1.0, 1.0), 0.3), "ShaderNodeVolumePrincipled",
+                     Color=(0.0, 0.0, 0.0, 1.0), Density=2.0,
+                     **{"Absorption Color": (0.2, 0.4, 0.9, 1.0)})])
+
+
 def _low_poly_sphere(name, centre, radius, mat, segments=10):
     """A smooth-shaded UV sphere coarse enough that its terminator shows the facets."""
     import bmesh
@@ -969,6 +997,12 @@ def gltf_texture_coordinates():
     _gltf("TextureCoordinateTest", direction=(0.0, -1.0, 0.2))
 
 
+def gltf_attenuation():
+    """KHR_materials_volume through the importer: Principled glass over Volume Absorption
+    (attenuation colour and distance), cubes of five sizes and node scales, seen face-on."""
+    _gltf("AttenuationTest", direction=(0.0, -1.0, 0.0))
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -1023,7 +1057,7 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 # Rough glass and metal (issue 14): light reaches the floor and the camera through two rough
 # interfaces, mostly by next-event estimation at the inner one.
-for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal):
+for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,
@@ -1041,7 +1075,8 @@ _add(Variant("textured_emitter", textured_emitter, max_bounces=8, samples=256,
 _add(Variant("normal_maps", normal_maps, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
-                      (gltf_texture_coordinates, "TextureCoordinateTest")):
+                      (gltf_texture_coordinates, "TextureCoordinateTest"),
+                      (gltf_attenuation, "AttenuationTest")):
     _add(Variant(_setup.__name__, _setup, max_bounces=8,
                  files=(os.path.join(GLTF_DIR, _name, _name + ".glb"),)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
