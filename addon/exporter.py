@@ -230,10 +230,11 @@ class _Exporter:
         for id_ in self.depsgraph.ids:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
-        self.textured = any("colour_program" in m.kwargs or "emission_program" in m.kwargs
-                            or "normal_program" in m.kwargs for m in self.out.materials)
-        self.tangent_maps = sorted({m.kwargs["normal_uv"] for m in self.out.materials
-                                    if "normal_program" in m.kwargs})
+        self.textured = any("colour_program" in leaf.kwargs or "emission_program" in leaf.kwargs
+                            or "normal_program" in leaf.kwargs
+                            for m in self.out.materials for leaf in m.leaves())
+        self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
+                                    if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:
             obj = inst.object
             if obj.type in GEOMETRY_TYPES:
@@ -627,7 +628,7 @@ def _instance_tangents(mesh: MeshData, insts, mat_index, specs):
     t = len(mesh.triangles)
     local = np.zeros((t, 3, 4), np.float32)
     for k, spec in enumerate(specs):
-        name = spec.kwargs.get("normal_uv")
+        name = spec.normal_uv
         if name in mesh.tangents:
             rows = mat_index == k
             local[rows] = mesh.tangents[name][rows]

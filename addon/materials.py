@@ -17,11 +17,13 @@ Fallbacks:
   * Displacement linked beside a Surface: ignored, warned.
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
-  * Principled BSDF: Transmission Weight >= 0.5 -> glass (IOR, roughness), else Metallic
-    >= 0.5 -> metal (roughness), else a Lambert base under a GGX dielectric layer. Inputs
-    Specula does not render (Alpha, Coat, Sheen, Subsurface, Anisotropic, Specular Tint,
-    Thin Film, Diffuse Roughness, normal maps) warn when used.
-  * any other shader node (Mix, Add, Toon, ...): diffuse of its 'Color' / 'Base Color'
+  * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
+    and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
+    (a mix of shaders where two or more weigh > 0). Inputs Specula does not render (Alpha,
+    Coat, Sheen, Subsurface, Anisotropic, Specular Tint, Thin Film, Diffuse Roughness)
+    warn when used.
+  * Mix Shader (Fac reduced to a constant) and Add Shader: a mix of their two shaders.
+  * any other shader node (Toon, Translucent, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
     `_Constants`: an image's mean colour in scene-linear space, RGB / Value / Math / Mix /
@@ -76,7 +78,27 @@ class MaterialSpec:
     name: str
     kwargs: dict = field(default_factory=dict)
 
+    def leaves(self):
+        """This spec, or a mix's component specs, recursively."""
+        if self.ctor != "mix":
+            yield self
+            return
+        for part in (self.kwargs["first"], self.kwargs["second"]):
+            yield from part.leaves()
+
+    @property
+    def normal_uv(self):
+        """The UV map of the normal maps below this spec (one per material), or None."""
+        return next((leaf.kwargs["normal_uv"] for leaf in self.leaves()
+                     if "normal_program" in leaf.kwargs), None)
+
     def to_core(self, core):
+        if self.ctor == "mix":
+            k = self.kwargs
+            m = core.Material.mix(self.name, k["first"].to_core(core),
+                                  k["second"].to_core(core), k["fac"], k["scale"])
+            extra = {key: tuple(k[key]) for key in ("absorption", "emission") if key in k}
+            return dataclasses.replace(m, **extra) if extra else m
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
         normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength", "absorption")
@@ -605,7 +627,8 @@ class _Reader:
             node = link.from_node
         spec = self.shader(node)
         if self.normal_map is not None:
-            spec.kwargs.update(self.normal_map)
+            for leaf in spec.leaves():
+                leaf.kwargs.update(self.normal_map)
         if absorption is not None and max(absorption) > 0:
             spec.kwargs["absorption"] = absorption
         return spec
@@ -642,6 +665,8 @@ class _Reader:
 
     def shader(self, node):
         name, kind = self.material.name, node.bl_idname
+        if kind in ("ShaderNodeMixShader", "ShaderNodeAddShader"):
+            return self.mix(node)
         if kind in ("ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass") or kind in GLOSSY_NODES:
             self.normal(node)
         if kind == "ShaderNodeBsdfDiffuse":
@@ -678,6 +703,47 @@ class _Reader:
         self.warn(f"node '{node.name}' ({node.bl_label or kind}) is not supported; rendered as "
                   f"diffuse {'grey 0.8' if colour_socket is None else 'of its ' + colour_socket}")
         return MaterialSpec("diffuse", name, {"colour": colour})
+
+    def mix(self, node):
+        """Mix Shader (Fac, reduced to a constant) and Add Shader: a mix of the two shaders
+        linked in, each with its own normal map; an unlinked input is no shader (Cycles'
+        empty closure: black, no light passes)."""
+        add = node.bl_idname == "ShaderNodeAddShader"
+        fac = 0.5 if add else self.unit(node, "Fac", 0.5)
+        parts = []
+        for sock in [s for s in node.inputs if s.type == "SHADER"][:2]:
+            link = live_link(sock)
+            while link is not None and link.from_node.bl_idname == "NodeReroute":
+                link = live_link(link.from_node.inputs[0])
+            self.normal_map = None
+            part = self.shader(link.from_node) if link is not None else \
+                MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),
+                                                                   "strength": 0.0})
+            if self.normal_map is not None:
+                for leaf in part.leaves():
+                    leaf.kwargs.update(self.normal_map)
+            self.normal_map = None
+            parts.append(part)
+        if not add and fac in (0.0, 1.0):
+            return parts[int(fac)]
+        return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0)
+
+    def mixed(self, first, second, fac, scale=1.0):
+        """The mix spec of two specs; their normal maps must read one UV map (a triangle has
+        one set of tangents), else the second's is dropped, warned."""
+        a, b = first.normal_uv, second.normal_uv
+        if a is not None and b is not None and a != b:
+            self.warn(f"mixed shaders' normal maps read UV maps '{a}' and '{b}'; only one per "
+                      f"material is supported: the second's normal map is not rendered")
+            for leaf in second.leaves():
+                for key in ("normal_program", "normal_strength", "normal_uv"):
+                    leaf.kwargs.pop(key, None)
+        for leaf in (*first.leaves(), *second.leaves()):
+            if leaf.kwargs.pop("emission_program", None) is not None:
+                self.warn("a textured emission inside a mixed shader is not supported; "
+                          "rendered as its constant (the texture's mean)")
+        return MaterialSpec("mix", self.material.name, {"first": first, "second": second,
+                                                        "fac": fac, "scale": scale})
 
     def multiscatter(self, node):
         """Whether a microfacet node is Multiscatter GGX (energy compensated) or plain GGX;
@@ -728,28 +794,47 @@ class _Reader:
         kwargs = {"emission": emission} if strength > 0 and max(emission) > 0 else {}
         if kwargs and program is not None:
             kwargs["emission_program"] = shader_nodes.scaled(program, strength)
-        for label, w in (("Metallic", metallic), ("Transmission Weight", transmission)):
-            if 0.0 < w < 1.0:
-                self.warn(f"node '{node.name}' {label} {w:.3g} is not supported (only 0 or 1); "
-                          f"treated as {1 if w >= 0.5 else 0}")
-        if transmission >= 0.5:
-            return MaterialSpec("principled_glass", name, {
-                "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
-                "roughness": roughness, "multiscatter": self.multiscatter(node), **kwargs})
-        base, program = self.textured_colour(node, "Base Color")
-        if metallic >= 0.5:
-            return MaterialSpec("metal", name, {
+        multiscatter = self.multiscatter(node)
+        lobes = []  # (weight, spec): Cycles mixes metal, glass and dielectric linearly
+        if metallic > 0.0:
+            base, program = self.textured_colour(node, "Base Color")
+            lobes.append((metallic, MaterialSpec("metal", name, {
                 "base_colour": base, **_with(program), "roughness": roughness,
-                "multiscatter": self.multiscatter(node), **kwargs})
-        # Dielectric: Lambert base under a GGX specular layer (Cycles' Principled v2).
-        if not self.multiscatter(node) and roughness > ROUGHNESS_EPSILON:
+                "multiscatter": multiscatter})))
+        if metallic < 1.0 and transmission > 0.0:
+            lobes.append(((1.0 - metallic) * transmission, MaterialSpec("principled_glass", name, {
+                "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
+                "roughness": roughness, "multiscatter": multiscatter})))
+        if metallic < 1.0 and transmission < 1.0:
+            lobes.append(((1.0 - metallic) * (1.0 - transmission), self.dielectric(node)))
+        if len(lobes) == 1:
+            lobes[0][1].kwargs.update(kwargs)
+            return lobes[0][1]
+        # Fractional Metallic or Transmission: a mix of the lobes, the emission on the mix.
+        spec, total = lobes[0][1], lobes[0][0]
+        for w, part in lobes[1:]:
+            spec = self.mixed(spec, part, w / (total + w))
+            total += w
+        if kwargs.pop("emission_program", None) is not None:
+            self.warn(f"node '{node.name}': a textured emission with fractional Metallic or "
+                      f"Transmission is not supported; rendered as its constant")
+        spec.kwargs.update(kwargs)
+        return spec
+
+    def dielectric(self, node):
+        """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer
+        (Cycles' Principled v2)."""
+        base, program = self.textured_colour(node, "Base Color")
+        roughness = self.unit(node, "Roughness")
+        if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and \
+                roughness > ROUGHNESS_EPSILON:
             self.warn(f"node '{node.name}' distribution GGX is not supported for the "
                       f"dielectric layer; rendered as Multiscatter GGX")
         level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
             if "Specular IOR Level" in node.inputs else 0.5
-        return MaterialSpec("principled", name, {
+        return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), "roughness": roughness,
-            "ior": self.ior(node), "specular_ior_level": level, **kwargs})
+            "ior": self.ior(node), "specular_ior_level": level})
 
 
 def convert(material, image_cache=None):

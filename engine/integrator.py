@@ -35,10 +35,11 @@ from .film import filter_offset
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
 from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SUN_BSDF,
                      _SUN_CAMERA, _SUN_RADIANCE)
-from .sampling import (BSDF, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE, ROULETTE,
+from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE,
+                       ROULETTE,
                        bounce_dim, pixel_seed, power_heuristic, reverse_bits, sample_1d,
                        sample_2d)
-from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, NONE, PRINCIPLED, ROUGH_GLASS,
+from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
                     ROUGH_METAL)
 
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
@@ -55,7 +56,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "HAS_VOLUMES", "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_VOLUMES", "HAS_MIXES", "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -66,6 +67,7 @@ HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weig
 HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
 HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
+HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one component
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -85,10 +87,12 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
-# strength (k,) and its medium's absorption coefficient (k, 3).
+# strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
+# component rows (k, 2), fac and scale (k,) (scene.Materials).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
-                                            "normal_strength absorption")
+                                            "normal_strength absorption mix_components "
+                                            "mix_fac mix_scale")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -260,11 +264,31 @@ def handle_escaped(i, row, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def surface_interaction(i, f, tfar, bu, bv, sc, paths):
+def choose_closure(row, depth, mat, rev_sample, sc, paths):
+    """Down a mix of shaders to one component, the second with probability fac (one
+    dimension per bounce serves every level: its remainder is reused): (material, the
+    mixes' scale product)."""
+    mt = sc.materials
+    u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, CLOSURE))
+    scale = 1.0
+    while mt.kind[mat] == MIX:
+        fac = mt.mix_fac[mat]
+        scale *= mt.mix_scale[mat]
+        if u < fac:
+            u = u / fac
+            mat = mt.mix_components[mat, 1]
+        else:
+            u = (u - fac) / (1.0 - fac)
+            mat = mt.mix_components[mat, 0]
+    return mat, scale
+
+
+def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     """The hit point from the barycentrics in float64 (embree works in float32), the
     geometric normal and the shading normal flipped to the incoming side (the shading
     normal falls back to the geometric one where it degenerates), the specular lobes'
-    normal (bsdf.valid_specular_normal) and the ray-offset scale."""
+    normal (bsdf.valid_specular_normal) and the ray-offset scale; mat: the material
+    shading it (the triangle's, or the component a mix chose)."""
     g = sc.geometry
     vt = g.vertices
     dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
@@ -288,7 +312,6 @@ def surface_interaction(i, f, tfar, bu, bv, sc, paths):
             length = math.sqrt(ax * ax + ay * ay + az * az)
             if length > 1e-12:
                 sx, sy, sz = ax / length, ay / length, az / length
-    mat = sc.geometry.material_index[f]
     bx, by, bz = sx, sy, sz
     if HAS_NORMAL_MAPS and sc.materials.programs.normal[mat, 0] >= 0:
         sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
@@ -556,8 +579,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     if DEBUG:
         _debug_mark(paths, row, 6, c0, c1, c2)
     if HAS_VOLUMES:  # the shadow ray crosses the media on the light's side of the surface
-        a0, a1, a2 = medium_transmittance(i, x.mat, x.front, wx * x.nx + wy * x.ny + wz * x.nz
-                                          < 0.0, dist, sc, paths)
+        a0, a1, a2 = medium_transmittance(i, sc.geometry.material_index[x.f], x.front,
+                                          wx * x.nx + wy * x.ny + wz * x.nz < 0.0, dist, sc,
+                                          paths)
         c0, c1, c2 = c0 * a0, c1 * a1, c2 * a2
     if not max(c0, max(c1, c2)) > 0:
         return n_shadow
@@ -722,7 +746,11 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         if f < 0:
             handle_escaped(i, row, sc, paths, mis)
             continue
-        x = surface_interaction(i, f, tfar[i], bu[i], bv[i], sc, paths)
+        mat = sc.geometry.material_index[f]
+        scale = 1.0
+        if HAS_MIXES:
+            mat, scale = choose_closure(row, depth, mat, rev_sample, sc, paths)
+        x = surface_interaction(i, f, mat, tfar[i], bu[i], bv[i], sc, paths)
         if depth == 0:
             paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
             paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
@@ -730,6 +758,10 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
                 _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
         if HAS_EMISSION:
             handle_emission(i, row, depth, x, sc, paths, mis)
+        if HAS_MIXES and scale != 1.0:  # after the emission, which is the whole mix's
+            paths.throughput[i, 0] *= scale
+            paths.throughput[i, 1] *= scale
+            paths.throughput[i, 2] *= scale
         # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
         k = sc.materials.kind[x.mat]
         if depth > max_bounces or k == NONE:
@@ -760,8 +792,9 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             if HAS_LIGHT_TRACING:
                 cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
                 paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
-            if HAS_VOLUMES:
-                media.carry(paths.media, i, out, sc.materials.absorption, x.mat, x.front,
+            if HAS_VOLUMES:  # the medium is the triangle's material's, a mix's as a whole
+                media.carry(paths.media, i, out, sc.materials.absorption,
+                            sc.geometry.material_index[x.f], x.front,
                             wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
             spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
             out += 1
@@ -798,7 +831,8 @@ def all_finite(radiance, depth, normal):
 # structures are inlined into `shade` by numba; the entry points are compiled on their own
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
-    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, surface_interaction,
+    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
+    surface_interaction,
     mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,

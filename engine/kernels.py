@@ -212,7 +212,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                         normals, smooth, obj, offset, uv, tangents)
     m = scene.materials
     rough = plan.principled or plan.glossy or plan.rough_glass or plan.rough_metal
-    used = np.unique(scene.material_index)
+    used = m.reachable(np.unique(scene.material_index))
     layers = layer_tables(m, used) if (rough or generic) else None
     strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
     absorption = None
@@ -220,7 +220,8 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         absorption = m.absorption if m.absorption is not None else np.zeros((len(m.kind), 3))
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
                               m.transmission_tint, m.emission, layers, programs,
-                              np.asarray(strength, np.float64), absorption)
+                              np.asarray(strength, np.float64), absorption,
+                              *_mix_arrays(m, plan.mixes or generic))
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -234,6 +235,16 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
                      cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table(),
                      caustics)
+
+
+def _mix_arrays(m, needed: bool) -> tuple:
+    """The materials' mix components, fac and scale for the kernel (None if not needed)."""
+    if not needed:
+        return None, None, None
+    if m.mix_components is None:
+        return np.full((len(m.kind), 2), -1, np.int64), np.zeros(len(m.kind)), \
+            np.ones(len(m.kind))
+    return m.mix_components, m.mix_fac, m.mix_scale
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:

@@ -229,7 +229,8 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         f = prim[i]
         if f < 0 or (depth == 0 and tfar[i] < lp.near[i]):
             continue
-        x = surface_interaction(i, f, tfar[i], bu[i], bv[i], sc, lp)
+        x = surface_interaction(i, f, sc.geometry.material_index[f], tfar[i], bu[i], bv[i], sc,
+                                lp)
         k = sc.materials.kind[x.mat]
         if not (k == DIFFUSE or k == MIRROR or k == METAL or k == GLASS) or \
                 (k == DIFFUSE and depth == 0):  # not a caustic path: NEE's

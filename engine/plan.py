@@ -19,6 +19,7 @@ from .scene import (
     KIND_NAMES,
     METAL,
     MIRROR,
+    MIX,
     NONE,
     PRINCIPLED,
     ROUGH_GLASS,
@@ -70,6 +71,8 @@ class Plan:
     normal_maps: bool = False
     # Some transmitting material used encloses an absorbing medium (media.py).
     volumes: bool = False
+    # Some material used is a mix of two (Mix / Add Shader): each hit picks one.
+    mixes: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -92,6 +95,8 @@ class Plan:
             s.append("apply normal maps")
         if self.volumes:
             s.append("absorb in media")
+        if self.mixes:
+            s.append("choose one of mixed shaders")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
@@ -128,7 +133,7 @@ class Plan:
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
-            HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes,
+            HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -146,8 +151,10 @@ class Plan:
 
 
 def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
-    used = np.unique(scene.material_index)
+    used = scene.materials.reachable(np.unique(scene.material_index))
     kinds = set(scene.materials.kind[used].tolist())
+    mixes = MIX in kinds
+    kinds.discard(MIX)
     # Only emissive triangles need an area: per-material test first (millions of triangles).
     emissive = (scene.materials.emission.max(axis=1) > 0)[scene.material_index]
     v = scene.vertices[emissive]
@@ -162,10 +169,13 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     dof = cam.aperture_radius > 0
     specular = bool(kinds & {MIRROR, METAL, GLASS})
     normal_maps = scene.programs is not None and bool(np.any(scene.programs.normal[used, 0] >= 0))
-    # Only a transmitting surface lets a path into its medium (Cycles: the same).
-    transmits = np.isin(scene.materials.kind[used], (GLASS, ROUGH_GLASS))
-    volumes = scene.materials.absorption is not None and bool(
-        np.any(scene.materials.absorption[used][transmits] > 0))
+    # Only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
+    # medium is its own row's, entered through any transmitting component.
+    m = scene.materials
+    volumes = m.absorption is not None and any(
+        m.absorption[top].max() > 0 and bool(np.any(np.isin(m.kind[m.reachable([top])],
+                                                             (GLASS, ROUGH_GLASS))))
+        for top in np.unique(scene.material_index))
     assert all(k in KIND_NAMES for k in kinds)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
@@ -185,17 +195,18 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
             np.any(scene.programs.colour[used, 0] >= 0)
             or np.any(scene.programs.emission[used, 0] >= 0)
             or np.any(scene.programs.normal[used, 0] >= 0)),
-        normal_maps=normal_maps, volumes=volumes,
+        normal_maps=normal_maps, volumes=volumes, mixes=mixes,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not), and
         # a normal map's shadowing term is not (light paths are not weighted by it), nor
-        # are paths through media (light paths carry no volume stack).
+        # are paths through media (light paths carry no volume stack) or mixed shaders
+        # (light paths do not choose among them).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
-                           and not volumes
+                           and not volumes and not mixes
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

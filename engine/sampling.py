@@ -168,7 +168,7 @@ def stream_1d(pixels, sample, seed, dim):
 # slot per use (module constants: compiled code reads them as constants).
 DIM_FILTER, DIM_LENS = 0, 1
 DIMS_PER_BOUNCE = 6
-LIGHT_SELECT, LIGHT_POINT, LOBE, BSDF, ROULETTE = 0, 1, 2, 3, 4
+LIGHT_SELECT, LIGHT_POINT, LOBE, BSDF, ROULETTE, CLOSURE = 0, 1, 2, 3, 4, 5
 
 
 @njit(**JIT)

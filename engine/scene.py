@@ -11,6 +11,7 @@ Rec.709 RGB, radiance in W/(sr m^2) per unit of Blender's "strength".
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -21,10 +22,10 @@ from .jit import ALLOCATING, njit
 from .shading import Program, ProgramTable, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
-NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL = range(9)
+NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX = range(10)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
-              ROUGH_METAL: "rough_metal"}
+              ROUGH_METAL: "rough_metal", MIX: "mix"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
@@ -90,6 +91,11 @@ class Material:
           al. 2007) with the tints and the dielectric Fresnel of glass, Multiscatter GGX
           energy compensation from the glass' own albedo tables (bsdf.py).
         - none: no BSDF (a pure Emission shader): paths end here.
+        - mix: scale x ((1 - fac) x components[0] + fac x components[1]) (Cycles' Mix
+          Shader: scale 1; Add Shader: fac 1/2, scale 2). A path picks one component per
+          hit, the second with probability fac, and carries the scale (an unbiased
+          estimate of the sum: the components are sampled and evaluated alone). Emission
+          is the components' emission mixed the same way (plus the mix's own).
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
         texture on the colour), or None. `colour` is then what the program's result is
@@ -123,6 +129,19 @@ class Material:
     normal_program: Program | None = field(default=None, compare=False)
     normal_strength: float = 1.0
     absorption: tuple = (0.0, 0.0, 0.0)
+    components: tuple = ()  # mix: the two Materials mixed
+    fac: float = 0.0  # mix: the weight of components[1]
+    scale: float = 1.0  # mix: the factor of the whole sum
+
+    @classmethod
+    def mix(cls, name, first, second, fac, scale=1.0):
+        """Cycles' Mix Shader (scale 1) or Add Shader (fac 1/2, scale 2) of two Materials."""
+        fac, scale = float(fac), float(scale)
+        if not (0.0 <= fac <= 1.0 and math.isfinite(scale) and scale >= 0.0):
+            raise ValueError(f"material '{name}': a mix needs 0 <= fac <= 1 and a finite scale "
+                             f">= 0, got fac {fac!r}, scale {scale!r}")
+        return cls(name, "mix", (0.0, 0.0, 0.0), components=(first, second), fac=fac,
+                   scale=scale)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -196,6 +215,54 @@ class Material:
                    emission_program=emission_program)
 
 
+def _flatten_mixes(materials: list[Material]) -> tuple[list[Material], list]:
+    """The materials with every mix's components appended as rows of their own, and per row
+    its component rows ((-1, -1) if not a mix). A mix's emission (its own plus its
+    components', mixed as their BSDFs are) moves onto every component row below it: the
+    path shades with one of them, and must see the emission of the whole."""
+    out, components = list(materials), []
+    given = len(out)
+    i = 0
+    while i < len(out):
+        m = out[i]
+        if m.kind != "mix":
+            components.append((-1, -1))
+            i += 1
+            continue
+        if len(m.components) != 2:
+            raise ValueError(f"material '{m.name}': a mix needs two components")
+        if m.emission_program is not None or any(c.emission_program is not None
+                                                 for c in m.components):
+            raise ValueError(f"material '{m.name}': a textured emission cannot be mixed")
+        # A component row already carries the emission of the mix above it.
+        total = _mixed_emission(m) if i < given else np.asarray(m.emission, np.float64)
+        out[i] = _with_emission(m, total)
+        rows = []
+        for c in m.components:
+            out.append(_with_emission(c, total))
+            rows.append(len(out) - 1)
+        components.append(tuple(rows))
+        i += 1
+    return out, components
+
+
+def _mixed_emission(m: Material) -> np.ndarray:
+    own = np.asarray(m.emission, np.float64)
+    if m.kind != "mix":
+        return own
+    a, b = (_mixed_emission(c) for c in m.components)
+    return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
+
+
+def _with_emission(m: Material, emission) -> Material:
+    """m (and, for a mix, its components, recursively) emitting `emission` in total."""
+    if m.kind != "mix":
+        return dataclasses.replace(m, emission=tuple(float(e) for e in emission))
+    return dataclasses.replace(m, emission=tuple(float(e) for e in emission),
+                               components=tuple(_with_emission(c, emission)
+                                                for c in m.components))
+
+
 def _glass_kind(roughness, ior) -> str:
     """Smooth glass at Cycles' delta roughness, or at an IOR refracting straight through."""
     rough = roughness > DELTA_ROUGHNESS and abs(float(ior) - 1.0) >= DELTA_IOR
@@ -228,9 +295,34 @@ class Materials:
     normal_programs: list | None = None
     normal_strength: np.ndarray | None = None
     absorption: np.ndarray | None = None  # (k, 3), Material.absorption
+    # Mixes: per row its two component rows (-1, -1 if not a mix), fac and scale; the
+    # components are rows after the materials given (from_list flattens them).
+    mix_components: np.ndarray | None = None
+    mix_fac: np.ndarray | None = None
+    mix_scale: np.ndarray | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
+        materials, components = _flatten_mixes(list(materials))
+        m = cls._rows(materials)
+        fac = np.array([float(x.fac) if x.kind == "mix" else 0.0 for x in materials])
+        scale = np.array([float(x.scale) if x.kind == "mix" else 1.0 for x in materials])
+        return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
+                                   mix_fac=fac, mix_scale=scale)
+
+    def reachable(self, rows) -> np.ndarray:
+        """`rows` and every mix component below them (the materials a hit can shade with)."""
+        seen = set(int(r) for r in rows)
+        todo = list(seen)
+        while todo:
+            for c in self.mix_components[todo.pop()] if self.mix_components is not None else ():
+                if c >= 0 and int(c) not in seen:
+                    seen.add(int(c))
+                    todo.append(int(c))
+        return np.array(sorted(seen), np.int64)
+
+    @classmethod
+    def _rows(cls, materials: list[Material]) -> "Materials":
         kinds = {v: k for k, v in KIND_NAMES.items()}
         rows = []
         for m in materials:

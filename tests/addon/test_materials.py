@@ -67,7 +67,6 @@ def test_no_material_is_default_grey():
 @pytest.mark.parametrize("shader, expect_ctor", [
     ("ShaderNodeBsdfToon", "diffuse"),
     ("ShaderNodeBsdfTranslucent", "diffuse"),
-    ("ShaderNodeMixShader", "diffuse"),
 ])
 def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     mat, node = node_material("Odd", shader)
@@ -160,11 +159,55 @@ def test_reroute_is_followed(fresh):
     assert (spec.ctor, warnings) == ("glossy", [])
 
 
-def test_fractional_principled_weights_warn(fresh):
-    mat, _ = node_material("Half", "ShaderNodeBsdfPrincipled", Metallic=0.3, Roughness=0.0)
+def test_fractional_principled_weights_are_a_mix_of_its_lobes(fresh, core):
+    """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x (1 -
+    Metallic) x Transmission, the dielectric x the rest; the emission is added once."""
+    mat, _ = node_material("Half", "ShaderNodeBsdfPrincipled", Metallic=0.3, Roughness=0.0,
+                           **{"Transmission Weight": 0.5, "Emission Strength": 2.0,
+                              "Emission Color": (1.0, 0.5, 0.25, 1.0)})
     spec, warnings = convert(mat)
-    assert spec.ctor == "principled"
-    assert any("Metallic" in w for w in warnings)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.35)
+    inner = spec.kwargs["first"]
+    assert (inner.ctor, inner.kwargs["first"].ctor, inner.kwargs["second"].ctor) == \
+        ("mix", "metal", "principled_glass")
+    assert inner.kwargs["fac"] == pytest.approx(0.35 / 0.65)
+    assert spec.kwargs["second"].ctor == "principled"
+    assert all("emission" not in leaf.kwargs for leaf in spec.leaves())
+    m = spec.to_core(core)
+    assert m.kind == "mix" and m.emission == pytest.approx((2.0, 1.0, 0.5))
+
+
+def test_mix_and_add_shaders_mix_their_shaders(fresh, core):
+    """Mix Shader (Fac) and Add Shader (each in full: fac 1/2, scale 2) of the shaders linked
+    in; a normal map stays with its own shader; Fac 0 is the first shader alone."""
+    mat, mix = node_material("Mixed", "ShaderNodeMixShader")
+    tree = mat.node_tree
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    glossy = tree.nodes.new("ShaderNodeBsdfGlossy")
+    glossy.inputs["Roughness"].default_value = 0.3
+    tree.links.new(diffuse.outputs[0], mix.inputs[1])
+    tree.links.new(glossy.outputs[0], mix.inputs[2])
+    mix.inputs["Fac"].default_value = 0.3
+    add_normal_map(mat, glossy)
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert (spec.ctor, spec.kwargs["fac"], spec.kwargs["scale"]) == ("mix", pytest.approx(0.3), 1.0)
+    first, second = spec.kwargs["first"], spec.kwargs["second"]
+    assert (first.ctor, second.ctor) == ("diffuse", "glossy")
+    assert "normal_program" in second.kwargs and "normal_program" not in first.kwargs
+    m = spec.to_core(core)
+    assert (m.kind, m.components[1].kind) == ("mix", "glossy")
+    assert m.components[1].normal_program is not None
+    mix.inputs["Fac"].default_value = 0.0
+    assert convert(mat)[0].ctor == "diffuse"
+    add = tree.nodes.new("ShaderNodeAddShader")
+    tree.links.new(diffuse.outputs[0], add.inputs[0])
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(add.outputs[0], out.inputs["Surface"])
+    spec, _ = convert(mat)
+    assert (spec.ctor, spec.kwargs["fac"], spec.kwargs["scale"]) == ("mix", 0.5, 2.0)
+    assert spec.kwargs["second"].ctor == "emission_only"  # unlinked: no shader, black
 
 
 def test_materials_without_nodes_use_viewport_colour(fresh):
@@ -358,7 +401,9 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
     tree.links.new(sep.outputs["Green"], node.inputs["Roughness"])
     tree.links.new(sep.outputs["Blue"], scale.inputs[0])
     tree.links.new(scale.outputs[0], node.inputs["Metallic"])
-    spec, warnings = convert(mat)
+    mixed, warnings = convert(mat)
+    # Metallic is fractional (half the texture's mean): the dielectric lobe of a mix.
+    spec = next(leaf for leaf in mixed.leaves() if leaf.ctor == "principled")
     base = srgb_to_linear(stored[:, :3]).mean(axis=0) * (0.5, 1.0, 0.25)
     assert spec.kwargs["base_colour"] == pytest.approx(tuple(base), abs=1e-5)
     # The base colour varies per point (Linear, at the texel centres: the texels).

@@ -251,6 +251,13 @@ def _absorption_plus_10_percent(scene, settings):
     return scene, settings
 
 
+def _mix_factor_reversed(scene, settings):
+    m = scene.materials
+    mixes = m.mix_components[:, 0] >= 0
+    scene.materials = dataclasses.replace(m, mix_fac=np.where(mixes, 1.0 - m.mix_fac, m.mix_fac))
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -281,6 +288,7 @@ INJECTIONS = {
     "normal_map_strength_halved": ("normal_maps", _normal_map_strength_halved, None),
     "absorption_plus_10_percent": ("coloured_glass", _absorption_plus_10_percent, None),
     "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
+    "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
 }
 
 

@@ -670,6 +670,43 @@ def coloured_glass():
                      **{"Absorption Color": (0.2, 0.4, 0.9, 1.0)})])
 
 
+def _mix_of(name, node, first, second, fac=None):
+    """A material whose surface is a `node` (Mix or Add Shader) of two shader nodes, each
+    given as (bl_idname, {input: value})."""
+    mat = bs.material(name, node)
+    tree = mat.node_tree
+    mix = next(n for n in tree.nodes if n.bl_idname == node)
+    if fac is not None:
+        mix.inputs["Fac"].default_value = fac
+    shader_inputs = [s for s in mix.inputs if s.type == "SHADER"]
+    for sock, (kind, inputs) in zip(shader_inputs, (first, second)):
+        sub = tree.nodes.new(kind)
+        for key, value in inputs.items():
+            sub.inputs[key].default_value = value
+        tree.links.new(sub.outputs[0], sock)
+    return mat
+
+
+def mixed_shaders():
+    """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
+    an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs at Metallic
+    0.5 and at Transmission 0.5 (Cycles mixes their lobes linearly)."""
+    _box()
+    for i, mat in enumerate([
+            _mix_of("MixDG", "ShaderNodeMixShader",
+                    ("ShaderNodeBsdfDiffuse", {"Color": (0.8, 0.1, 0.1, 1.0)}),
+                    ("ShaderNodeBsdfGlossy", {"Color": (1.0, 1.0, 1.0, 1.0), "Roughness": 0.3}),
+                    fac=0.4),
+            _mix_of("AddDG", "ShaderNodeAddShader",
+                    ("ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.3, 0.5, 1.0)}),
+                    ("ShaderNodeBsdfGlossy", {"Color": (0.4, 0.4, 0.4, 1.0), "Roughness": 0.15})),
+            _principled("HalfMetal", **{"Base Color": (0.9, 0.6, 0.3, 1.0), "Metallic": 0.5,
+                                        "Roughness": 0.3}),
+            _principled("HalfGlass", **{"Base Color": (0.8, 0.9, 1.0, 1.0), "Roughness": 0.0,
+                                        "Transmission Weight": 0.5})]):
+        _sphere(mat, (-0.66 + 0.44 * i, 0.0, 0.2), 0.2, f"Ball{i}")
+
+
 def _low_poly_sphere(name, centre, radius, mat, segments=10):
     """A smooth-shaded UV sphere coarse enough that its terminator shows the facets."""
     import bmesh
@@ -1057,7 +1094,8 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 # Rough glass and metal (issue 14): light reaches the floor and the camera through two rough
 # interfaces, mostly by next-event estimation at the inner one.
-for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass):
+for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass,
+               mixed_shaders):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,

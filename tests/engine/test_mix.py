@@ -1,0 +1,73 @@
+"""Mixed shaders (scene.Material.mix): a hit shades with one component, picked by the mix's
+factor, carrying its scale; the image is the mixed BSDF's and the mixed emission's."""
+
+import numpy as np
+import pytest
+
+from engine import Material, RenderSettings, SceneBuilder, World, render
+from engine.plan import make_plan
+from tests import scenes
+from tests.engine.test_integrator import max_block_z
+
+# Luminances 0.33 and 0.11: a wrong factor changes the luminance the comparison reads.
+RED, BLUE = (0.8, 0.2, 0.2), (0.05, 0.1, 0.4)
+
+
+def _box_with_ball(material):
+    b = SceneBuilder()
+    scenes.cornell_box(b, spheres=False)
+    v, t, n = scenes.uv_sphere((0.0, 0.0, 0.4), 0.4)
+    b.add_mesh("ball", v, t, b.add_material(material), corner_normals=n)
+    return b.build(scenes.cornell_camera(), World((0, 0, 0)))
+
+
+def _render(material, seed):
+    return render(_box_with_ball(material), RenderSettings(width=48, height=36, samples=32,
+                                                           max_bounces=4, seed=seed))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mixed, plain", [
+    (Material.mix("mix", Material.diffuse("a", RED), Material.diffuse("b", BLUE), 0.3),
+     Material.diffuse("same", tuple(0.7 * np.array(RED) + 0.3 * np.array(BLUE)))),
+    (Material.mix("add", Material.diffuse("a", RED), Material.diffuse("b", BLUE), 0.5, 2.0),
+     Material.diffuse("same", tuple(np.array(RED) + np.array(BLUE)))),
+    (Material.mix("glow", Material.emission_only("e", (1.0, 0.8, 0.5), 2.0),
+                  Material.mix("inner", Material.diffuse("a", RED), Material.diffuse("b", BLUE),
+                               0.5), 0.6),
+     Material.diffuse("same", tuple(0.3 * np.array(RED) + 0.3 * np.array(BLUE)),
+                      emission=tuple(0.8 * np.array((1.0, 0.8, 0.5))))),
+], ids=["mix", "add", "nested_with_emission"])
+def test_a_mix_of_diffuse_shaders_is_the_diffuse_of_their_mix(mixed, plain):
+    """Mix Shader, Add Shader and a nested mix with an emitter render as the one diffuse
+    (and emission) they add up to, within noise (block z-scores, Sidak-corrected); the
+    same comparison tells a mix with its factor reversed (the first input at fac) apart."""
+    ref = _render(plain, 11)
+    z, critical = max_block_z(ref, _render(mixed, 12))
+    assert z < critical, z
+    if mixed.name == "mix":
+        wrong = Material.mix("mix", *mixed.components, 1.0 - mixed.fac)
+        z, critical = max_block_z(ref, _render(wrong, 12))
+        assert z > critical, z
+
+
+def test_a_mix_plans_its_components_and_no_light_tracing():
+    """The plan sees the kinds a mix reaches (here a mirror only inside a mix) and leaves
+    light tracing out (light paths do not choose among components)."""
+    scene = _box_with_ball(Material.mix("m", Material.diffuse("a", RED),
+                                        Material.mirror("b"), 0.5))
+    plan = make_plan(scene, scenes.settings())
+    assert plan.mixes and plan.mirror and plan.diffuse and not plan.light_tracing
+    assert plan.kernel_constants(False)["HAS_MIXES"]
+    assert not make_plan(scenes.cbspheres(), scenes.settings()).mixes
+
+
+def test_a_mix_is_validated_and_its_emission_lights_the_scene():
+    with pytest.raises(ValueError, match="'bad'.*fac"):
+        Material.mix("bad", Material.diffuse("a", RED), Material.diffuse("b", BLUE), 1.5)
+    m = _box_with_ball(Material.mix("glow", Material.emission_only("e", (1, 1, 1), 4.0),
+                                    Material.diffuse("a", RED), 0.25)).materials
+    ball = m.names.index("glow")
+    np.testing.assert_allclose(m.emission[ball], (3.0, 3.0, 3.0))  # an emitter for NEE
+    for row in m.mix_components[ball]:
+        np.testing.assert_allclose(m.emission[row], (3.0, 3.0, 3.0))
