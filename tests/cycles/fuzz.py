@@ -254,6 +254,16 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                 and media.random() < 0.4:
             o["material"]["volume"] = {"colour": [_r(c) for c in media.uniform(0.1, 1.0, 3)],
                                        "density": _r(media.uniform(0.2, 4.0))}
+    # Some opaque surfaces mixed with a Glossy or a Diffuse (Mix Shader), again from a stream
+    # of their own.
+    mixes = np.random.default_rng([seed, 0x313c])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("diffuse", "glossy", "principled", "metal") and \
+                mixes.random() < 0.3:
+            o["material"]["mix"] = {
+                "shader": "glossy" if mixes.random() < 0.5 else "diffuse",
+                "colour": [_r(c) for c in mixes.uniform(0.05, 1.0, 3)],
+                "roughness": _r(mixes.uniform(0.05, 0.8), 3), "fac": _r(mixes.uniform(0.1, 0.9))}
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -281,7 +291,8 @@ def features(params) -> list[str]:
         rough = f":r={m['roughness']}" if m.get("roughness") else ""
         f.append(f"{o['id']}:{o['shape']}{':smooth' if o['smooth'] else ''}:{m['kind']}{rough}"
                  + (":emissive" if m.get("emission_strength") else "")
-                 + (":absorbing" if m.get("volume") else ""))
+                 + (":absorbing" if m.get("volume") else "")
+                 + (f":mix_{m['mix']['shader']}" if m.get("mix") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
         if light.get("scale", [1, 1, 1]) != [1.0, 1.0, 1.0]:
@@ -464,6 +475,8 @@ def _mesh_object(shape, name):
 def _bpy_material(name, m):
     """The Blender material of `m`, with a Volume Absorption on its output if it has one."""
     mat = _bpy_surface(name, m)
+    if m.get("mix"):
+        _mix_surface(mat, m["mix"])
     v = m.get("volume")
     if v:
         tree = mat.node_tree
@@ -473,6 +486,23 @@ def _bpy_material(name, m):
         vol.inputs["Density"].default_value = v["density"]
         tree.links.new(vol.outputs[0], out.inputs["Volume"])
     return mat
+
+
+def _mix_surface(mat, mix):
+    """Put a Mix Shader between the material's surface shader and a second one."""
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    first = out.inputs["Surface"].links[0].from_node
+    node = tree.nodes.new("ShaderNodeMixShader")
+    node.inputs["Fac"].default_value = mix["fac"]
+    second = tree.nodes.new("ShaderNodeBsdfGlossy" if mix["shader"] == "glossy"
+                            else "ShaderNodeBsdfDiffuse")
+    second.inputs["Color"].default_value = (*mix["colour"], 1.0)
+    second.inputs["Roughness"].default_value = mix["roughness"] if mix["shader"] == "glossy" \
+        else 0.0
+    tree.links.new(first.outputs[0], node.inputs[1])
+    tree.links.new(second.outputs[0], node.inputs[2])
+    tree.links.new(node.outputs[0], out.inputs["Surface"])
 
 
 def _bpy_surface(name, m):
