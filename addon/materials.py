@@ -96,7 +96,8 @@ class MaterialSpec:
         if self.ctor == "mix":
             k = self.kwargs
             m = core.Material.mix(self.name, k["first"].to_core(core),
-                                  k["second"].to_core(core), k["fac"], k["scale"])
+                                  k["second"].to_core(core), k["fac"], k["scale"],
+                                  k.get("fac_program"))
             extra = {key: tuple(k[key]) for key in ("absorption", "emission") if key in k}
             return dataclasses.replace(m, **extra) if extra else m
         kwargs = dict(self.kwargs)
@@ -709,7 +710,7 @@ class _Reader:
         linked in, each with its own normal map; an unlinked input is no shader (Cycles'
         empty closure: black, no light passes)."""
         add = node.bl_idname == "ShaderNodeAddShader"
-        fac = 0.5 if add else self.unit(node, "Fac", 0.5)
+        fac, program = (0.5, None) if add else self.textured_unit(node, "Fac", 0.5)
         parts = []
         for sock in [s for s in node.inputs if s.type == "SHADER"][:2]:
             link = live_link(sock)
@@ -724,13 +725,20 @@ class _Reader:
                     leaf.kwargs.update(self.normal_map)
             self.normal_map = None
             parts.append(part)
-        if not add and fac in (0.0, 1.0):
+        if not add and program is None and fac in (0.0, 1.0):
             return parts[int(fac)]
-        return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0)
+        return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0, program)
 
-    def mixed(self, first, second, fac, scale=1.0):
+    def textured_unit(self, node, socket_name, default):
+        """A factor in [0, 1] that may vary over the surface: (its constant, e.g. the image's
+        mean; its shader program (first channel), or None)."""
+        c, program = self.textured_colour(node, socket_name, (default,) * 3)
+        return min(max(c[0], 0.0), 1.0), program
+
+    def mixed(self, first, second, fac, scale=1.0, fac_program=None):
         """The mix spec of two specs; their normal maps must read one UV map (a triangle has
-        one set of tangents), else the second's is dropped, warned."""
+        one set of tangents), else the second's is dropped, warned. A textured factor mixes
+        the components' emission by its constant (warned)."""
         a, b = first.normal_uv, second.normal_uv
         if a is not None and b is not None and a != b:
             self.warn(f"mixed shaders' normal maps read UV maps '{a}' and '{b}'; only one per "
@@ -742,8 +750,16 @@ class _Reader:
             if leaf.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
-        return MaterialSpec("mix", self.material.name, {"first": first, "second": second,
-                                                        "fac": fac, "scale": scale})
+        if fac_program is not None and any(
+                max(leaf.kwargs.get("emission", (0.0,))) > 0 or leaf.ctor == "emission_only"
+                and leaf.kwargs.get("strength", 0.0) > 0
+                for leaf in (*first.leaves(), *second.leaves())):
+            self.warn(f"an emission mixed by a textured factor is mixed by its mean, "
+                      f"{fac:.3g}")
+        kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
+        if fac_program is not None:
+            kwargs["fac_program"] = fac_program
+        return MaterialSpec("mix", self.material.name, kwargs)
 
     def multiscatter(self, node):
         """Whether a microfacet node is Multiscatter GGX (energy compensated) or plain GGX;
@@ -779,8 +795,13 @@ class _Reader:
     def principled(self, node):
         name = self.material.name
         self.principled_ignored(node)
-        metallic = self.unit(node, "Metallic")
+        metallic, metal_program = self.textured_unit(node, "Metallic", 0.0)
         transmission = self.unit(node, "Transmission Weight", self.unit(node, "Transmission"))
+        if metal_program is not None and transmission > 0.0:
+            self.warn(f"node '{node.name}' input 'Metallic' varies over the surface beside a "
+                      f"Transmission Weight > 0, which is not supported; using its mean "
+                      f"{metallic:.3g}")
+            metal_program = None
         roughness = self.unit(node, "Roughness")
         # A linked emission that cannot be reduced is off, not the sockets' own values:
         # Emission Color's is white, and a textured surface must not become a white light.
@@ -795,6 +816,13 @@ class _Reader:
         if kwargs and program is not None:
             kwargs["emission_program"] = shader_nodes.scaled(program, strength)
         multiscatter = self.multiscatter(node)
+        if metal_program is not None:  # e.g. the glTF importer's metallic-roughness channel
+            base, program = self.textured_colour(node, "Base Color")
+            metal = MaterialSpec("metal", name, {"base_colour": base, **_with(program),
+                                                 "roughness": roughness,
+                                                 "multiscatter": multiscatter})
+            return self.with_emission(node, self.mixed(self.dielectric(node), metal, metallic,
+                                                       1.0, metal_program), kwargs)
         lobes = []  # (weight, spec): Cycles mixes metal, glass and dielectric linearly
         if metallic > 0.0:
             base, program = self.textured_colour(node, "Base Color")
@@ -815,11 +843,15 @@ class _Reader:
         for w, part in lobes[1:]:
             spec = self.mixed(spec, part, w / (total + w))
             total += w
+        return self.with_emission(node, spec, kwargs)
+
+    def with_emission(self, node, mix, kwargs):
+        """A Principled BSDF's mix of lobes with its emission added once, on the mix."""
         if kwargs.pop("emission_program", None) is not None:
-            self.warn(f"node '{node.name}': a textured emission with fractional Metallic or "
-                      f"Transmission is not supported; rendered as its constant")
-        spec.kwargs.update(kwargs)
-        return spec
+            self.warn(f"node '{node.name}': a textured emission with fractional or textured "
+                      f"Metallic or Transmission is not supported; rendered as its constant")
+        mix.kwargs.update(kwargs)
+        return mix
 
     def dielectric(self, node):
         """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer

@@ -264,15 +264,18 @@ def handle_escaped(i, row, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def choose_closure(row, depth, mat, rev_sample, sc, paths):
-    """Down a mix of shaders to one component, the second with probability fac (one
-    dimension per bounce serves every level: its remainder is reused): (material, the
-    mixes' scale product)."""
+def choose_closure(row, depth, f, bu, bv, mat, rev_sample, sc, paths):
+    """Down a mix of shaders to one component, the second with probability fac (its
+    program's value at the hit where it is textured; one dimension per bounce serves every
+    level: its remainder is reused): (material, the mixes' scale product)."""
     mt = sc.materials
     u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, CLOSURE))
     scale = 1.0
     while mt.kind[mat] == MIX:
         fac = mt.mix_fac[mat]
+        if HAS_TEXTURES:
+            fac = shading.fac_at(mat, f, np.float64(bu), np.float64(bv), mt.programs,
+                                 sc.geometry.uv, paths.svm, fac)
         scale *= mt.mix_scale[mat]
         if u < fac:
             u = u / fac
@@ -749,7 +752,7 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         mat = sc.geometry.material_index[f]
         scale = 1.0
         if HAS_MIXES:
-            mat, scale = choose_closure(row, depth, mat, rev_sample, sc, paths)
+            mat, scale = choose_closure(row, depth, f, bu[i], bv[i], mat, rev_sample, sc, paths)
         x = surface_interaction(i, f, mat, tfar[i], bu[i], bv[i], sc, paths)
         if depth == 0:
             paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)

@@ -202,6 +202,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                                 np.zeros((0, 6), np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64),
+                                np.full((len(scene.materials), 3), -1, np.int64),
                                 np.full((len(scene.materials), 3), -1, np.int64))
     tangents = None
     if scene.tangents is not None and (plan.normal_maps or generic):

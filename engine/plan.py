@@ -194,7 +194,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         textures=scene.programs is not None and bool(
             np.any(scene.programs.colour[used, 0] >= 0)
             or np.any(scene.programs.emission[used, 0] >= 0)
-            or np.any(scene.programs.normal[used, 0] >= 0)),
+            or np.any(scene.programs.normal[used, 0] >= 0)
+            or np.any(scene.programs.fac[used, 0] >= 0)),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian

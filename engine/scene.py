@@ -130,18 +130,21 @@ class Material:
     normal_strength: float = 1.0
     absorption: tuple = (0.0, 0.0, 0.0)
     components: tuple = ()  # mix: the two Materials mixed
-    fac: float = 0.0  # mix: the weight of components[1]
+    fac: float = 0.0  # mix: the weight of components[1] (a constant standing for fac_program)
+    # mix: a Program whose result's first channel is the factor at each hit (a textured Mix
+    # Shader Fac, a Principled BSDF's textured Metallic), clamped to [0, 1] as Cycles does.
+    fac_program: Program | None = field(default=None, compare=False)
     scale: float = 1.0  # mix: the factor of the whole sum
 
     @classmethod
-    def mix(cls, name, first, second, fac, scale=1.0):
+    def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
         """Cycles' Mix Shader (scale 1) or Add Shader (fac 1/2, scale 2) of two Materials."""
         fac, scale = float(fac), float(scale)
         if not (0.0 <= fac <= 1.0 and math.isfinite(scale) and scale >= 0.0):
             raise ValueError(f"material '{name}': a mix needs 0 <= fac <= 1 and a finite scale "
                              f">= 0, got fac {fac!r}, scale {scale!r}")
         return cls(name, "mix", (0.0, 0.0, 0.0), components=(first, second), fac=fac,
-                   scale=scale)
+                   scale=scale, fac_program=fac_program)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -300,11 +303,18 @@ class Materials:
     mix_components: np.ndarray | None = None
     mix_fac: np.ndarray | None = None
     mix_scale: np.ndarray | None = None
+    fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
         materials, components = _flatten_mixes(list(materials))
         m = cls._rows(materials)
+        if m.colour_programs is None and any(x.fac_program is not None for x in materials):
+            none = [None] * len(materials)
+            m = dataclasses.replace(m, colour_programs=none, emission_programs=none,
+                                    normal_programs=none)
+        if m.colour_programs is not None:
+            m = dataclasses.replace(m, fac_programs=[x.fac_program for x in materials])
         fac = np.array([float(x.fac) if x.kind == "mix" else 0.0 for x in materials])
         scale = np.array([float(x.scale) if x.kind == "mix" else 1.0 for x in materials])
         return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
@@ -842,7 +852,7 @@ class SceneBuilder:
             return None, None
         progs = [[p for p in pair if p is not None] for pair in
                  zip(materials.colour_programs, materials.emission_programs,
-                     materials.normal_programs)]
+                     materials.normal_programs, materials.fac_programs)]
         names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
         uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
         start = 0
@@ -861,7 +871,7 @@ class SceneBuilder:
                     warnings.warn(msg, stacklevel=3)
             start += count
         return uv, pack(materials.colour_programs, materials.emission_programs, names.index,
-                        materials.normal_programs)
+                        materials.normal_programs, materials.fac_programs)
 
 
 # -------------------------------------------------------------------- builder passes

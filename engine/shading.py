@@ -142,22 +142,25 @@ class Program:
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
 #   colour, emission (k, 3) int64 per material: the colour's and the emission's program as
 #   first instruction (-1: none), end, result register.
-ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission normal")
+ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission normal "
+                                          "fac")
 
 
 def pack(colour_programs: list, emission_programs: list | None, uv_index,
-         normal_programs: list | None = None) -> ProgramTable:
-    """Pack the materials' colour, emission and normal-map programs (one per material, or
-    None) into a ProgramTable; each program's UV map names become scene-wide map indices
-    through `uv_index(name)`."""
+         normal_programs: list | None = None, fac_programs: list | None = None) -> ProgramTable:
+    """Pack the materials' colour, emission, normal-map and mix-factor programs (one per
+    material, or None) into a ProgramTable; each program's UV map names become scene-wide
+    map indices through `uv_index(name)`."""
     k = len(colour_programs)
     emission_programs = emission_programs or [None] * k
     normal_programs = normal_programs or [None] * k
+    fac_programs = fac_programs or [None] * k
     code, params, texels, tex_rows = [], [], [], []
-    rows = np.full((3, k, 3), -1, np.int64)
+    rows = np.full((4, k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
     for slot, mat, prog in [(j, m, p) for j, progs in enumerate(
-            (colour_programs, emission_programs, normal_programs)) for m, p in enumerate(progs)]:
+            (colour_programs, emission_programs, normal_programs, fac_programs))
+            for m, p in enumerate(progs)]:
         if prog is None:
             continue
         first_tex = len(tex_rows)
@@ -180,7 +183,8 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
     return ProgramTable(np.array(code, np.int64).reshape(-1, WIDTH),
                         np.array(params + [0.0], np.float64),
                         (np.concatenate(texels) if texels else np.zeros((1, 4), np.float32)),
-                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1], rows[2])
+                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1], rows[2],
+                        rows[3])
 
 
 # ------------------------------------------------------------------ node functions
@@ -571,6 +575,13 @@ def emission_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
 def normal_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
     """The colour feeding material mat's Normal Map node at the hit, or c without one."""
     return result_at(pt.normal, mat, f, u, v, pt, uv, reg, c0, c1, c2)
+
+
+@njit(**INLINE)
+def fac_at(mat, f, u, v, pt, uv, reg, fac):
+    """Mix mat's factor at the hit: its factor program's first channel in [0, 1], or fac."""
+    r, _, _ = result_at(pt.fac, mat, f, u, v, pt, uv, reg, fac, fac, fac)
+    return min(r, 1.0)
 
 
 @njit(**JIT)

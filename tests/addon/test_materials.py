@@ -402,7 +402,7 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
     tree.links.new(sep.outputs["Blue"], scale.inputs[0])
     tree.links.new(scale.outputs[0], node.inputs["Metallic"])
     mixed, warnings = convert(mat)
-    # Metallic is fractional (half the texture's mean): the dielectric lobe of a mix.
+    # Metallic is textured: the base colour is the dielectric lobe's (and the metal's).
     spec = next(leaf for leaf in mixed.leaves() if leaf.ctor == "principled")
     base = srgb_to_linear(stored[:, :3]).mean(axis=0) * (0.5, 1.0, 0.25)
     assert spec.kwargs["base_colour"] == pytest.approx(tuple(base), abs=1e-5)
@@ -411,8 +411,13 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
         assert _program_at(spec.kwargs["colour_program"], uv) == \
             pytest.approx(texel * (0.5, 1.0, 0.25), abs=1e-6)
     assert spec.kwargs["roughness"] == pytest.approx(orm_stored[:, 1].mean(), abs=1e-6)
-    metallic = 0.5 * orm_stored[:, 2].mean()
-    assert any(f"the constant {metallic:.3g}" in w and "'Metallic'" in w for w in warnings)
+    # Metallic varies too: the mix of the dielectric and the metal lobe takes it per point.
+    assert mixed.ctor == "mix" and mixed.kwargs["second"].ctor == "metal"
+    assert mixed.kwargs["fac"] == pytest.approx(0.5 * orm_stored[:, 2].mean(), abs=1e-6)
+    for uv, texel in zip(TEXEL_CENTRES, orm_stored):
+        assert _program_at(mixed.kwargs["fac_program"], uv)[0] == \
+            pytest.approx(0.5 * texel[2], abs=1e-6)
+    assert not any("'Metallic'" in w for w in warnings)
 
 
 def test_alpha_weights_the_colour_seen(fresh):

@@ -258,6 +258,12 @@ def _mix_factor_reversed(scene, settings):
     return scene, settings
 
 
+def _mix_factors_as_their_means(scene, settings):
+    pt = scene.programs
+    scene.programs = pt._replace(fac=np.full_like(pt.fac, -1))
+    return scene, settings
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -289,6 +295,7 @@ INJECTIONS = {
     "absorption_plus_10_percent": ("coloured_glass", _absorption_plus_10_percent, None),
     "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
     "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
+    "textured_mix_factor_as_its_mean": ("mixed_shaders", _mix_factors_as_their_means, None),
 }
 
 

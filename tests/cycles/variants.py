@@ -186,8 +186,11 @@ def _glass_chart(ior):
                         Roughness=0.0, IOR=ior), (0.0, 0.0, 0.75), 0.6)
 
 
-_HELPERS = (_open, _box, _sphere, _principled, _emitter_quad, _card, _chart, _dof_scene,
-            _glass_chart)
+def _helpers() -> list:
+    """Every helper of this module: its private functions, wherever they are defined."""
+    return [f for name, f in globals().items() if name.startswith("_") and
+            inspect.isfunction(f) and f.__module__ == __name__
+            and name not in ("_helpers", "_helpers_used", "_add")]
 
 
 def _helpers_used(fn) -> list:
@@ -196,7 +199,7 @@ def _helpers_used(fn) -> list:
     found, todo = [], [fn]
     while todo:
         source = inspect.getsource(todo.pop())
-        for helper in _HELPERS:
+        for helper in _helpers():
             if helper not in found and re.search(rf"\b{helper.__name__}\(", source):
                 found.append(helper)
                 todo.append(helper)
@@ -687,10 +690,26 @@ def _mix_of(name, node, first, second, fac=None):
     return mat
 
 
+def _checker_metallic(mat):
+    """The Principled BSDF's Metallic from a Checker Texture on the UV map: 1 and 0.3 in
+    squares."""
+    tree = mat.node_tree
+    node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.3, 0.3, 0.3, 1.0)
+    checker.inputs["Scale"].default_value = 4.0
+    coords = tree.nodes.new("ShaderNodeTexCoord")  # UV (Generated is not compiled yet)
+    tree.links.new(coords.outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Color"], node.inputs["Metallic"])
+    return mat
+
+
 def mixed_shaders():
     """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
-    an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs at Metallic
-    0.5 and at Transmission 0.5 (Cycles mixes their lobes linearly)."""
+    an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs with a
+    Checker Texture's Metallic (1 and 0.3 in squares: a mix whose factor is evaluated at
+    each hit) and at Transmission 0.5 (Cycles mixes the lobes linearly)."""
     _box()
     for i, mat in enumerate([
             _mix_of("MixDG", "ShaderNodeMixShader",
@@ -700,8 +719,8 @@ def mixed_shaders():
             _mix_of("AddDG", "ShaderNodeAddShader",
                     ("ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.3, 0.5, 1.0)}),
                     ("ShaderNodeBsdfGlossy", {"Color": (0.4, 0.4, 0.4, 1.0), "Roughness": 0.15})),
-            _principled("HalfMetal", **{"Base Color": (0.9, 0.6, 0.3, 1.0), "Metallic": 0.5,
-                                        "Roughness": 0.3}),
+            _checker_metallic(_principled("HalfMetal", **{"Base Color": (0.9, 0.6, 0.3, 1.0),
+                                                          "Roughness": 0.3})),
             _principled("HalfGlass", **{"Base Color": (0.8, 0.9, 1.0, 1.0), "Roughness": 0.0,
                                         "Transmission Weight": 0.5})]):
         _sphere(mat, (-0.66 + 0.44 * i, 0.0, 0.2), 0.2, f"Ball{i}")

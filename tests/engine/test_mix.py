@@ -71,3 +71,29 @@ def test_a_mix_is_validated_and_its_emission_lights_the_scene():
     np.testing.assert_allclose(m.emission[ball], (3.0, 3.0, 3.0))  # an emitter for NEE
     for row in m.mix_components[ball]:
         np.testing.assert_allclose(m.emission[row], (3.0, 3.0, 3.0))
+
+
+def test_a_textured_factor_picks_each_component_where_the_texture_says():
+    """A Mix Shader whose factor is a 2 x 2 image of 0 and 1 (Closest): each texel's
+    quarter of a quad under a white world is exactly one component's albedo (the factor's
+    program is run at each hit, not replaced by its mean)."""
+    from engine import Camera
+
+    texels = np.zeros((2, 2, 4), np.float32)
+    texels[0, 1, :3] = texels[1, 0, :3] = 1.0  # texel (x 1, y 0) and (x 0, y 1): fac 1
+    texels[..., 3] = 1.0
+    b = SceneBuilder()
+    mix = Material.mix("checker", Material.diffuse("a", (0.2, 0.2, 0.2)),
+                       Material.diffuse("b", (0.9, 0.6, 0.3)), 0.5,
+                       fac_program=scenes.image_program(texels))
+    v, t = scenes.quad((-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0))
+    b.add_mesh("quad", v, t, b.add_material(mix), uv_maps={"": scenes.quad_uvs()})
+    cam = Camera(type="ORTHO", ortho_scale=1.6,
+                 world_from_camera=scenes.look_at((0, 0, 2), (0, 0, 0), up=(0, 1, 0)))
+    r = render(b.build(cam, World((1.0, 1.0, 1.0))),
+               RenderSettings(width=8, height=8, samples=4, max_bounces=1, seed=2))
+    img = r.combined[..., :3]  # row 0 at the bottom (v = 0), as Blender's
+    np.testing.assert_allclose(img[1, 1], (0.2, 0.2, 0.2), rtol=1e-5)  # texel (0, 0)
+    np.testing.assert_allclose(img[1, 6], (0.9, 0.6, 0.3), rtol=1e-5)  # texel (1, 0)
+    np.testing.assert_allclose(img[6, 1], (0.9, 0.6, 0.3), rtol=1e-5)  # texel (0, 1)
+    np.testing.assert_allclose(img[6, 6], (0.2, 0.2, 0.2), rtol=1e-5)  # texel (1, 1)
