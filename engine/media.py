@@ -35,19 +35,13 @@ def extinction(media, row, absorption, mat, entering, crossed):
     """The summed coefficient of path `row`'s stack (media (n, MEDIA_STACK)), after it
     crosses (if `crossed`) a surface of material `mat` from its front (`entering`) or back."""
     s0 = s1 = s2 = 0.0
-    present = False
     for j in range(MEDIA_STACK):
         m = media[row, j]
-        if m < 0:
-            continue
-        if m == mat:
-            present = True
-            if crossed and not entering:
-                continue  # leaving it
-        s0 += absorption[m, 0]
-        s1 += absorption[m, 1]
-        s2 += absorption[m, 2]
-    if crossed and entering and not present and _fills(absorption, mat):
+        if _kept(m, mat, entering, crossed):
+            s0 += absorption[m, 0]
+            s1 += absorption[m, 1]
+            s2 += absorption[m, 2]
+    if _pushed(media, row, absorption, mat, entering, crossed):
         s0 += absorption[mat, 0]
         s1 += absorption[mat, 1]
         s2 += absorption[mat, 2]
@@ -55,29 +49,38 @@ def extinction(media, row, absorption, mat, entering, crossed):
 
 
 @njit(**INLINE)
-def _fills(absorption, mat):
-    return absorption[mat, 0] > 0.0 or absorption[mat, 1] > 0.0 or absorption[mat, 2] > 0.0
-
-
-@njit(**INLINE)
 def carry(media, src, dst, absorption, mat, entering, crossed):
     """Path src's stack, updated for crossing (or not) a surface of material `mat`, becomes
     row dst's (dst <= src: the batch compacts in place). A full stack drops the medium
     entered (the path then ignores it, as Cycles' fixed-size stack does)."""
+    push = _pushed(media, src, absorption, mat, entering, crossed)
     n = 0
-    present = False
     for j in range(MEDIA_STACK):
         m = media[src, j]
-        if m < 0:
-            continue
-        if m == mat:
-            present = True
-            if crossed and not entering:
-                continue
-        media[dst, n] = m
-        n += 1
-    if crossed and entering and not present and _fills(absorption, mat) and n < MEDIA_STACK:
+        if _kept(m, mat, entering, crossed):
+            media[dst, n] = m
+            n += 1
+    if push and n < MEDIA_STACK:
         media[dst, n] = mat
         n += 1
     for j in range(n, MEDIA_STACK):
         media[dst, j] = -1
+
+
+@njit(**INLINE)
+def _kept(m, mat, entering, crossed):
+    """Whether stack entry m (-1: empty) stays after the crossing: all but the one left."""
+    return m >= 0 and not (m == mat and crossed and not entering)
+
+
+@njit(**INLINE)
+def _pushed(media, row, absorption, mat, entering, crossed):
+    """Whether the crossing adds mat's medium to path row's stack: entered, absorbing, and
+    not already there."""
+    if not (crossed and entering and (absorption[mat, 0] > 0.0 or absorption[mat, 1] > 0.0
+                                      or absorption[mat, 2] > 0.0)):
+        return False
+    for j in range(MEDIA_STACK):
+        if media[row, j] == mat:
+            return False
+    return True
