@@ -230,9 +230,8 @@ class _Exporter:
         for id_ in self.depsgraph.ids:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
-        self.textured = any("colour_program" in leaf.kwargs or "emission_program" in leaf.kwargs
-                            or "normal_program" in leaf.kwargs
-                            for m in self.out.materials for leaf in m.leaves())
+        self.textured = any(key in spec.kwargs for m in self.out.materials
+                            for spec in m.parts() for key in materials.PROGRAM_KEYS)
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:

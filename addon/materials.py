@@ -78,6 +78,13 @@ class MaterialSpec:
     name: str
     kwargs: dict = field(default_factory=dict)
 
+    def parts(self):
+        """This spec and, for a mix, every spec below it."""
+        yield self
+        if self.ctor == "mix":
+            for part in (self.kwargs["first"], self.kwargs["second"]):
+                yield from part.parts()
+
     def leaves(self):
         """This spec, or a mix's component specs, recursively."""
         if self.ctor != "mix":
@@ -106,6 +113,11 @@ class MaterialSpec:
                   if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
         return dataclasses.replace(m, **normal) if normal else m
+
+
+# The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
+# with one reads UV maps.
+PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program")
 
 
 def default_material():

@@ -480,3 +480,30 @@ def test_normal_map_tangents_are_blenders(fresh, core, mirror):
     cos = np.sum(b * world_b[:, order], axis=-1) / (
         np.linalg.norm(b, axis=-1) * np.linalg.norm(world_b[:, order], axis=-1))
     assert np.all(cos > 0.99), cos.min()
+
+
+def test_a_textured_mix_factor_alone_exports_the_uv_maps(fresh, core):
+    """Regression: a material whose only texture drives a mix factor (here a Checker on the
+    UV map into the Principled BSDF's Metallic) reads UV maps, so the mesh exports them
+    (without, every hit read the factor at UV (0, 0))."""
+    import bmesh
+    from addon_helpers import node_material
+    mesh = bpy.data.meshes.new("Ball")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")
+    bmesh.ops.create_uvsphere(bm, u_segments=16, v_segments=8, radius=1.0, calc_uvs=True)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = link(bpy.data.objects.new("Ball", mesh))
+    mat, node = node_material("Checkered", "ShaderNodeBsdfPrincipled")
+    tree = mat.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Fac"], node.inputs["Metallic"])
+    obj.data.materials.append(mat)
+    exp = export(fresh)
+    scene, warnings = exporter.to_core(exp, core)
+    assert not any("no UV map" in w for w in warnings), warnings
+    assert scene.uv is not None and np.ptp(scene.uv[0]) > 0.5
+    assert scene.programs is not None and (scene.programs.fac[:, 0] >= 0).any()

@@ -723,7 +723,11 @@ def mixed_shaders():
                                                           "Roughness": 0.3})),
             _principled("HalfGlass", **{"Base Color": (0.8, 0.9, 1.0, 1.0), "Roughness": 0.0,
                                         "Transmission Weight": 0.5})]):
-        _sphere(mat, (-0.66 + 0.44 * i, 0.0, 0.2), 0.2, f"Ball{i}")
+        # UV spheres: the checker reads the UV map (without one it would read (0, 0)).
+        obj = bpy.data.objects.new(f"Ball{i}", _uv_sphere_mesh(f"Ball{i}", 0.2))
+        obj.location = (-0.66 + 0.44 * i, 0.0, 0.2)
+        obj.data.materials.append(mat)
+        bpy.context.scene.collection.objects.link(obj)
 
 
 def _low_poly_sphere(name, centre, radius, mat, segments=10):
