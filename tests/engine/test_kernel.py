@@ -163,6 +163,26 @@ def test_normal_maps_same_in_both_kernels(kind):
     assert_same_image(a, c)
 
 
+def test_mixes_and_media_same_in_both_kernels():
+    """A mix with a textured factor (a checker image between a red diffuse and a rough
+    glossy) on the floor and an absorbing glass ball: the generic kernel's run-time checks
+    and the plan's kernel take the same choices and give the same pixels."""
+    b = scenes.cornell_box(spheres=False)
+    mix = Material.mix("checker mix", Material.diffuse("red", (0.8, 0.2, 0.2)),
+                       Material.glossy("shiny", (0.9, 0.9, 0.9), roughness=0.3), 0.5,
+                       fac_program=scenes.image_program(scenes.checker_texels()))
+    v, t = scenes.quad((-1, -1, 0.001), (1, -1, 0.001), (1, 1, 0.001), (-1, 1, 0.001))
+    b.add_mesh("mixed floor", v, t, b.add_material(mix), uv_maps={"": scenes.quad_uvs()})
+    amber = Material.glass("amber", (1, 1, 1), 1.5)
+    amber = replace(amber, absorption=(0.5, 1.5, 3.0))
+    v, t, n = scenes.uv_sphere((0.3, 0.0, 0.35), 0.35)
+    b.add_mesh("amber ball", v, t, b.add_material(amber), corner_normals=n)
+    a, c = both(b.build(scenes.cornell_camera(), World((0, 0, 0))))
+    assert a.plan.mixes and a.plan.volumes and a.plan.textures
+    assert a.combined[..., :3].mean() > 0.05
+    assert_same_image(a, c)
+
+
 @pytest.mark.parametrize("light", ["area", "point"])
 def test_shadow_terminator_offset_same_in_both_kernels(light):
     """Coarse smooth spheres with terminator offsets 0, 0.1 and 1 lit from the side: the
