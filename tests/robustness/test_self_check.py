@@ -28,8 +28,8 @@ def _poisoned_interaction(field, value):
     px = value if field == "depth" else 0.0
     sx = value if field == "normal" else 0.0
 
-    def surface_interaction(i, f, tfar, bu, bv, sc, paths):
-        x = original_surface_interaction(i, f, tfar, bu, bv, sc, paths)  # noqa: F821
+    def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
+        x = original_surface_interaction(i, f, mat, tfar, bu, bv, sc, paths)  # noqa: F821
         if i == 0 and paths.depth[paths.live[0]] == 1e10:
             return Vertex(x.px + px, x.py, x.pz, x.nx, x.ny, x.nz, x.sx + sx,  # noqa: F821
                           x.sy, x.sz, x.mx, x.my, x.mz, x.wox, x.woy, x.woz, x.front, x.f,
