@@ -3,12 +3,13 @@
 A wavefront of rays alternates between embree (closest hits, shadow rays) and `shade`, the
 compiled bounce, which runs these stages per ray:
 
-    handle_light_hits -> handle_escaped | surface_interaction -> handle_emission
-    -> russian_roulette -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
+    absorb_along_ray -> handle_light_hits -> handle_escaped | choose_closure
+    -> surface_interaction -> handle_emission -> russian_roulette
+    -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
 
 Each stage is a function of its own that holds no formulas: those live once in the module
-of their concept (sampling, bsdf, lights, environment, camera, terminator) and numba inlines
-them. The stages read the scene's plan as the module constants below; `Kernel` compiles a
+of their concept (sampling, media, bsdf, lights, environment, camera, terminator) and numba
+inlines them. The stages read the scene's plan as the module constants below; `Kernel` compiles a
 copy of the stages with one plan's values (specialise.py), so code for features a scene
 lacks is not in its kernel at all. The generic kernel (every constant on) renders any scene
 and is what a render starts with while its own kernel compiles in the background.
