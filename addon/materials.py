@@ -87,11 +87,7 @@ class MaterialSpec:
 
     def leaves(self):
         """This spec, or a mix's component specs, recursively."""
-        if self.ctor != "mix":
-            yield self
-            return
-        for part in (self.kwargs["first"], self.kwargs["second"]):
-            yield from part.leaves()
+        return (part for part in self.parts() if part.ctor != "mix")
 
     @property
     def normal_uv(self):
@@ -134,6 +130,14 @@ def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
     nothing) around its medium's absorption."""
     return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0,
                                         "absorption": tuple(absorption)})
+
+
+def _past_reroutes(link):
+    """The link that reaches a node other than a reroute through `link`, or None where the
+    reroutes lead nowhere (or `link` is None)."""
+    while link is not None and link.from_node.bl_idname == "NodeReroute":
+        link = live_link(link.from_node.inputs[0])
+    return link
 
 
 def _rgb(value):
@@ -632,13 +636,11 @@ class _Reader:
                 src = ignored.from_node
                 self.warn(f"'{out.name}' input '{socket_name}' is driven by node '{src.name}' "
                           f"({_label(src)}), which Specula ignores: {meaning}")
-        node = link.from_node
-        while node.bl_idname == "NodeReroute":
-            link = live_link(node.inputs[0])
-            if link is None:
-                return self.viewport_fallback(f"reroute '{node.name}' leads nowhere")
-            node = link.from_node
-        spec = self.shader(node)
+        source = _past_reroutes(link)
+        if source is None:
+            return self.viewport_fallback(f"a reroute before '{out.name}' Surface leads "
+                                          f"nowhere")
+        spec = self.shader(source.from_node)
         if self.normal_map is not None:
             for leaf in spec.leaves():
                 leaf.kwargs.update(self.normal_map)
@@ -652,9 +654,8 @@ class _Reader:
         of a Principled Volume (Cycles: density x (1 - colour) x (1 - sqrt(absorption
         colour))), its scattering and emission warned and left out; other volume shaders
         warned and not rendered."""
-        node = link.from_node
-        while node.bl_idname == "NodeReroute" and live_link(node.inputs[0]) is not None:
-            node = live_link(node.inputs[0]).from_node
+        source = _past_reroutes(link)
+        node = link.from_node if source is None else source.from_node
         kind = node.bl_idname
         if kind == "ShaderNodeVolumeAbsorption":
             colour = self.colour(node, "Color", (0.8, 0.8, 0.8))
@@ -725,9 +726,7 @@ class _Reader:
         fac, program = (0.5, None) if add else self.textured_unit(node, "Fac", 0.5)
         parts = []
         for sock in [s for s in node.inputs if s.type == "SHADER"][:2]:
-            link = live_link(sock)
-            while link is not None and link.from_node.bl_idname == "NodeReroute":
-                link = live_link(link.from_node.inputs[0])
+            link = _past_reroutes(live_link(sock))
             self.normal_map = None
             part = self.shader(link.from_node) if link is not None else \
                 MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),

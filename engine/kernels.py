@@ -216,13 +216,16 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     used = m.reachable(np.unique(scene.material_index))
     layers = layer_tables(m, used) if (rough or generic) else None
     strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
-    absorption = None
-    if plan.volumes or generic:
-        absorption = m.absorption if m.absorption is not None else np.zeros((len(m.kind), 3))
+    # Materials.from_list always fills the media and mix arrays; a kernel without media or
+    # mixes is not passed them.
+    needs_mixes = plan.mixes or generic
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
                               m.transmission_tint, m.emission, layers, programs,
-                              np.asarray(strength, np.float64), absorption,
-                              *_mix_arrays(m, plan.mixes or generic))
+                              np.asarray(strength, np.float64),
+                              m.absorption if plan.volumes or generic else None,
+                              m.mix_components if needs_mixes else None,
+                              m.mix_fac if needs_mixes else None,
+                              m.mix_scale if needs_mixes else None)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -236,16 +239,6 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
                      cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table(),
                      caustics)
-
-
-def _mix_arrays(m, needed: bool) -> tuple:
-    """The materials' mix components, fac and scale for the kernel (None if not needed)."""
-    if not needed:
-        return None, None, None
-    if m.mix_components is None:
-        return np.full((len(m.kind), 2), -1, np.int64), np.zeros(len(m.kind)), \
-            np.ones(len(m.kind))
-    return m.mix_components, m.mix_fac, m.mix_scale
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:
