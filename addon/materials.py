@@ -1,8 +1,8 @@
 """Blender materials -> Specula material descriptions.
 
 The core understands Lambert diffuse, perfect mirror, smooth metal, smooth and rough glass,
-rough Glossy, the dielectric Principled BSDF and emission (see engine/scene.py
-`Material`). This module reads a material's Cycles output and maps the nodes it knows
+rough Glossy, the dielectric Principled BSDF, Transparent, emission and mixes of these (see
+engine/scene.py `Material`). This module reads a material's Cycles output and maps the nodes it knows
 onto those; anything else becomes a documented fallback with a warning that names the
 material, the node and the input, so nothing renders silently black and no fallback
 changes what kind of thing an object is (a surface never becomes a light, a volume never
@@ -19,10 +19,10 @@ Fallbacks:
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
   * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
     and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
-    (a mix of shaders where two or more weigh > 0). Inputs Specula does not render (Alpha,
-    Coat, Sheen, Subsurface, Anisotropic, Specular Tint, Thin Film, Diffuse Roughness)
-    warn when used.
-  * Mix Shader (Fac reduced to a constant) and Add Shader: a mix of their two shaders.
+    (a mix of shaders where two or more weigh > 0), and Alpha < 1 (or textured) mixes in
+    transparent white. Inputs Specula does not render (Coat, Sheen, Subsurface,
+    Anisotropic, Specular Tint, Thin Film, Diffuse Roughness) warn when used.
+  * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * any other shader node (Toon, Translucent, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
@@ -56,7 +56,6 @@ MEAN_SIDE = 512
 # The Principled BSDF's inputs Specula does not render yet: (input, the value at which it has
 # no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
 PRINCIPLED_IGNORED = (
-    ("Alpha", 1.0, "rendered opaque"),
     ("Coat Weight", 0.0, "rendered without a coat"),
     ("Sheen Weight", 0.0, "rendered without sheen"),
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
@@ -130,6 +129,11 @@ def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
     nothing) around its medium's absorption."""
     return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0,
                                         "absorption": tuple(absorption)})
+
+
+def transparent(name, colour=(1.0, 1.0, 1.0)):
+    """Cycles' Transparent BSDF: what passes straight through, tinted."""
+    return MaterialSpec("transparent", name, {"colour": tuple(colour)})
 
 
 def _past_reroutes(link):
@@ -711,7 +715,9 @@ class _Reader:
                 **({"emission_program": shader_nodes.scaled(program, strength)}
                    if textured else {})})
         if kind == "ShaderNodeBsdfPrincipled":
-            return self.principled(node)
+            return self.with_alpha(node, self.principled(node))
+        if kind == "ShaderNodeBsdfTransparent":
+            return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
         colour_socket = next((s for s in ("Color", "Base Color") if s in node.inputs), None)
         colour = DEFAULT_GREY if colour_socket is None else self.colour(node, colour_socket)
         self.warn(f"node '{node.name}' ({node.bl_label or kind}) is not supported; rendered as "
@@ -855,6 +861,15 @@ class _Reader:
             spec = self.mixed(spec, part, w / (total + w))
             total += w
         return self.with_emission(node, spec, kwargs)
+
+    def with_alpha(self, node, spec):
+        """A Principled BSDF's Alpha (which may vary, e.g. a texture's alpha channel): the
+        mix of transparent white (1 - alpha) and the rest (Cycles' Principled: alpha
+        scales every closure, its emission too, and adds a transparent one)."""
+        alpha, program = self.textured_unit(node, "Alpha", 1.0)
+        if program is None and alpha >= 1.0:
+            return spec
+        return self.mixed(transparent(self.material.name), spec, alpha, 1.0, program)
 
     def with_emission(self, node, mix, kwargs):
         """A Principled BSDF's mix of lobes with its emission added once, on the mix."""

@@ -33,6 +33,11 @@ class SpeculaSceneSettings(bpy.types.PropertyGroup):
     max_bounces: IntProperty(
         name="Max Bounces", description="Total bounces a path may take, counted as Cycles "
         "does (0 shows direct lighting only)", default=12, min=0, max=1024, soft_max=128)
+    transparent_max_bounces: IntProperty(
+        name="Transparent Bounces", description="Transparent surfaces (Transparent BSDF, "
+        "alpha) a path or a shadow ray may cross, as Cycles' Light Paths > Max Bounces > "
+        "Transparent; they do not count as bounces", default=8, min=0, max=1024,
+        soft_max=128)
     seed: IntProperty(
         name="Seed", description="Seed of the sample sequence; the same seed renders the "
         "same image", default=0, min=0, max=(1 << 31) - 1)

@@ -38,10 +38,11 @@ def configure_cycles_unbiased(scene, samples, time_limit, seed, max_bounces):
     c.blur_glossy = 0.0
     c.light_sampling_threshold = 0.0
     # Every per-type limit equals the total, so only the total limits a path, as in Specula;
-    # transparent bounces are left as they are.
+    # transparent bounces have their own limit, Specula's.
     for name in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
                  "volume_bounces"):
         setattr(c, name, max_bounces)
+    c.transparent_max_bounces = s.transparent_max_bounces
     c.pixel_filter_type = s.filter_type
     c.filter_width = s.filter_width  # Film > Pixel Filter width
     for layer in scene.view_layers:

@@ -75,6 +75,7 @@ class SPECULA_RENDER_PT_light_paths(SpeculaPanel, bpy.types.Panel):
         layout.use_property_split = True
         s = context.scene.specula
         layout.prop(s, "max_bounces")
+        layout.prop(s, "transparent_max_bounces")
         layout.prop(s, "fresnel")
         layout.prop(s, "use_light_tracing")
 

@@ -77,7 +77,8 @@ class Accel:
 
     def intersect_raw(self, origins: np.ndarray, directions: np.ndarray, tmax: np.ndarray):
         """Closest hits for contiguous float32 rays (the compiled kernels' buffers), in
-        embree's own arrays: prim (n,) int32 (-1 for a miss), t, u, v (n,) float32."""
+        embree's own arrays: prim (n,) int32 (-1 for a miss), t, u, v (n,) float32. Embree
+        writes each hit's t over `tmax` (pass a copy to keep it)."""
         n = len(origins)
         if self.empty or n == 0:
             z = np.zeros(n, F32)

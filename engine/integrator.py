@@ -4,8 +4,11 @@ A wavefront of rays alternates between embree (closest hits, shadow rays) and `s
 compiled bounce, which runs these stages per ray:
 
     absorb_along_ray -> handle_light_hits -> handle_escaped | choose_closure
-    -> surface_interaction -> handle_emission -> russian_roulette
+    -> surface_interaction -> handle_emission -> pass_through (transparent) | russian_roulette
     -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
+
+and, where the plan has transparent surfaces, shadow rays take closest hits in turn and
+`cross_transparent` carries them through the transparent ones.
 
 Each stage is a function of its own that holds no formulas: those live once in the module
 of their concept (sampling, media, bsdf, lights, environment, camera, terminator) and numba
@@ -21,6 +24,12 @@ sampling after a non-delta bounce are weighted against next-event estimation wit
 power heuristic; after delta bounces (mirror, metal, glass) and from the camera they count
 fully. Russian roulette follows Cycles: none for the first two vertices, then survival
 probability min(sqrt(max channel of throughput), 1).
+
+Transparent surfaces (Cycles' Transparent BSDF, a Principled BSDF's alpha) are not bounces:
+a path crosses them keeping its bounce count, its MIS state (the last scattering vertex's
+origin, pdf and normal; Paths.mis_t is the distance from it) and its flags, and counts them
+apart, against transparent_max_bounces; each crossing takes the sampler's next bounce
+dimensions, as in Cycles. So with transparency each path carries its own bounce count.
 """
 
 from __future__ import annotations
@@ -38,11 +47,17 @@ from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SU
                      _SUN_CAMERA, _SUN_RADIANCE)
 from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_SELECT, LOBE,
                        ROULETTE,
-                       bounce_dim, pixel_seed, power_heuristic, reverse_bits, sample_1d,
-                       sample_2d)
+                       bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
+                       sample_1d, sample_2d)
 from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
-                    ROUGH_METAL)
+                    ROUGH_METAL, TRANSPARENT)
 
+# Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
+# scrambled by this (and the crossing's number), apart from the path's own choices.
+SHADOW_CLOSURE_SALT = 0x5AD0C105
+# A shadow ray moves past a transparent surface along itself by the ray offset / cos: the
+# cosine is taken as at least this (a grazing ray moves at most 1000 offsets).
+GRAZING_COS = 1e-3
 # Spawned rays leave the surface by this fraction of the local coordinate magnitude:
 # a few float32 ulps (embree intersects in float32), so the offset scales with the scene.
 RAY_EPSILON = 2.0**-18
@@ -57,7 +72,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "HAS_VOLUMES", "HAS_MIXES", "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_VOLUMES", "HAS_MIXES", "HAS_TRANSPARENCY", "EXACT_FRESNEL", "PROFILE",
+                  "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -69,6 +85,7 @@ HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
 HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
 HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one component
+HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -105,11 +122,15 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # is specular (0 otherwise), the chain's product of relative IORs, and the distance from
 # the lens point to where the camera ray starts (per row); svm: the shader programs'
 # registers (shading.MAX_REGISTERS floats, reused by every path of the batch); the media
-# each path is inside (media.MEDIA_STACK material indices, -1 empty).
+# each path is inside (media.MEDIA_STACK material indices, -1 empty); with transparency
+# (HAS_TRANSPARENCY), each path's bounce count, its transparent crossings and the distance
+# from its last scattering vertex (o64, where its MIS state was set) to the ray's start.
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
-                            "camera_near prev_normal svm media")
-ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib")
+                            "camera_near prev_normal svm media bounce transparent mis_t")
+# Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
+# path's transparent crossings plus its own, and the sampler bounce of its vertex.
+ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib transparent vertex")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side; s after the material's normal map), the specular lobes' normal m, wo,
 # front face, triangle, barycentrics, material, distance, the offset scale and the mesh's
@@ -202,11 +223,15 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
     if HAS_LIGHT_HITS:
         hit_seen = _HIT_CAMERA if depth == 0 else _HIT_BSDF
         t_surface = np.float64(tfar) if f >= 0 else np.float64(paths.tmax32[i])
+        t_start = 0.0  # o64 is the scattering vertex, before any transparent crossings
+        if HAS_TRANSPARENCY:
+            t_start = paths.mis_t[i]
+            t_surface += t_start
         for j in range(L.shape[0]):
             if L[j, hit_seen] == 0:
                 continue
             th, l0, l1, l2 = lights.intersect_object(j, ox, oy, oz, dx, dy, dz, t_surface, L)
-            if math.isinf(th):
+            if math.isinf(th) or th <= t_start:  # (found on an earlier segment)
                 continue
             w = 1.0
             if mis:
@@ -265,12 +290,11 @@ def handle_escaped(i, row, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def choose_closure(row, depth, f, bu, bv, mat, rev_sample, sc, paths):
+def choose_closure(u, f, bu, bv, mat, sc, paths):
     """Down a mix of shaders to one component, the second with probability fac (its
-    program's value at the hit where it is textured; one dimension per bounce serves every
+    program's value at the hit where it is textured; one sample u in [0, 1) serves every
     level: its remainder is reused): (material, the mixes' scale product)."""
     mt = sc.materials
-    u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, CLOSURE))
     scale = 1.0
     while mt.kind[mat] == MIX:
         fac = mt.mix_fac[mat]
@@ -437,14 +461,15 @@ def caustic_weight(i, source, cos_y, sc, paths):
                                         1.0 / (eta * eta), paths.caustic_q[i])
 
 
-def russian_roulette(depth, t0, t1, t2, pseed, rev_sample):
-    """Cycles' rule: none for the first vertices, then survival with probability
+def russian_roulette(depth, vertex, t0, t1, t2, pseed, rev_sample):
+    """Cycles' rule: none for the first bounces, then survival with probability
     q = min(sqrt(max channel), 1) and the survivor divided by q (so at most sqrt(t): a small
-    q never blows a path up). Returns (survives, throughput)."""
+    q never blows a path up); vertex: the sampler's bounce. Returns (survives,
+    throughput)."""
     if depth < ROULETTE_MIN_BOUNCE:
         return True, t0, t1, t2
     q = min(math.sqrt(max(t0, max(t1, t2))), 1.0)
-    if not sample_1d(pseed, rev_sample, bounce_dim(depth, ROULETTE)) < q:
+    if not sample_1d(pseed, rev_sample, bounce_dim(vertex, ROULETTE)) < q:
         return False, t0, t1, t2
     return True, t0 / q, t1 / q, t2 / q
 
@@ -606,6 +631,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
             gx / sl, gy / sl, gz / sl)
         shadow.tmax[s] = seg - ray_offset(light_scale)
     shadow.contrib[s, 0], shadow.contrib[s, 1], shadow.contrib[s, 2] = c0, c1, c2
+    if HAS_TRANSPARENCY:
+        shadow.transparent[s] = paths.transparent[i]
+        shadow.vertex[s] = depth
     return s + 1
 
 
@@ -707,6 +735,34 @@ def absorb_along_ray(i, f, tfar, sc, paths):
     paths.throughput[i, 2] *= a2
 
 
+def pass_through(i, out, row, x, sc, paths):
+    """Continue path i as row `out` straight through a transparent surface, its throughput
+    tinted by the surface's colour: only embree's ray start moves (behind the surface);
+    o64, the MIS pdf and normal stay the scattering vertex's, mis_t grows to here. Returns
+    the rows going on."""
+    eps = ray_offset(x.scale)  # n faces the incoming ray: behind is -n
+    for j in range(3):
+        paths.o64[out, j] = paths.o64[i, j]
+        paths.d64[out, j] = paths.d64[i, j]
+        paths.dir32[out, j] = paths.dir32[i, j]
+        paths.prev_normal[out, j] = paths.prev_normal[i, j]
+        paths.throughput[out, j] = paths.throughput[i, j] * sc.materials.colour[x.mat, j]
+    paths.origin32[out, 0] = x.px - eps * x.nx
+    paths.origin32[out, 1] = x.py - eps * x.ny
+    paths.origin32[out, 2] = x.pz - eps * x.nz
+    paths.tmax32[out] = np.inf
+    paths.prev_pdf[out] = paths.prev_pdf[i]
+    paths.mis_t[out] = x.t
+    paths.bounce[out] = paths.bounce[i]
+    paths.transparent[out] = paths.transparent[i] + 1
+    paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
+    if HAS_VOLUMES:  # a transparent surface lets the path into its medium as glass does
+        media.carry(paths.media, i, out, sc.materials.absorption,
+                    sc.geometry.material_index[x.f], x.front, True)
+    paths.live[out] = row
+    return out + 1
+
+
 def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
     """Continue the path as row `out` of the compacted batch: leave the surface toward the
     side of the new direction, into embree's buffers."""
@@ -729,12 +785,13 @@ def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
     paths.live[out] = row
 
 
-def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shadow, profile):
-    """One bounce for the m live paths (batch rows paths.live[:m]) after embree's closest
-    hits (prim, tfar, bu, bv): the stages above, per path. The paths that go on are
-    compacted to the front of the batch; shadow rays are queued in `shadow`. profile (3,)
-    uint64 (PROFILE kernels) receives cycle counts: the loop, sample light, sample BSDF.
-    Returns (paths that go on, shadow rays queued)."""
+def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv, m, paths,
+          shadow, profile):
+    """One step (a bounce, or with transparency a segment) for the m live paths (batch rows
+    paths.live[:m]) after embree's closest hits (prim, tfar, bu, bv): the stages above, per
+    path. The paths that go on are compacted to the front of the batch; shadow rays are
+    queued in `shadow`. profile (3,) uint64 (PROFILE kernels) receives cycle counts: the
+    loop, sample light, sample BSDF. Returns (paths that go on, shadow rays queued)."""
     if PROFILE:
         c_loop = _cycles()
     out = 0
@@ -742,6 +799,13 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
     for i in range(m):
         row = paths.live[i]
         f = prim[i]
+        # depth: the bounce, Blender's count; vertex: the sampler's bounce (crossings too).
+        depth = vertex = step
+        t_hit = np.float64(tfar[i])
+        if HAS_TRANSPARENCY:
+            depth = paths.bounce[i]
+            vertex = depth + paths.transparent[i]
+            t_hit += paths.mis_t[i]
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
         if HAS_VOLUMES:
             absorb_along_ray(i, f, tfar[i], sc, paths)
@@ -753,9 +817,11 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
         mat = sc.geometry.material_index[f]
         scale = 1.0
         if HAS_MIXES:
-            mat, scale = choose_closure(row, depth, f, bu[i], bv[i], mat, rev_sample, sc, paths)
-        x = surface_interaction(i, f, mat, tfar[i], bu[i], bv[i], sc, paths)
-        if depth == 0:
+            u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(vertex, CLOSURE))
+            mat, scale = choose_closure(u, f, bu[i], bv[i], mat, sc, paths)
+        x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
+        k = sc.materials.kind[x.mat]
+        if depth == 0 and not (HAS_TRANSPARENCY and k == TRANSPARENT):
             paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
             paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
             if DEBUG:
@@ -766,11 +832,18 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             paths.throughput[i, 0] *= scale
             paths.throughput[i, 1] *= scale
             paths.throughput[i, 2] *= scale
+        if HAS_TRANSPARENCY:
+            # Past the transparent limit a surface only adds emission (Cycles: terminate on
+            # the next surface); a transparent one is crossed even past the bounce limit.
+            if paths.transparent[i] >= max(transparent_max, 1):
+                continue
+            if k == TRANSPARENT:
+                out = pass_through(i, out, row, x, sc, paths)
+                continue
         # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
-        k = sc.materials.kind[x.mat]
         if depth > max_bounces or k == NONE:
             continue
-        alive, t0, t1, t2 = russian_roulette(depth, paths.throughput[i, 0],
+        alive, t0, t1, t2 = russian_roulette(depth, vertex, paths.throughput[i, 0],
                                              paths.throughput[i, 1], paths.throughput[i, 2],
                                              paths.pseed[row], rev_sample)
         if not alive:
@@ -782,12 +855,12 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
                                    or k == ROUGH_GLASS or k == ROUGH_METAL):
-            n_shadow = sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow,
+            n_shadow = sample_light(i, row, vertex, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
-        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, depth, x, lobe, c, sc, paths,
+        wx, wy, wz, f0, f1, f2, pdf, ok = sample_bsdf(row, vertex, x, lobe, c, sc, paths,
                                                       rev_sample)
         t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
         if DEBUG:
@@ -801,6 +874,10 @@ def shade(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, paths, shad
                             sc.geometry.material_index[x.f], x.front,
                             wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
             spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
+            if HAS_TRANSPARENCY:
+                paths.bounce[out] = depth + 1
+                paths.transparent[out] = paths.transparent[i]
+                paths.mis_t[out] = 0.0
             out += 1
         if PROFILE:
             profile[2] += _cycles() - c_bsdf
@@ -818,6 +895,53 @@ def accumulate_unoccluded(radiance, shadow, occluded_prim, count):
             radiance[row, 0] += shadow.contrib[j, 0]
             radiance[row, 1] += shadow.contrib[j, 1]
             radiance[row, 2] += shadow.contrib[j, 2]
+
+
+def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count, shadow,
+                      paths):
+    """Shadow rays after their closest hits (Cycles' transparent shadows): one that hits
+    nothing adds its contribution; one that hits a transparent surface (a mix's: the
+    component a sample picks, which estimates its transparency) goes on behind it, tinted
+    by its colour, compacted to the front, until its transparent crossings reach the limit;
+    any other surface blocks it. Returns the rays going on."""
+    out = 0
+    for j in range(count):
+        row = shadow.row[j]
+        f = prim[j]
+        if f < 0:
+            for c in range(3):
+                paths.radiance[row, c] += shadow.contrib[j, c]
+            continue
+        crossed = shadow.transparent[j] + 1
+        if crossed >= transparent_max:
+            continue
+        mat = sc.geometry.material_index[f]
+        scale = 1.0
+        if HAS_MIXES:
+            seed = hash_combine(paths.pseed[row], np.uint64(SHADOW_CLOSURE_SALT + crossed))
+            u = sample_1d(seed, rev_sample, bounce_dim(shadow.vertex[j], CLOSURE))
+            mat, scale = choose_closure(u, f, bu[j], bv[j], mat, sc, paths)
+        if sc.materials.kind[mat] != TRANSPARENT:
+            continue
+        # Go on along the ray itself, past the surface by the usual offset measured along
+        # its normal: the ray still ends where it did, just short of the light.
+        o, d = shadow.origin[j], shadow.direction[j]
+        n = sc.geometry.tri_normal[f]
+        cos_n = max(abs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]), GRAZING_COS)
+        t = np.float64(tfar[j])
+        px, py, pz = o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t
+        t += ray_offset(max(sc.geometry.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))) \
+            / cos_n
+        for c in range(3):
+            shadow.origin[out, c] = o[c] + d[c] * t
+            shadow.direction[out, c] = d[c]
+            shadow.contrib[out, c] = shadow.contrib[j, c] * scale * sc.materials.colour[mat, c]
+        shadow.tmax[out] = shadow.tmax[j] - t
+        shadow.row[out] = row
+        shadow.transparent[out] = crossed
+        shadow.vertex[out] = shadow.vertex[j]
+        out += 1
+    return out
 
 
 def all_finite(radiance, depth, normal):
@@ -841,6 +965,6 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, medium_transmittance,
-    absorb_along_ray, spawn)}
+    absorb_along_ray, pass_through, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
-    generate_camera_rays, shade, accumulate_unoccluded, all_finite)})
+    generate_camera_rays, shade, accumulate_unoccluded, cross_transparent, all_finite)})

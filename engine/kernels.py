@@ -75,6 +75,7 @@ class Kernel:
         self.generate_camera_rays = f["generate_camera_rays"]
         self.shade = f["shade"]
         self.accumulate_unoccluded = f["accumulate_unoccluded"]
+        self.cross_transparent = f["cross_transparent"]
         self.all_finite = f["all_finite"]
         self.start_light_paths = f["start_light_paths"]
         self.light_bounce = f["light_bounce"]
@@ -112,8 +113,12 @@ def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -
     """Compile every entry point of `kernel` by tracing one pixel of the scene with it
     (numba compiles for the argument types it is called with)."""
     data = scene_data(scene, settings, plan, emitters, camera, kernel.generic)
-    tracer = Tracer(kernel, data, accel, settings, lambda stage, seconds: None)
+    tracer = Tracer(kernel, data, accel, settings, lambda stage, seconds: None,
+                    transparent_shadows=plan.transparency)
     tracer.trace_pixels(np.zeros(1, np.int64), 0)
+    if plan.transparency:  # (one pixel need not have queued a shadow ray)
+        tracer.trace_shadow_rays(tracer.shadow_rays(1), 0, tracer.new_paths(1),
+                                 reverse_bits(np.uint64(0)))
     if kernel.constants["HAS_LIGHT_TRACING"]:
         tracer.trace_light(0, 1, 0)
     kernel.all_finite(np.zeros((1, 3)), np.zeros(1), np.zeros((1, 3)))
@@ -265,10 +270,32 @@ class Tracer:
     and the stage timers split its time into surface interaction, light sampling and BSDF
     sampling."""
 
-    def __init__(self, kernel: Kernel, data: SceneData, accel, settings, count):
+    def __init__(self, kernel: Kernel, data: SceneData, accel, settings, count,
+                 transparent_shadows: bool = False):
         self.kernel, self.data, self.accel, self.settings = kernel, data, accel, settings
         self._count = count  # callable(stage, seconds)
         self.profile = bool(kernel.constants["PROFILE"])
+        # Shadow rays cross transparent surfaces (the plan has some): closest hits in turn.
+        self.transparent_shadows = bool(transparent_shadows)
+        if transparent_shadows and not kernel.constants["HAS_TRANSPARENCY"]:
+            raise ValueError("transparent shadows need a kernel with HAS_TRANSPARENCY")
+
+    @staticmethod
+    def new_paths(n: int) -> Paths:
+        return Paths(np.arange(n, dtype=np.int64), np.empty(n, np.uint64), np.empty((n, 3)),
+                     np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
+                     np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
+                     np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
+                     np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
+                     np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
+                     np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n))
+
+    @staticmethod
+    def shadow_rays(n: int) -> ShadowRays:
+        """Room for n shadow rays: at most one per path and bounce."""
+        return ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
+                          np.empty(n, F32), np.empty((n, 3)), np.zeros(n, np.int64),
+                          np.zeros(n, np.int64))
 
     def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
         """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):
@@ -277,38 +304,51 @@ class Tracer:
         middles, as Cycles' first sample."""
         k, s = self.kernel, self.settings
         n = len(pixels)
-        paths = Paths(np.arange(n, dtype=np.int64), np.empty(n, np.uint64), np.empty((n, 3)),
-                      np.empty((n, 3)), np.empty((n, 3), F32), np.empty((n, 3), F32),
-                      np.empty(n, F32), np.ones((n, 3)), np.full(n, np.inf), np.zeros((n, 3)),
-                      np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
-                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
-                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64))
+        paths = self.new_paths(n)
         t0 = time.perf_counter()
         k.generate_camera_rays(np.asarray(pixels, np.int64), sample,
                                replicate_seed(s.seed, replicate), sample == 0 and replicate == 0,
                                self.data, paths)
         self._count("generate camera rays", time.perf_counter() - t0)
         rev_sample = reverse_bits(np.uint64(sample))
-        # Shadow rays: at most one per path and bounce.
-        shadow = ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
-                            np.empty(n, F32), np.empty((n, 3)))
+        shadow = self.shadow_rays(n)
         profile = np.zeros(3 if self.profile else 0, np.uint64)
         m = n
-        for depth in range(s.max_bounces + 2):
+        # Each step is a bounce; transparent crossings take steps of their own.
+        steps = s.max_bounces + 2 + (max(s.transparent_max_bounces, 1)
+                                     if self.transparent_shadows else 0)
+        for step in range(steps):
             if m == 0:
                 break
             prim, tfar, bu, bv = self._closest_hits(paths, m)
             t0 = time.perf_counter()
-            m, count = k.shade(depth, rev_sample, s.max_bounces, self.data, prim, tfar, bu, bv,
-                               m, paths, shadow, profile)
+            m, count = k.shade(step, rev_sample, s.max_bounces, s.transparent_max_bounces,
+                               self.data, prim, tfar, bu, bv, m, paths, shadow, profile)
             self._count_shade(time.perf_counter() - t0, profile)
             if count:
-                t0 = time.perf_counter()
-                blocked = self.accel.occluded_raw(shadow.origin[:count], shadow.direction[:count],
-                                                  shadow.tmax[:count])
-                k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)
-                self._count("trace shadow rays", time.perf_counter() - t0)
+                self.trace_shadow_rays(shadow, count, paths, rev_sample)
         return paths.radiance, paths.depth, paths.normal, paths.nonfinite
+
+    def trace_shadow_rays(self, shadow: ShadowRays, count: int, paths: Paths, rev_sample):
+        """Add the contributions of the first `count` queued shadow rays that reach their
+        lights: one occlusion query, or closest hits in turn through transparent surfaces."""
+        k = self.kernel
+        t0 = time.perf_counter()
+        if not self.transparent_shadows:
+            blocked = self.accel.occluded_raw(shadow.origin[:count], shadow.direction[:count],
+                                              shadow.tmax[:count])
+            k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)
+        else:
+            limit = self.settings.transparent_max_bounces
+            for _ in range(limit + 1):
+                # (embree writes each hit's distance over the tmax it is given)
+                prim, tfar, bu, bv = self.accel.intersect_raw(
+                    shadow.origin[:count], shadow.direction[:count], shadow.tmax[:count].copy())
+                count = k.cross_transparent(rev_sample, limit, self.data, prim, tfar, bu, bv,
+                                            count, shadow, paths)
+                if count == 0:
+                    break
+        self._count("trace shadow rays", time.perf_counter() - t0)
 
     def _closest_hits(self, rays, m: int):
         """Embree's closest hits of the first m rays of a wavefront (camera or light

@@ -243,7 +243,7 @@ def light_bounce(depth, rev_sample, max_bounces, sc, prim, tfar, bu, bv, m, lp, 
         # beta carries the emitter's power (it scales with the scene's area): the roulette
         # reads it relative to the start, as a camera path's throughput starts at 1.
         b0 = lp.start[i]
-        alive, t0, t1, t2 = russian_roulette(depth, lp.throughput[i, 0] / b0,
+        alive, t0, t1, t2 = russian_roulette(depth, depth, lp.throughput[i, 0] / b0,
                                              lp.throughput[i, 1] / b0,
                                              lp.throughput[i, 2] / b0, lp.pseed[row], rev_sample)
         if not alive:

@@ -24,6 +24,7 @@ from .scene import (
     PRINCIPLED,
     ROUGH_GLASS,
     ROUGH_METAL,
+    TRANSPARENT,
     RenderSettings,
     Scene,
 )
@@ -73,6 +74,9 @@ class Plan:
     volumes: bool = False
     # Some material used is a mix of two (Mix / Add Shader): each hit picks one.
     mixes: bool = False
+    # Some material used is (or mixes in) a Transparent BSDF: paths and shadow rays cross it.
+    transparency: bool = False
+    transparent_max_bounces: int = 8
 
     @property
     def light_sampling(self) -> bool:
@@ -97,13 +101,16 @@ class Plan:
             s.append("absorb in media")
         if self.mixes:
             s.append("choose one of mixed shaders")
+        if self.transparency:
+            s.append("pass through transparent surfaces")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
             s.append("handle emission")
         if self.light_sampling:
             s += ["sample light", "trace shadow rays"
-                  + (" (shadow terminator offset)" if self.terminator else "")]
+                  + (" (shadow terminator offset)" if self.terminator else "")
+                  + (" through transparent surfaces" if self.transparency else "")]
         kinds = [n for n, f in (("diffuse", self.diffuse), ("principled", self.principled),
                                 ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass),
@@ -134,6 +141,7 @@ class Plan:
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
             HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
+            HAS_TRANSPARENCY=self.transparency,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -154,7 +162,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     used = scene.materials.reachable(np.unique(scene.material_index))
     kinds = set(scene.materials.kind[used].tolist())
     mixes = MIX in kinds
-    kinds.discard(MIX)
+    transparency = TRANSPARENT in kinds
+    kinds -= {MIX, TRANSPARENT}
     # Only emissive triangles need an area: per-material test first (millions of triangles).
     emissive = (scene.materials.emission.max(axis=1) > 0)[scene.material_index]
     v = scene.vertices[emissive]
@@ -196,18 +205,19 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
             or np.any(scene.programs.emission[used, 0] >= 0)
             or np.any(scene.programs.normal[used, 0] >= 0)
             or np.any(scene.programs.fac[used, 0] >= 0)),
-        normal_maps=normal_maps, volumes=volumes, mixes=mixes,
+        normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
+        transparent_max_bounces=int(settings.transparent_max_bounces),
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not), and
         # a normal map's shadowing term is not (light paths are not weighted by it), nor
-        # are paths through media (light paths carry no volume stack) or mixed shaders
-        # (light paths do not choose among them).
+        # are paths through media (light paths carry no volume stack), mixed shaders
+        # (light paths do not choose among them) or transparent surfaces (nor cross them).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
-                           and not volumes and not mixes
+                           and not volumes and not mixes and not transparency
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

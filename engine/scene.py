@@ -22,10 +22,11 @@ from .jit import ALLOCATING, njit
 from .shading import Program, ProgramTable, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
-NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX = range(10)
+(NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
+ TRANSPARENT) = range(11)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
-              ROUGH_METAL: "rough_metal", MIX: "mix"}
+              ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
@@ -91,6 +92,10 @@ class Material:
           al. 2007) with the tints and the dielectric Fresnel of glass, Multiscatter GGX
           energy compensation from the glass' own albedo tables (bsdf.py).
         - none: no BSDF (a pure Emission shader): paths end here.
+        - transparent: Cycles' Transparent BSDF: light passes straight through, weighted by
+          `colour`, as if the surface were not there (no bounce counted, only a transparent
+          one); shadow rays cross it the same way (Cycles' transparent shadows). A
+          Principled BSDF's Alpha a is a mix of transparent white (1 - a) and the rest (a).
         - mix: scale x ((1 - fac) x components[0] + fac x components[1]) (Cycles' Mix
           Shader: scale 1; Add Shader: fac 1/2, scale 2). A path picks one component per
           hit, the second with probability fac, and carries the scale (an unbiased
@@ -210,6 +215,11 @@ class Material:
         return cls(name, "glossy", tuple(colour), emission=tuple(emission),
                    roughness=float(roughness), multiscatter=bool(multiscatter),
                    colour_program=colour_program, emission_program=emission_program)
+
+    @classmethod
+    def transparent(cls, name, colour=(1, 1, 1)):
+        """Cycles' Transparent BSDF: straight through, tinted by colour."""
+        return cls(name, "transparent", tuple(colour))
 
     @classmethod
     def emission_only(cls, name, colour=(1, 1, 1), strength=1.0, emission_program=None):
@@ -543,6 +553,9 @@ class RenderSettings:
     width, height : pixels. samples : samples per pixel (upper bound).
     time_limit : seconds, 0 for none. target_error : stop when the estimated relative
         error falls below it, 0 for none. max_bounces : Blender's count (0 = direct light).
+    transparent_max_bounces : Cycles' Transparent bounce limit: the transparent surfaces
+        (Transparent BSDF, alpha) a path or a shadow ray may cross; they do not count
+        toward max_bounces.
     seed : sample-sequence seed. threads : worker threads (0 = all cores).
     fresnel : "exact" or "schlick". filter_type, filter_width : pixel filter (px).
     chunk_pixels : pixels traced at once per thread, bounding memory.
@@ -569,6 +582,7 @@ class RenderSettings:
     time_limit: float = 0.0
     target_error: float = 0.0
     max_bounces: int = 12
+    transparent_max_bounces: int = 8
     seed: int = 0
     threads: int = 0
     fresnel: str = "exact"
@@ -594,6 +608,10 @@ class RenderSettings:
                 raise ValueError(f"render {name} must be a positive integer, got {v!r}")
         if int(self.max_bounces) != self.max_bounces or self.max_bounces < 0:
             raise ValueError(f"max_bounces must be an integer >= 0, got {self.max_bounces!r}")
+        if int(self.transparent_max_bounces) != self.transparent_max_bounces or \
+                self.transparent_max_bounces < 0:
+            raise ValueError(f"transparent_max_bounces must be an integer >= 0, got "
+                             f"{self.transparent_max_bounces!r}")
         if not (self.time_limit >= 0) or not (self.target_error >= 0):
             raise ValueError(f"time_limit and target_error must be >= 0, got "
                              f"{self.time_limit!r}, {self.target_error!r}")

@@ -421,8 +421,9 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
 
 
 def test_alpha_weights_the_colour_seen(fresh):
-    """Alpha output linked: the colour of what stays visible (alpha-weighted straight colour);
-    unlinked: Cycles' premultiplied colour (alpha mode Straight)."""
+    """Alpha output linked: the colour of what stays visible (alpha-weighted straight colour),
+    mixed over transparent white by the texture's alpha at each hit; unlinked: Cycles'
+    premultiplied colour (alpha mode Straight)."""
     texels = np.array([[1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0],
                        [1.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]])
     mat, node = node_material("Cutout", "ShaderNodeBsdfPrincipled")
@@ -432,8 +433,45 @@ def test_alpha_weights_the_colour_seen(fresh):
     assert spec.kwargs["base_colour"] == pytest.approx((0.5, 0.0, 0.5), abs=1e-6)
     mat.node_tree.links.new(tex.outputs["Alpha"], node.inputs["Alpha"])
     spec, warnings = convert(mat)
-    assert spec.kwargs["base_colour"] == pytest.approx((1.0, 0.0, 0.0), abs=1e-6)
-    assert any("'Alpha'" in w and "opaque" in w for w in warnings)
+    assert spec.ctor == "mix" and spec.kwargs["first"].ctor == "transparent"
+    assert spec.kwargs["second"].kwargs["base_colour"] == pytest.approx((1.0, 0.0, 0.0),
+                                                                        abs=1e-6)
+    assert spec.kwargs["fac"] == pytest.approx(0.5)
+    for uv, texel in zip(TEXEL_CENTRES, texels):
+        assert _program_at(spec.kwargs["fac_program"], uv)[0] == pytest.approx(texel[3])
+    assert not any("'Alpha'" in w for w in warnings), warnings
+
+
+@pytest.mark.parametrize("alpha", [0.25, "link", 1.0])
+def test_principled_alpha_mixes_in_transparency(fresh, core, alpha):
+    """Alpha below 1 (or a chain reducing to it) is a mix of transparent white (1 - alpha)
+    and the Principled BSDF (alpha), its emission scaled by alpha as Cycles scales it;
+    alpha 1 is the Principled BSDF alone."""
+    mat, node = node_material("Leaf", "ShaderNodeBsdfPrincipled",
+                              **{"Emission Strength": 2.0,
+                                 "Emission Color": (1.0, 0.5, 0.25, 1.0)})
+    if alpha == "link":
+        link_value(mat, node, "Alpha").outputs[0].default_value = 0.25
+    else:
+        node.inputs["Alpha"].default_value = alpha
+    spec, warnings = convert(mat)
+    assert warnings == []
+    if alpha == 1.0:
+        assert spec.ctor == "principled"
+        return
+    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.25)
+    assert spec.kwargs["first"] == materials.MaterialSpec("transparent", "Leaf",
+                                                {"colour": (1.0, 1.0, 1.0)})
+    m = core.Materials.from_list([spec.to_core(core)])
+    np.testing.assert_allclose(m.emission[0], 0.25 * 2.0 * np.array([1.0, 0.5, 0.25]))
+
+
+def test_transparent_bsdf_is_transparent(fresh):
+    mat, node = node_material("Glassless", "ShaderNodeBsdfTransparent",
+                              Color=(0.9, 0.5, 0.1, 1.0))
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec == materials.MaterialSpec("transparent", "Glassless", {"colour": (0.9, 0.5, 0.1)})
 
 
 def test_unreducible_chains_keep_what_the_object_is(fresh):
@@ -575,7 +613,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "bump"), ("Alpha", 0.5), ("Alpha", "link"), ("Coat Weight", 1.0),
+    ("Normal", "bump"), ("Coat Weight", 1.0),
     ("Coat Weight", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
     ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])

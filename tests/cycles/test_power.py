@@ -264,6 +264,38 @@ def _mix_factors_as_their_means(scene, settings):
     return scene, settings
 
 
+def _transparent_tint_plus_10_percent(scene, settings):
+    m = scene.materials
+    clear = (m.kind == renderers.core().scene.TRANSPARENT)[:, None]
+    scene.materials = dataclasses.replace(m, colour=np.where(clear, m.colour * 1.1, m.colour))
+    return scene, settings
+
+
+def _one_transparent_bounce_more(scene, settings):
+    return scene, dataclasses.replace(
+        settings, transparent_max_bounces=settings.transparent_max_bounces + 1)
+
+
+def opaque_shadow_rays(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count, shadow,
+                       paths):
+    """cross_transparent with every surface blocking: no transparent shadows."""
+    for j in range(count):
+        if prim[j] < 0:
+            for c in range(3):
+                paths.radiance[shadow.row[j], c] += shadow.contrib[j, c]
+    return 0
+
+
+@contextmanager
+def _opaque_shadows():
+    """Shadow rays stop at transparent surfaces (a one-off kernel)."""
+    from tests.patching import one_off_kernels
+
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, cross_transparent=opaque_shadow_rays)
+        yield
+
+
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
@@ -296,6 +328,11 @@ INJECTIONS = {
     "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
     "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
     "textured_mix_factor_as_its_mean": ("mixed_shaders", _mix_factors_as_their_means, None),
+    "alpha_as_its_mean": ("alpha_cutouts", _mix_factors_as_their_means, None),
+    "opaque_shadows": ("alpha_cutouts", None, _opaque_shadows),
+    "transparent_tint_plus_10_percent": ("alpha_cutouts", _transparent_tint_plus_10_percent,
+                                         None),
+    "one_transparent_bounce_more": ("transparent_limit", _one_transparent_bounce_more, None),
 }
 
 

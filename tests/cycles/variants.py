@@ -907,6 +907,54 @@ def _quad_uvs(obj):
         loop.uv = uv
 
 
+def _checker_alpha(mat, scale=4.0):
+    """The Principled BSDF's Alpha from a Checker Texture on the UV map: 1 and 0 in
+    squares (a cut-out)."""
+    tree = mat.node_tree
+    node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    checker.inputs["Scale"].default_value = scale
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Fac"], node.inputs["Alpha"])
+    return mat
+
+
+def alpha_cutouts():
+    """Alpha and the Transparent BSDF (issue 14, points 1 and 4): a leaf-green card under the
+    light whose Principled Alpha is a Checker Texture (a cut-out: seen from below, it casts
+    a checkered shadow through transparent shadow rays), a tinted Transparent BSDF pane in
+    front of a white ball (seen through, casting a coloured shadow), and a blue ball at
+    Alpha 0.4."""
+    _box()
+    col = bpy.context.scene.collection
+    leaf = _checker_alpha(_principled("Leaf", **{"Base Color": (0.2, 0.6, 0.1, 1.0),
+                                                 "Roughness": 0.5}))
+    card = bs.quad("Leaf", [(-0.45, -0.45, 0.0), (0.45, -0.45, 0.0), (0.45, 0.45, 0.0),
+                            (-0.45, 0.45, 0.0)], leaf, col)
+    _quad_uvs(card)
+    card.location = (0.0, 0.1, 1.1)
+    pane = bs.material("Tint", "ShaderNodeBsdfTransparent", Color=(0.9, 0.5, 0.2, 1.0))
+    _card("Pane", (-0.45, -0.5, 0.4), (0.6, 0.8), pane)
+    _sphere(bs.diffuse("Chalk", (0.8, 0.8, 0.8)), (-0.45, 0.0, 0.25), 0.25, "Chalk")
+    ghost = _principled("Ghost", **{"Base Color": (0.1, 0.2, 0.8, 1.0), "Alpha": 0.4})
+    _sphere(ghost, (0.5, -0.1, 0.3), 0.3, "Ghost")
+
+
+def transparent_limit():
+    """Cycles' transparent bounce limit (3 here): four overlapping tinted Transparent BSDF
+    panes in front of the back wall and under the light. Where the camera looks through
+    all four, the fourth is the surface after the limit (emission only: black); the
+    shadow rays crossing three or more panes are blocked."""
+    _box()
+    bpy.context.scene.specula.transparent_max_bounces = 3
+    pane = bs.material("Tint", "ShaderNodeBsdfTransparent", Color=(0.95, 0.8, 0.6, 1.0))
+    for i in range(4):
+        _card(f"Pane{i}", (-0.45 + 0.3 * i, -0.2 - 0.15 * i, 0.7), (0.9, 1.0), pane)
+
+
 def textured_walls():
     """The Cornell box whose back wall (through a Hue/Saturation node) and floor carry an
     8 x 8 sRGB image texture (Closest, repeated twice by a Mapping node on the floor), a
@@ -1118,7 +1166,7 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
 # Rough glass and metal (issue 14): light reaches the floor and the camera through two rough
 # interfaces, mostly by next-event estimation at the inner one.
 for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass,
-               mixed_shaders):
+               mixed_shaders, alpha_cutouts, transparent_limit):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Caustics from a small light: rare paths for path tracing, more samples for Cycles.
 _add(Variant("caustic_quad", caustic_quad, max_bounces=8, samples=1024, cycles_samples=2048,

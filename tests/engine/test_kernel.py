@@ -163,10 +163,11 @@ def test_normal_maps_same_in_both_kernels(kind):
     assert_same_image(a, c)
 
 
-def test_mixes_and_media_same_in_both_kernels():
+def test_mixes_media_and_transparency_same_in_both_kernels():
     """A mix with a textured factor (a checker image between a red diffuse and a rough
-    glossy) on the floor and an absorbing glass ball: the generic kernel's run-time checks
-    and the plan's kernel take the same choices and give the same pixels."""
+    glossy) on the floor, an absorbing glass ball and a checkered alpha cut-out (tinted
+    transparent and diffuse) under the light: the generic kernel's run-time checks and the
+    plan's kernel take the same choices, count the same bounces and give the same pixels."""
     b = scenes.cornell_box(spheres=False)
     mix = Material.mix("checker mix", Material.diffuse("red", (0.8, 0.2, 0.2)),
                        Material.glossy("shiny", (0.9, 0.9, 0.9), roughness=0.3), 0.5,
@@ -177,8 +178,13 @@ def test_mixes_and_media_same_in_both_kernels():
     amber = replace(amber, absorption=(0.5, 1.5, 3.0))
     v, t, n = scenes.uv_sphere((0.3, 0.0, 0.35), 0.35)
     b.add_mesh("amber ball", v, t, b.add_material(amber), corner_normals=n)
+    cut_out = Material.mix("cut-out", Material.transparent("clear", (0.9, 0.8, 0.6)),
+                           Material.diffuse("leaf", (0.3, 0.7, 0.2)), 0.5,
+                           fac_program=scenes.image_program(scenes.checker_texels()))
+    v, t = scenes.quad((-0.5, -0.5, 1.0), (0.5, -0.5, 1.0), (0.5, 0.5, 1.0), (-0.5, 0.5, 1.0))
+    b.add_mesh("cut-out", v, t, b.add_material(cut_out), uv_maps={"": scenes.quad_uvs()})
     a, c = both(b.build(scenes.cornell_camera(), World((0, 0, 0))))
-    assert a.plan.mixes and a.plan.volumes and a.plan.textures
+    assert a.plan.mixes and a.plan.volumes and a.plan.textures and a.plan.transparency
     assert a.combined[..., :3].mean() > 0.05
     assert_same_image(a, c)
 
@@ -383,7 +389,8 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
            "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_IMPORTANCE": "importance_pmf",
            "HAS_LIGHT_TRACING": "path_tracing_weight", "HAS_TEXTURES": "image_channel",
-           "HAS_VOLUMES": "transmittance", "HAS_MIXES": "choose_closure"}
+           "HAS_VOLUMES": "transmittance", "HAS_MIXES": "choose_closure",
+           "HAS_TRANSPARENCY": "pass_through"}
 
 
 def _ir(kernel):

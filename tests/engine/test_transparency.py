@@ -1,0 +1,120 @@
+"""Transparent surfaces (scene.Material.transparent, a Principled BSDF's alpha as a mix):
+paths and shadow rays cross them straight, tinted, without counting a bounce, up to
+Cycles' transparent bounce limit; MIS keeps the scattering vertex's state across them."""
+
+import numpy as np
+import pytest
+
+from engine import Camera, Light, Material, RenderSettings, SceneBuilder, World, render
+from engine.plan import make_plan
+from tests import scenes
+from tests.engine.test_integrator import max_block_z
+
+SETTINGS = dict(width=48, height=36, samples=64, max_bounces=4, light_tracing=False)
+
+
+def _box_with_filtered_light(pane, radiance):
+    """The Cornell box whose light is sandwiched between two panes of `pane` a thousandth
+    below and above it (same footprint): every path to the light crosses one pane."""
+    b = SceneBuilder()
+    scenes.cornell_box(b, emitter_radiance=radiance)
+    if pane is not None:
+        m = b.add_material(pane)
+        for z in (1.489, 1.491):
+            v, t = scenes.quad((-0.4, -0.3, z), (-0.4, 0.3, z), (0.4, 0.3, z),
+                               (0.4, -0.3, z))
+            b.add_mesh("pane", v, t, m)
+    return b.build(scenes.cornell_camera(), World((0, 0, 0)))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("pane", [
+    Material.transparent("pane", (0.5, 0.5, 0.5)),
+    Material.mix("alpha 0.5", Material.transparent("t"), Material.diffuse("black", (0, 0, 0)),
+                 0.5)], ids=["transparent", "alpha"])
+def test_a_light_behind_a_transparent_filter_is_the_light_dimmed(pane):
+    """A light seen, sampled and hit only through a transparent pane of 0.5 (a Transparent
+    BSDF, or alpha 0.5 over black: shadow rays pick among the mix) renders as the light at
+    half its radiance, within noise (block z-scores, Sidak-corrected); the full light is
+    told apart."""
+    half = render(_box_with_filtered_light(None, 5.0), RenderSettings(seed=1, **SETTINGS))
+    filtered = render(_box_with_filtered_light(pane, 10.0), RenderSettings(seed=2, **SETTINGS))
+    z, critical = max_block_z(half, filtered)
+    assert z < critical, z
+    full = render(_box_with_filtered_light(None, 10.0), RenderSettings(seed=3, **SETTINGS))
+    z, critical = max_block_z(full, filtered)
+    assert z > critical, z
+
+
+def _box_with_clear_ceiling(pane):
+    """The box with a big, dim light and a pane across the room under it: BSDF-sampled
+    rays reach the light across the pane, where MIS weighs them by the light's pdf from
+    the scattering vertex (the pane's distance to the light is a seventh of it)."""
+    b = SceneBuilder()
+    scenes.cornell_box(b, emitter_radiance=2.0, light_half=(0.9, 0.9))
+    if pane is not None:
+        v, t = scenes.quad((-1, -1, 1.3), (-1, 1, 1.3), (1, 1, 1.3), (1, -1, 1.3))
+        b.add_mesh("pane", v, t, b.add_material(pane))
+    return b.build(scenes.cornell_camera(), World((0, 0, 0)))
+
+
+@pytest.mark.slow
+def test_a_clear_pane_changes_nothing_and_mis_measures_from_the_vertex():
+    """A white transparent pane across the room leaves the image as it was, within noise.
+    (Measuring the light's MIS distance from the pane instead of from the scattering
+    vertex gives z 43 here.)"""
+    ref = render(_box_with_clear_ceiling(None), RenderSettings(seed=1, **SETTINGS))
+    clear = render(_box_with_clear_ceiling(Material.transparent("clear")),
+                   RenderSettings(seed=2, **SETTINGS))
+    z, critical = max_block_z(ref, clear)
+    assert z < critical, z
+
+
+def _panes(n, colour=(0.5, 0.8, 1.0), sun=False):
+    """n transparent panes stacked under an orthographic camera looking down at a white
+    world, or (sun) at a white floor lit by a sun straight through them."""
+    b = SceneBuilder()
+    m = b.add_material(Material.transparent("pane", colour))
+    for k in range(n):
+        z = 1.0 + 0.2 * k
+        v, t = scenes.quad((-2, -2, z), (2, -2, z), (2, 2, z), (-2, 2, z))
+        b.add_mesh(f"pane {k}", v, t, m)
+    if sun:
+        v, t = scenes.quad((-2, -2, 0), (2, -2, 0), (2, 2, 0), (-2, 2, 0))
+        b.add_mesh("floor", v, t, b.add_material(Material.diffuse("white", (1, 1, 1))))
+        b.add_light(Light("sun", "SUN", (np.pi, np.pi, np.pi)))
+    cam = Camera(type="ORTHO", ortho_scale=1.0,
+                 world_from_camera=scenes.look_at((0, 0, 0.5) if sun else (0, 0, 3),
+                                                  (0, 0, -1) if sun else (0, 0, 0),
+                                                  up=(0, 1, 0)))
+    return b.build(cam, World((0, 0, 0) if sun else (1, 1, 1)))
+
+
+@pytest.mark.parametrize("limit", [0, 1, 2, 3, 4, 8])
+def test_the_transparent_bounce_limit_is_cycles(limit):
+    """Through three panes: the world is seen once three crossings are allowed (Cycles
+    stops a path at the surface after its limit-th crossing, but still adds the world),
+    and the panes' colour cubed tints it; a sun's shadow rays need one crossing more
+    (Cycles blocks a shadow ray at its limit-th crossing). Exact: nothing is sampled."""
+    st = RenderSettings(width=4, height=4, samples=2, max_bounces=2,
+                        transparent_max_bounces=limit)
+    c3 = np.array((0.5, 0.8, 1.0)) ** 3
+    seen = render(_panes(3), st).combined[..., :3]
+    np.testing.assert_allclose(seen, np.broadcast_to(c3 if limit >= 3 else 0.0, seen.shape),
+                               rtol=1e-6, atol=1e-12)
+    # The camera sits under the panes, so only the sun's shadow rays cross them: the
+    # white floor's radiance is its irradiance pi x c^3 / pi.
+    lit = render(_panes(3, sun=True), st).combined[..., :3]
+    np.testing.assert_allclose(lit, np.broadcast_to(c3 if limit >= 4 else 0.0, lit.shape),
+                               rtol=1e-6, atol=1e-12)
+
+
+def test_transparency_is_planned_and_leaves_light_tracing_out():
+    scene = _box_with_filtered_light(Material.transparent("pane"), 10.0)
+    plan = make_plan(scene, scenes.settings())
+    assert plan.transparency and not plan.light_tracing
+    assert plan.kernel_constants(False)["HAS_TRANSPARENCY"]
+    assert "pass through transparent surfaces" in plan.stages()
+    assert not make_plan(scenes.cbspheres(), scenes.settings()).transparency
+    with pytest.raises(ValueError, match="transparent_max_bounces"):
+        RenderSettings(transparent_max_bounces=-1).validate()
