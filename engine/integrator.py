@@ -902,8 +902,8 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
     """Shadow rays after their closest hits (Cycles' transparent shadows): one that hits
     nothing adds its contribution; one that hits a transparent surface (a mix's: the
     component a sample picks, which estimates its transparency) goes on behind it, tinted
-    by its colour, compacted to the front, until its transparent crossings reach the limit;
-    any other surface blocks it. Returns the rays going on."""
+    by its colour, compacted to the front, while its path's transparent crossings and its
+    own stay within the limit; any other surface blocks it. Returns the rays going on."""
     out = 0
     for j in range(count):
         row = shadow.row[j]
@@ -913,7 +913,7 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
                 paths.radiance[row, c] += shadow.contrib[j, c]
             continue
         crossed = shadow.transparent[j] + 1
-        if crossed >= transparent_max:
+        if crossed > transparent_max:  # (Cycles: the path's crossings count too)
             continue
         mat = sc.geometry.material_index[f]
         scale = 1.0

@@ -333,6 +333,7 @@ INJECTIONS = {
     "transparent_tint_plus_10_percent": ("alpha_cutouts", _transparent_tint_plus_10_percent,
                                          None),
     "one_transparent_bounce_more": ("transparent_limit", _one_transparent_bounce_more, None),
+    "gltf_alpha_as_its_mean": ("gltf_glass_vase_flowers", _mix_factors_as_their_means, None),
 }
 
 

@@ -1111,6 +1111,13 @@ def gltf_attenuation():
     _gltf("AttenuationTest", direction=(0.0, -1.0, 0.0))
 
 
+def gltf_glass_vase_flowers():
+    """Glass two ways side by side (alpha 0.3 against transmission), and flowers cut out by
+    their colour texture's alpha (the importer's alpha-mask Math chain) with normal and
+    roughness maps."""
+    _gltf("GlassVaseFlowers", direction=(0.0, -1.0, 0.25))
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -1185,7 +1192,8 @@ _add(Variant("normal_maps", normal_maps, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
-                      (gltf_attenuation, "AttenuationTest")):
+                      (gltf_attenuation, "AttenuationTest"),
+                      (gltf_glass_vase_flowers, "GlassVaseFlowers")):
     _add(Variant(_setup.__name__, _setup, max_bounces=8,
                  files=(os.path.join(GLTF_DIR, _name, _name + ".glb"),)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the

@@ -94,8 +94,9 @@ def _panes(n, colour=(0.5, 0.8, 1.0), sun=False):
 def test_the_transparent_bounce_limit_is_cycles(limit):
     """Through three panes: the world is seen once three crossings are allowed (Cycles
     stops a path at the surface after its limit-th crossing, but still adds the world),
-    and the panes' colour cubed tints it; a sun's shadow rays need one crossing more
-    (Cycles blocks a shadow ray at its limit-th crossing). Exact: nothing is sampled."""
+    and the panes' colour cubed tints it; a sun lights the floor through them once three
+    crossings are allowed (Cycles blocks a shadow ray at the crossing past the limit,
+    counting its path's). Exact: nothing is sampled."""
     st = RenderSettings(width=4, height=4, samples=2, max_bounces=2,
                         transparent_max_bounces=limit)
     c3 = np.array((0.5, 0.8, 1.0)) ** 3
@@ -105,7 +106,7 @@ def test_the_transparent_bounce_limit_is_cycles(limit):
     # The camera sits under the panes, so only the sun's shadow rays cross them: the
     # white floor's radiance is its irradiance pi x c^3 / pi.
     lit = render(_panes(3, sun=True), st).combined[..., :3]
-    np.testing.assert_allclose(lit, np.broadcast_to(c3 if limit >= 4 else 0.0, lit.shape),
+    np.testing.assert_allclose(lit, np.broadcast_to(c3 if limit >= 3 else 0.0, lit.shape),
                                rtol=1e-6, atol=1e-12)
 
 
