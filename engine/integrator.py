@@ -735,11 +735,11 @@ def absorb_along_ray(i, f, tfar, sc, paths):
     paths.throughput[i, 2] *= a2
 
 
-def pass_through(i, out, row, x, sc, paths):
-    """Continue path i as row `out` straight through a transparent surface, its throughput
-    tinted by the surface's colour: only embree's ray start moves (behind the surface);
-    o64, the MIS pdf and normal stay the scattering vertex's, mis_t grows to here. Returns
-    the rows going on."""
+def pass_through(i, out, row, x, tfar, sc, paths):
+    """Continue path i as row `out` straight through a transparent surface (tfar away), its
+    throughput tinted by the surface's colour: only embree's ray start moves (behind the
+    surface) and its end stays (a camera ray's clipping); o64, the MIS pdf and normal stay
+    the scattering vertex's, mis_t grows to here. Returns the rows going on."""
     eps = ray_offset(x.scale)  # n faces the incoming ray: behind is -n
     for j in range(3):
         paths.o64[out, j] = paths.o64[i, j]
@@ -750,7 +750,7 @@ def pass_through(i, out, row, x, sc, paths):
     paths.origin32[out, 0] = x.px - eps * x.nx
     paths.origin32[out, 1] = x.py - eps * x.ny
     paths.origin32[out, 2] = x.pz - eps * x.nz
-    paths.tmax32[out] = np.inf
+    paths.tmax32[out] = paths.tmax32[i] - tfar
     paths.prev_pdf[out] = paths.prev_pdf[i]
     paths.mis_t[out] = x.t
     paths.bounce[out] = paths.bounce[i]
@@ -838,7 +838,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             if paths.transparent[i] >= max(transparent_max, 1):
                 continue
             if k == TRANSPARENT:
-                out = pass_through(i, out, row, x, sc, paths)
+                out = pass_through(i, out, row, x, tfar[i], sc, paths)
                 continue
         # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
         if depth > max_bounces or k == NONE:

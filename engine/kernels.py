@@ -354,7 +354,10 @@ class Tracer:
         """Embree's closest hits of the first m rays of a wavefront (camera or light
         paths: their float32 origin32, dir32, tmax32)."""
         t0 = time.perf_counter()
-        hits = self.accel.intersect_raw(rays.origin32[:m], rays.dir32[:m], rays.tmax32[:m])
+        # A copy: embree writes hit distances over tmax, and a ray crossing a transparent
+        # surface keeps its end (a camera ray's clipping).
+        hits = self.accel.intersect_raw(rays.origin32[:m], rays.dir32[:m],
+                                        rays.tmax32[:m].copy())
         self._count("intersect", time.perf_counter() - t0)
         return hits
 

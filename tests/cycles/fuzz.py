@@ -264,6 +264,13 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                 "shader": "glossy" if mixes.random() < 0.5 else "diffuse",
                 "colour": [_r(c) for c in mixes.uniform(0.05, 1.0, 3)],
                 "roughness": _r(mixes.uniform(0.05, 0.8), 3), "fac": _r(mixes.uniform(0.1, 0.9))}
+    # Some Principled surfaces see-through (Alpha < 1), from a stream of their own; not over a
+    # medium (shadow rays keep the medium they start in across a transparent surface).
+    alphas = np.random.default_rng([seed, 0xa1fa])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("principled", "metal", "principled_glass") and \
+                not o["material"].get("volume") and alphas.random() < 0.25:
+            o["material"]["alpha"] = _r(alphas.uniform(0.2, 0.9))
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -292,7 +299,8 @@ def features(params) -> list[str]:
         f.append(f"{o['id']}:{o['shape']}{':smooth' if o['smooth'] else ''}:{m['kind']}{rough}"
                  + (":emissive" if m.get("emission_strength") else "")
                  + (":absorbing" if m.get("volume") else "")
-                 + (f":mix_{m['mix']['shader']}" if m.get("mix") else ""))
+                 + (f":mix_{m['mix']['shader']}" if m.get("mix") else "")
+                 + (":alpha" if m.get("alpha") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
         if light.get("scale", [1, 1, 1]) != [1.0, 1.0, 1.0]:
@@ -525,6 +533,8 @@ def _bpy_surface(name, m):
         inputs["Metallic"] = 1.0
     elif kind == "principled_glass":
         inputs.update({"IOR": m["ior"], "Transmission Weight": 1.0})
+    if m.get("alpha"):
+        inputs["Alpha"] = m["alpha"]
     if m.get("emission_strength"):
         inputs.update({"Emission Color": (*m["emission_colour"], 1.0),
                        "Emission Strength": m["emission_strength"]})

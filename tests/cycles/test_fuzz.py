@@ -65,6 +65,7 @@ def _all_features(seeds, avoid_known=False):
                      if o["material"]["kind"] == "metal" and o["material"]["roughness"] > 0)
         found.update("absorbing glass" for o in p["objects"] if o["material"].get("volume"))
         found.update("mixed shader" for o in p["objects"] if o["material"].get("mix"))
+        found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
         found.update("smooth monkey" for o in p["objects"]
                      if o["shape"] == "monkey" and o["smooth"])
         found.update(f"known:{k}" for k in fuzz.known_issue_features(p))
@@ -77,7 +78,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "world:colour", "world:map", "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
-              "absorbing glass", "mixed shader",
+              "absorbing glass", "mixed shader", "alpha",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c"}
 
 
