@@ -487,7 +487,10 @@ class _Reader:
         self.normal_map = None  # set by normal(): the shader's tangent-space normal map
 
     def warn(self, text):
-        self.warnings.append(f"material '{self.material.name}': {text}")
+        """Record a warning once (a Principled BSDF's lobes read the same inputs)."""
+        text = f"material '{self.material.name}': {text}"
+        if text not in self.warnings:
+            self.warnings.append(text)
 
     def value(self, node, socket_name, default=None, unknown=None):
         """Value of `node`'s input `socket_name`: its own when unlinked, else the constant its
@@ -810,15 +813,16 @@ class _Reader:
             self.ignored(node, "Coat Normal", None, "no coat is rendered")
 
     def principled(self, node):
+        """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x
+        (1 - Metallic) x Transmission, the dielectric x the rest; here as a mix of the metal
+        and a mix of the dielectric and the glass, each factor a program where it varies
+        (the glTF importer's metallic and transmission channels)."""
         name = self.material.name
         self.principled_ignored(node)
         metallic, metal_program = self.textured_unit(node, "Metallic", 0.0)
-        transmission = self.unit(node, "Transmission Weight", self.unit(node, "Transmission"))
-        if metal_program is not None and transmission > 0.0:
-            self.warn(f"node '{node.name}' input 'Metallic' varies over the surface beside a "
-                      f"Transmission Weight > 0, which is not supported; using its mean "
-                      f"{metallic:.3g}")
-            metal_program = None
+        transmission, glass_program = self.textured_unit(
+            node, "Transmission Weight" if "Transmission Weight" in node.inputs
+            else "Transmission", 0.0)
         roughness = self.unit(node, "Roughness")
         # A linked emission that cannot be reduced is off, not the sockets' own values:
         # Emission Color's is white, and a textured surface must not become a white light.
@@ -833,33 +837,31 @@ class _Reader:
         if kwargs and program is not None:
             kwargs["emission_program"] = shader_nodes.scaled(program, strength)
         multiscatter = self.multiscatter(node)
-        if metal_program is not None:  # e.g. the glTF importer's metallic-roughness channel
+
+        def metal():
             base, program = self.textured_colour(node, "Base Color")
-            metal = MaterialSpec("metal", name, {"base_colour": base, **_with(program),
-                                                 "roughness": roughness,
-                                                 "multiscatter": multiscatter})
-            return self.with_emission(node, self.mixed(self.dielectric(node), metal, metallic,
-                                                       1.0, metal_program), kwargs)
-        lobes = []  # (weight, spec): Cycles mixes metal, glass and dielectric linearly
-        if metallic > 0.0:
-            base, program = self.textured_colour(node, "Base Color")
-            lobes.append((metallic, MaterialSpec("metal", name, {
-                "base_colour": base, **_with(program), "roughness": roughness,
-                "multiscatter": multiscatter})))
-        if metallic < 1.0 and transmission > 0.0:
-            lobes.append(((1.0 - metallic) * transmission, MaterialSpec("principled_glass", name, {
+            return MaterialSpec("metal", name, {"base_colour": base, **_with(program),
+                                                "roughness": roughness,
+                                                "multiscatter": multiscatter})
+
+        def glass():
+            return MaterialSpec("principled_glass", name, {
                 "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
-                "roughness": roughness, "multiscatter": multiscatter})))
-        if metallic < 1.0 and transmission < 1.0:
-            lobes.append(((1.0 - metallic) * (1.0 - transmission), self.dielectric(node)))
-        if len(lobes) == 1:
-            lobes[0][1].kwargs.update(kwargs)
-            return lobes[0][1]
-        # Fractional Metallic or Transmission: a mix of the lobes, the emission on the mix.
-        spec, total = lobes[0][1], lobes[0][0]
-        for w, part in lobes[1:]:
-            spec = self.mixed(spec, part, w / (total + w))
-            total += w
+                "roughness": roughness, "multiscatter": multiscatter})
+
+        def either(first, second, fac, program):
+            """first (1 - fac) and second (fac), or one alone where fac is 0 or 1."""
+            if program is None and fac <= 0.0:
+                return first()
+            if program is None and fac >= 1.0:
+                return second()
+            return self.mixed(first(), second(), fac, 1.0, program)
+
+        spec = either(lambda: either(lambda: self.dielectric(node), glass, transmission,
+                                     glass_program), metal, metallic, metal_program)
+        if spec.ctor != "mix":
+            spec.kwargs.update(kwargs)
+            return spec
         return self.with_emission(node, spec, kwargs)
 
     def with_alpha(self, node, spec):

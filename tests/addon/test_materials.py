@@ -167,12 +167,12 @@ def test_fractional_principled_weights_are_a_mix_of_its_lobes(fresh, core):
                               "Emission Color": (1.0, 0.5, 0.25, 1.0)})
     spec, warnings = convert(mat)
     assert warnings == []
-    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.35)
+    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.3)
     inner = spec.kwargs["first"]
     assert (inner.ctor, inner.kwargs["first"].ctor, inner.kwargs["second"].ctor) == \
-        ("mix", "metal", "principled_glass")
-    assert inner.kwargs["fac"] == pytest.approx(0.35 / 0.65)
-    assert spec.kwargs["second"].ctor == "principled"
+        ("mix", "principled", "principled_glass")
+    assert inner.kwargs["fac"] == pytest.approx(0.5)
+    assert spec.kwargs["second"].ctor == "metal"
     assert all("emission" not in leaf.kwargs for leaf in spec.leaves())
     m = spec.to_core(core)
     assert m.kind == "mix" and m.emission == pytest.approx((2.0, 1.0, 0.5))
@@ -418,6 +418,29 @@ def test_texture_times_colour_factor_and_separated_channels(fresh):
         assert _program_at(mixed.kwargs["fac_program"], uv)[0] == \
             pytest.approx(0.5 * texel[2], abs=1e-6)
     assert not any("'Metallic'" in w for w in warnings)
+
+
+def test_textured_transmission_and_metallic_are_nested_mixes(fresh):
+    """Transmission and Metallic from a texture's channels (the glTF importer's layout):
+    the glass-or-dielectric mix and the metal mix each take their channel per point."""
+    mat, node = node_material("Patchy", "ShaderNodeBsdfPrincipled", Roughness=0.0)
+    tree = mat.node_tree
+    img, stored = make_image("Channels", colorspace="Non-Color")
+    sep = tree.nodes.new("ShaderNodeSeparateColor")
+    texture(mat, img, sep, "Color")
+    tree.links.new(sep.outputs["Red"], node.inputs["Transmission Weight"])
+    tree.links.new(sep.outputs["Blue"], node.inputs["Metallic"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    inner, metal = spec.kwargs["first"], spec.kwargs["second"]
+    assert (spec.ctor, metal.ctor, inner.ctor) == ("mix", "metal", "mix")
+    assert (inner.kwargs["first"].ctor, inner.kwargs["second"].ctor) == \
+        ("principled", "principled_glass")
+    for mix, channel in ((inner, 0), (spec, 2)):
+        assert mix.kwargs["fac"] == pytest.approx(stored[:, channel].mean(), abs=1e-6)
+        for uv, texel in zip(TEXEL_CENTRES, stored):
+            assert _program_at(mix.kwargs["fac_program"], uv)[0] == \
+                pytest.approx(texel[channel], abs=1e-6)
 
 
 def test_alpha_weights_the_colour_seen(fresh):

@@ -1065,10 +1065,10 @@ def textured_emitter():
     scene.specula.use_light_tracing = True
 
 
-def _gltf(name, direction=(0.6, -1.0, 0.5)):
+def _gltf(name, direction=(0.6, -1.0, 0.5), distance=2.6, sun=True):
     """A Khronos glTF sample model (tests/assets/gltf/, licences beside them) imported with
-    Blender's own glTF importer, as a user would: framed by a camera from `direction`, lit
-    by a grey world and a sun."""
+    Blender's own glTF importer, as a user would: framed by a camera from `direction`,
+    `distance` bounding radii away, lit by a grey world and (`sun`) a sun."""
     scene = bs.new_scene()
     bpy.ops.import_scene.gltf(filepath=os.path.join(GLTF_DIR, name, name + ".glb"))
     corners = [o.matrix_world @ mathutils.Vector(c) for o in scene.objects
@@ -1077,7 +1077,7 @@ def _gltf(name, direction=(0.6, -1.0, 0.5)):
     hi = mathutils.Vector([max(c[i] for c in corners) for i in range(3)])
     centre, radius = (lo + hi) / 2, (hi - lo).length / 2
     d = mathutils.Vector(direction).normalized()
-    cam = bs.camera(scene, "Camera", centre + d * radius * 2.6, 50.0, (64, 48))
+    cam = bs.camera(scene, "Camera", centre + d * radius * distance, 50.0, (64, 48))
     cam.rotation_euler = (-d).to_track_quat("-Z", "Y").to_euler()
     cam.data.clip_start, cam.data.clip_end = radius * 0.05, radius * 20
     world = bpy.data.worlds.new("Grey")
@@ -1085,6 +1085,8 @@ def _gltf(name, direction=(0.6, -1.0, 0.5)):
     bg.inputs["Color"].default_value = (0.3, 0.3, 0.3, 1.0)
     world.color = (0.3, 0.3, 0.3)
     scene.world = world
+    if not sun:
+        return
     sun = bpy.data.lights.new("Sun", "SUN")
     sun.energy = 2.0
     obj = bpy.data.objects.new("Sun", sun)
@@ -1116,6 +1118,14 @@ def gltf_glass_vase_flowers():
     their colour texture's alpha (the importer's alpha-mask Math chain) with normal and
     roughness maps."""
     _gltf("GlassVaseFlowers", direction=(0.0, -1.0, 0.25))
+
+
+def gltf_transmission():
+    """KHR_materials_transmission through the importer: Principled glass whose Transmission
+    and Metallic come from textures (Roughness and the glass' Base Color are taken as their
+    textures' means), before a patterned backdrop, seen close. Lit by the world alone: a
+    sun's caustics through the smooth balls are fireflies in both engines (issue 16)."""
+    _gltf("TransmissionTest", direction=(0.0, -1.0, 0.3), distance=1.0, sun=False)
 
 
 def _bounces(n):
@@ -1196,6 +1206,13 @@ for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_glass_vase_flowers, "GlassVaseFlowers")):
     _add(Variant(_setup.__name__, _setup, max_bounces=8,
                  files=(os.path.join(GLTF_DIR, _name, _name + ".glb"),)))
+# Glass balls through textured transmission: more samples, as rough glass. Known to
+# disagree (|z| 8.2, measured) where the two middle-row balls' roughness textures vary.
+_add(Variant("gltf_transmission", gltf_transmission, max_bounces=8, samples=512,
+             cycles_samples=1024,
+             xfail="a textured Roughness is rendered as its texture's mean (warned): the "
+                   "middle row's red and blue balls",
+             files=(os.path.join(GLTF_DIR, "TransmissionTest", "TransmissionTest.glb"),)))
 # Direct light only: the terminator band is a few pixels of each sphere, and without the
 # room's indirect light its pixels are nearly noise-free (the power tests need that).
 for _setup in (terminator_point, terminator_area):
