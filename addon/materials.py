@@ -2,8 +2,8 @@
 
 The core understands Lambert diffuse, perfect mirror, smooth metal, smooth and rough glass,
 rough Glossy, the dielectric Principled BSDF, Transparent, emission and mixes of these (see
-engine/scene.py `Material`). This module reads a material's Cycles output and maps the nodes it knows
-onto those; anything else becomes a documented fallback with a warning that names the
+engine/scene.py `Material`). This module reads a material's Cycles output and maps the
+nodes it knows onto those; anything else becomes a documented fallback with a warning that names the
 material, the node and the input, so nothing renders silently black and no fallback
 changes what kind of thing an object is (a surface never becomes a light, a volume never
 becomes an opaque wall).

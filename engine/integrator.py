@@ -735,6 +735,25 @@ def absorb_along_ray(i, f, tfar, sc, paths):
     paths.throughput[i, 2] *= a2
 
 
+def path_counts(i, step, tfar, paths):
+    """Path i at this step: (depth, the bounce: Blender's count; vertex, the sampler's
+    bounce: transparent crossings count too; the hit's distance from the last scattering
+    vertex). Without transparency every path's is the step's."""
+    if HAS_TRANSPARENCY:
+        depth = paths.bounce[i]
+        return depth, depth + paths.transparent[i], np.float64(tfar) + paths.mis_t[i]
+    return step, step, np.float64(tfar)
+
+
+def write_passes(row, x, sc, paths):
+    """The Depth and Normal passes from the camera ray's first surface that is not crossed
+    (Cycles: the first one opaque enough)."""
+    paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
+    paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
+    if DEBUG:
+        _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
+
+
 def pass_through(i, out, row, x, tfar, sc, paths):
     """Continue path i as row `out` straight through a transparent surface (tfar away), its
     throughput tinted by the surface's colour: only embree's ray start moves (behind the
@@ -763,9 +782,21 @@ def pass_through(i, out, row, x, tfar, sc, paths):
     return out + 1
 
 
-def spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
-    """Continue the path as row `out` of the compacted batch: leave the surface toward the
-    side of the new direction, into embree's buffers."""
+def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
+    """Continue path i (at bounce depth, on a surface of kind k) as row `out` of the
+    compacted batch: leave the surface toward the side of the new direction, into embree's
+    buffers, with the path's light-tracing weight state, media and counters."""
+    if HAS_LIGHT_TRACING:
+        cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
+        paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
+    if HAS_VOLUMES:  # the medium is the triangle's material's, a mix's as a whole
+        media.carry(paths.media, i, out, sc.materials.absorption,
+                    sc.geometry.material_index[x.f], x.front,
+                    wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
+    if HAS_TRANSPARENCY:
+        paths.bounce[out] = depth + 1
+        paths.transparent[out] = paths.transparent[i]
+        paths.mis_t[out] = 0.0
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
     eps = side * ray_offset(x.scale)
     paths.o64[out, 0] = x.px + eps * x.nx
@@ -799,13 +830,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
     for i in range(m):
         row = paths.live[i]
         f = prim[i]
-        # depth: the bounce, Blender's count; vertex: the sampler's bounce (crossings too).
-        depth = vertex = step
-        t_hit = np.float64(tfar[i])
-        if HAS_TRANSPARENCY:
-            depth = paths.bounce[i]
-            vertex = depth + paths.transparent[i]
-            t_hit += paths.mis_t[i]
+        depth, vertex, t_hit = path_counts(i, step, tfar[i], paths)
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
         if HAS_VOLUMES:
             absorb_along_ray(i, f, tfar[i], sc, paths)
@@ -822,16 +847,12 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
         k = sc.materials.kind[x.mat]
         if depth == 0 and not (HAS_TRANSPARENCY and k == TRANSPARENT):
-            paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
-            paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
-            if DEBUG:
-                _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
+            write_passes(row, x, sc, paths)
         if HAS_EMISSION:
             handle_emission(i, row, depth, x, sc, paths, mis)
         if HAS_MIXES and scale != 1.0:  # after the emission, which is the whole mix's
-            paths.throughput[i, 0] *= scale
-            paths.throughput[i, 1] *= scale
-            paths.throughput[i, 2] *= scale
+            for j in range(3):
+                paths.throughput[i, j] *= scale
         if HAS_TRANSPARENCY:
             # Past the transparent limit a surface only adds emission (Cycles: terminate on
             # the next surface); a transparent one is crossed even past the bounce limit.
@@ -866,18 +887,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         if DEBUG:
             _debug_mark(paths, row, 7, t0 + wx, t1 + wy, t2 + wz)
         if ok and max(t0, max(t1, t2)) > 0:
-            if HAS_LIGHT_TRACING:
-                cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
-                paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
-            if HAS_VOLUMES:  # the medium is the triangle's material's, a mix's as a whole
-                media.carry(paths.media, i, out, sc.materials.absorption,
-                            sc.geometry.material_index[x.f], x.front,
-                            wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
-            spawn(out, row, x, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
-            if HAS_TRANSPARENCY:
-                paths.bounce[out] = depth + 1
-                paths.transparent[out] = paths.transparent[i]
-                paths.mis_t[out] = 0.0
+            spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
             out += 1
         if PROFILE:
             profile[2] += _cycles() - c_bsdf
@@ -965,6 +975,6 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, medium_transmittance,
-    absorb_along_ray, pass_through, spawn)}
+    absorb_along_ray, path_counts, write_passes, pass_through, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, cross_transparent, all_finite)})
