@@ -97,11 +97,11 @@ def test_russian_roulette_never_divides_by_a_tiny_survival_probability():
     roulette = njit(**INLINE)(integrator.russian_roulette)
     pseed = np.uint64(12345)
     for t in (1.0, 0.5, 1e-8, 1e-300, 5e-324, 0.0):
-        alive, t0, t1, t2 = roulette(5, t, t * 0.5, 0.0, pseed, np.uint64(0))
+        alive, t0, t1, t2 = roulette(5, 5, t, t * 0.5, 0.0, pseed, np.uint64(0))
         assert np.isfinite([t0, t1, t2]).all()
         if alive:
             assert t0 <= 1.0 and t0 <= np.sqrt(t) * (1 + 1e-12)
         if t == 0.0:
             assert not alive
     # Before the roulette bounce nothing is touched.
-    assert roulette(1, 1e-300, 0.0, 0.0, pseed, np.uint64(0)) == (True, 1e-300, 0.0, 0.0)
+    assert roulette(1, 1, 1e-300, 0.0, 0.0, pseed, np.uint64(0)) == (True, 1e-300, 0.0, 0.0)
