@@ -857,8 +857,10 @@ class _Reader:
                 return second()
             return self.mixed(first(), second(), fac, 1.0, program)
 
-        spec = either(lambda: either(lambda: self.dielectric(node), glass, transmission,
-                                     glass_program), metal, metallic, metal_program)
+        def non_metal():
+            return either(lambda: self.dielectric(node), glass, transmission, glass_program)
+
+        spec = either(non_metal, metal, metallic, metal_program)
         if spec.ctor != "mix":
             spec.kwargs.update(kwargs)
             return spec

@@ -163,6 +163,12 @@ def ray_offset(scale):
     return RAY_EPSILON * max(scale, 1e-30)
 
 
+def offset_scale(g, f, px, py, pz):
+    """The magnitude ray offsets at point p of triangle f scale with: the triangle's size or
+    p's coordinates, whichever is larger (float32 ulps grow with both)."""
+    return max(g.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+
+
 def _add(paths, row, t0, t1, t2, l0, l1, l2, w):
     """Radiance l reaching the camera through throughput t with MIS weight w."""
     paths.radiance[row, 0] += t0 * l0 * w
@@ -346,7 +352,7 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     mx, my, mz = sx, sy, sz
     if sc.materials.kind[mat] != DIFFUSE:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
-    scale = max(g.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))
+    scale = offset_scale(g, f, px, py, pz)
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
                   v, mat, np.float64(tfar), scale, bx, by, bz)
 
@@ -940,8 +946,7 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         cos_n = max(abs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]), GRAZING_COS)
         t = np.float64(tfar[j])
         px, py, pz = o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t
-        t += ray_offset(max(sc.geometry.tri_scale[f], max(abs(px), max(abs(py), abs(pz))))) \
-            / cos_n
+        t += ray_offset(offset_scale(sc.geometry, f, px, py, pz)) / cos_n
         for c in range(3):
             shadow.origin[out, c] = o[c] + d[c] * t
             shadow.direction[out, c] = d[c]
@@ -969,7 +974,7 @@ def all_finite(radiance, depth, normal):
 # structures are inlined into `shade` by numba; the entry points are compiled on their own
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
-    ray_offset, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
+    ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
     surface_interaction,
     mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,

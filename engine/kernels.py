@@ -114,7 +114,7 @@ def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -
     (numba compiles for the argument types it is called with)."""
     data = scene_data(scene, settings, plan, emitters, camera, kernel.generic)
     tracer = Tracer(kernel, data, accel, settings, lambda stage, seconds: None,
-                    transparent_shadows=plan.transparency)
+                    transparency=plan.transparency)
     tracer.trace_pixels(np.zeros(1, np.int64), 0)
     if plan.transparency:  # (one pixel need not have queued a shadow ray)
         tracer.trace_shadow_rays(tracer.shadow_rays(1), 0, tracer.new_paths(1),
@@ -271,13 +271,13 @@ class Tracer:
     sampling."""
 
     def __init__(self, kernel: Kernel, data: SceneData, accel, settings, count,
-                 transparent_shadows: bool = False):
+                 transparency: bool = False):
         self.kernel, self.data, self.accel, self.settings = kernel, data, accel, settings
         self._count = count  # callable(stage, seconds)
         self.profile = bool(kernel.constants["PROFILE"])
-        # Shadow rays cross transparent surfaces (the plan has some): closest hits in turn.
-        self.transparent_shadows = bool(transparent_shadows)
-        if transparent_shadows and not kernel.constants["HAS_TRANSPARENCY"]:
+        # The plan has transparent surfaces: paths and shadow rays cross them.
+        self.transparency = bool(transparency)
+        if transparency and not kernel.constants["HAS_TRANSPARENCY"]:
             raise ValueError("transparent shadows need a kernel with HAS_TRANSPARENCY")
 
     @staticmethod
@@ -294,8 +294,8 @@ class Tracer:
     def shadow_rays(n: int) -> ShadowRays:
         """Room for n shadow rays: at most one per path and bounce."""
         return ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
-                          np.empty(n, F32), np.empty((n, 3)), np.zeros(n, np.int64),
-                          np.zeros(n, np.int64))
+                          np.empty(n, F32), np.empty((n, 3)), np.empty(n, np.int64),
+                          np.empty(n, np.int64))
 
     def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
         """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):
@@ -316,7 +316,7 @@ class Tracer:
         m = n
         # Each step is a bounce; transparent crossings take steps of their own.
         steps = s.max_bounces + 2 + (max(s.transparent_max_bounces, 1)
-                                     if self.transparent_shadows else 0)
+                                     if self.transparency else 0)
         for step in range(steps):
             if m == 0:
                 break
@@ -334,7 +334,7 @@ class Tracer:
         lights: one occlusion query, or closest hits in turn through transparent surfaces."""
         k = self.kernel
         t0 = time.perf_counter()
-        if not self.transparent_shadows:
+        if not self.transparency:
             blocked = self.accel.occluded_raw(shadow.origin[:count], shadow.direction[:count],
                                               shadow.tmax[:count])
             k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)
@@ -354,10 +354,11 @@ class Tracer:
         """Embree's closest hits of the first m rays of a wavefront (camera or light
         paths: their float32 origin32, dir32, tmax32)."""
         t0 = time.perf_counter()
-        # A copy: embree writes hit distances over tmax, and a ray crossing a transparent
-        # surface keeps its end (a camera ray's clipping).
+        # Embree writes hit distances over tmax; a ray crossing a transparent surface keeps
+        # its end (a camera ray's clipping), so with transparency it gets a copy.
+        tmax = rays.tmax32[:m]
         hits = self.accel.intersect_raw(rays.origin32[:m], rays.dir32[:m],
-                                        rays.tmax32[:m].copy())
+                                        tmax.copy() if self.transparency else tmax)
         self._count("intersect", time.perf_counter() - t0)
         return hits
 

@@ -76,7 +76,6 @@ class Plan:
     mixes: bool = False
     # Some material used is (or mixes in) a Transparent BSDF: paths and shadow rays cross it.
     transparency: bool = False
-    transparent_max_bounces: int = 8
 
     @property
     def light_sampling(self) -> bool:
@@ -206,7 +205,6 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
             or np.any(scene.programs.normal[used, 0] >= 0)
             or np.any(scene.programs.fac[used, 0] >= 0)),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
-        transparent_max_bounces=int(settings.transparent_max_bounces),
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must

@@ -183,7 +183,7 @@ class Kernels:
         data = kernels.scene_data(self.scene, self.settings, self.plan, self.emitters,
                                   self.camera, kernel.generic)
         return kernels.Tracer(kernel, data, self.accel, self.settings, self.timers,
-                              transparent_shadows=self.plan.transparency)
+                              transparency=self.plan.transparency)
 
     def _compile(self, kernel) -> None:
         kernels.compile_on(kernel, self.scene, self.settings, self.plan, self.emitters,
