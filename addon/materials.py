@@ -101,6 +101,8 @@ class MaterialSpec:
                                   k["second"].to_core(core), k["fac"], k["scale"],
                                   k.get("fac_program"))
             extra = {key: tuple(k[key]) for key in ("absorption", "emission") if key in k}
+            if "emission_program" in k:
+                extra["emission_program"] = k["emission_program"]
             return dataclasses.replace(m, **extra) if extra else m
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
@@ -112,16 +114,17 @@ class MaterialSpec:
 
 # The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
 # with one reads UV maps.
-PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program")
+PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
+                "roughness_program")
 
 
 def default_material():
     return MaterialSpec("diffuse", "Specula default", {"colour": DEFAULT_GREY})
 
 
-def _with(program):
-    """The keyword of a colour's shader program, when it has one."""
-    return {} if program is None else {"colour_program": program}
+def _with(program, key="colour_program"):
+    """The keyword of an input's shader program (a colour's, by default), when it has one."""
+    return {} if program is None else {key: program}
 
 
 def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
@@ -700,12 +703,11 @@ class _Reader:
             # Rough Glossy is GGX; at Cycles' delta threshold it is a perfect mirror.
             colour, program = self.textured_colour(node, "Color")
             return MaterialSpec("glossy", name, {"colour": colour, **_with(program),
-                                                 "roughness": self.unit(node, "Roughness"),
+                                                 **self.roughness(node),
                                                  "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeBsdfGlass":
             return MaterialSpec("glass", name, {"colour": self.colour(node, "Color"),
-                                                "ior": self.ior(node),
-                                                "roughness": self.unit(node, "Roughness"),
+                                                "ior": self.ior(node), **self.roughness(node),
                                                 "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
@@ -766,8 +768,8 @@ class _Reader:
             for leaf in second.leaves():
                 for key in ("normal_program", "normal_strength", "normal_uv"):
                     leaf.kwargs.pop(key, None)
-        for leaf in (*first.leaves(), *second.leaves()):
-            if leaf.kwargs.pop("emission_program", None) is not None:
+        for part in (*first.parts(), *second.parts()):
+            if part.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
         if fac_program is not None and any(
@@ -781,12 +783,22 @@ class _Reader:
             kwargs["fac_program"] = fac_program
         return MaterialSpec("mix", self.material.name, kwargs)
 
+    def roughness(self, node):
+        """A GGX node's Roughness as keywords: its constant in [0, 1] (the texture's mean
+        where it varies) and, where it varies, its program (first channel, clamped)."""
+        roughness, program = self.textured_unit(node, "Roughness", 0.5)
+        return {"roughness": roughness, **_with(program, "roughness_program")}
+
+    def rough(self, node):
+        """Whether a GGX node's Roughness is above Cycles' delta threshold or varies."""
+        r = self.roughness(node)
+        return "roughness_program" in r or r["roughness"] > ROUGHNESS_EPSILON
+
     def multiscatter(self, node):
         """Whether a microfacet node is Multiscatter GGX (energy compensated) or plain GGX;
         other distributions render as GGX, with a warning."""
         distribution = getattr(node, "distribution", "MULTI_GGX")
-        if distribution not in ("GGX", "MULTI_GGX") and self.unit(node, "Roughness") > \
-                ROUGHNESS_EPSILON:
+        if distribution not in ("GGX", "MULTI_GGX") and self.rough(node):
             self.warn(f"node '{node.name}' distribution {distribution} is not supported; "
                       f"rendered as GGX")
         return distribution == "MULTI_GGX"
@@ -823,7 +835,7 @@ class _Reader:
         transmission, glass_program = self.textured_unit(
             node, "Transmission Weight" if "Transmission Weight" in node.inputs
             else "Transmission", 0.0)
-        roughness = self.unit(node, "Roughness")
+        roughness = self.roughness(node)
         # A linked emission that cannot be reduced is off, not the sockets' own values:
         # Emission Color's is white, and a textured surface must not become a white light.
         strength = self.number(node, "Emission Strength", 0.0, unknown=0.0)
@@ -841,13 +853,12 @@ class _Reader:
         def metal():
             base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("metal", name, {"base_colour": base, **_with(program),
-                                                "roughness": roughness,
-                                                "multiscatter": multiscatter})
+                                                **roughness, "multiscatter": multiscatter})
 
         def glass():
             return MaterialSpec("principled_glass", name, {
                 "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
-                "roughness": roughness, "multiscatter": multiscatter})
+                **roughness, "multiscatter": multiscatter})
 
         def either(first, second, fac, program):
             """first (1 - fac) and second (fac), or one alone where fac is 0 or 1."""
@@ -876,10 +887,8 @@ class _Reader:
         return self.mixed(transparent(self.material.name), spec, alpha, 1.0, program)
 
     def with_emission(self, node, mix, kwargs):
-        """A Principled BSDF's mix of lobes with its emission added once, on the mix."""
-        if kwargs.pop("emission_program", None) is not None:
-            self.warn(f"node '{node.name}': a textured emission with fractional or textured "
-                      f"Metallic or Transmission is not supported; rendered as its constant")
+        """A Principled BSDF's mix of lobes with its emission (textured or not) added once,
+        on the mix."""
         mix.kwargs.update(kwargs)
         return mix
 
@@ -887,15 +896,13 @@ class _Reader:
         """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer
         (Cycles' Principled v2)."""
         base, program = self.textured_colour(node, "Base Color")
-        roughness = self.unit(node, "Roughness")
-        if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and \
-                roughness > ROUGHNESS_EPSILON:
+        if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and self.rough(node):
             self.warn(f"node '{node.name}' distribution GGX is not supported for the "
                       f"dielectric layer; rendered as Multiscatter GGX")
         level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
             if "Specular IOR Level" in node.inputs else 0.5
         return MaterialSpec("principled", self.material.name, {
-            "base_colour": base, **_with(program), "roughness": roughness,
+            "base_colour": base, **_with(program), **self.roughness(node),
             "ior": self.ior(node), "specular_ior_level": level})
 
 

@@ -401,25 +401,29 @@ def surface_colour(x, sc, paths):
     return c0, c1, c2
 
 
-def rough_lobe(x, k, c, sc):
+def rough_lobe(x, k, c, sc, paths):
     """The rough lobe (bsdf.Layer) of vertex x of kind k with surface colour c: the
-    Principled or Glossy layer, rough metal, or rough glass on the side wo sees; empty for
-    others."""
+    Principled or Glossy layer, rough metal, or rough glass on the side wo sees, at the
+    roughness its program gives here where it has one; empty for others."""
     mt = sc.materials
     mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
+    textured = False
+    roughness = -1.0  # the table's own
+    if HAS_TEXTURES and (k == PRINCIPLED or k == GLOSSY or k == ROUGH_METAL
+                         or k == ROUGH_GLASS):
+        textured = mt.programs.colour[x.mat, 0] >= 0
+        roughness = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                         paths.svm, roughness)
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
-        textured = False
-        if HAS_TEXTURES:
-            textured = mt.programs.colour[x.mat, 0] >= 0
-        return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2])
+        return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
+                             roughness)
     if HAS_ROUGH_METAL and k == ROUGH_METAL:
-        textured = False
-        if HAS_TEXTURES:
-            textured = mt.programs.colour[x.mat, 0] >= 0
-        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2])
+        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2],
+                                   roughness)
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers,
-                                   mt.reflection_tint[x.mat], mt.transmission_tint[x.mat])
+                                   mt.reflection_tint[x.mat], mt.transmission_tint[x.mat],
+                                   roughness)
     return bsdf.no_layer()
 
 
@@ -877,7 +881,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             continue
         paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = t0, t1, t2
         c = surface_colour(x, sc, paths)
-        lobe = rough_lobe(x, k, c, sc)
+        lobe = rough_lobe(x, k, c, sc, paths)
         if PROFILE:
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY

@@ -32,7 +32,7 @@ from .lights import BOUND_COLUMNS, COLUMNS, Emitters
 from .media import MEDIA_STACK
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
-from .shading import MAX_REGISTERS, ProgramTable
+from .shading import MAX_REGISTERS, SLOTS, ProgramTable
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -203,12 +203,9 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         uv, programs = scene.uv, scene.programs
     elif generic:  # no material has a program
         uv = np.zeros((1, 1, 3, 2), np.float32)
+        none = np.full((len(scene.materials), 3), -1, np.int64)
         programs = ProgramTable(np.zeros((0, 8), np.int64), np.zeros(1), np.zeros((1, 4), F32),
-                                np.zeros((0, 6), np.int64),
-                                np.full((len(scene.materials), 3), -1, np.int64),
-                                np.full((len(scene.materials), 3), -1, np.int64),
-                                np.full((len(scene.materials), 3), -1, np.int64),
-                                np.full((len(scene.materials), 3), -1, np.int64))
+                                np.zeros((0, 6), np.int64), *[none] * len(SLOTS))
     tangents = None
     if scene.tangents is not None and (plan.normal_maps or generic):
         tangents = scene.tangents

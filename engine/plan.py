@@ -28,6 +28,7 @@ from .scene import (
     RenderSettings,
     Scene,
 )
+from .shading import SLOTS
 
 
 @dataclass(frozen=True)
@@ -62,7 +63,8 @@ class Plan:
     terminator: bool = False
     # Light paths from emissive triangles through specular chains to the camera (caustics.py).
     light_tracing: bool = False
-    # Some material used has a colour or an emission from a shader program (shading.py).
+    # Some material used has an input from a shader program (shading.py): a colour, an
+    # emission, a normal map, a mix factor or a roughness.
     textures: bool = False
     # Glass with roughness > 0 (GGX reflection and refraction).
     rough_glass: bool = False
@@ -199,11 +201,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         terminator=bool(scene.normals is not None and np.any(
             scene.smooth & (scene.terminator_offset[scene.object_index] > 0))),
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
-        textures=scene.programs is not None and bool(
-            np.any(scene.programs.colour[used, 0] >= 0)
-            or np.any(scene.programs.emission[used, 0] >= 0)
-            or np.any(scene.programs.normal[used, 0] >= 0)
-            or np.any(scene.programs.fac[used, 0] >= 0)),
+        textures=scene.programs is not None and any(
+            bool(np.any(getattr(scene.programs, slot)[used, 0] >= 0)) for slot in SLOTS),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian

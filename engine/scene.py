@@ -34,6 +34,8 @@ DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
 TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal")
+# The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes.
+ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass")
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
@@ -107,6 +109,9 @@ class Material:
         approximated by where a constant is needed (its mean).
     normal_program, normal_strength : a tangent-space normal map (Cycles' Normal Map node)
         over the shading normal, for any kind.
+    roughness_program : a Program whose first channel replaces `roughness` at each hit
+        (clamped to [0, 1]) for the GGX kinds; `roughness` then stands for its mean, and the
+        kind stays rough (a microfacet lobe) even where that mean is 0.
     emission_program : a Program whose result replaces `emission` at each point (a textured
         emission colour, strength included); `emission` then stands for it where a constant
         is needed (choosing lights by power), so it must be > 0.
@@ -140,6 +145,7 @@ class Material:
     # Shader Fac, a Principled BSDF's textured Metallic), clamped to [0, 1] as Cycles does.
     fac_program: Program | None = field(default=None, compare=False)
     scale: float = 1.0  # mix: the factor of the whole sum
+    roughness_program: Program | None = field(default=None, compare=False)
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -165,35 +171,41 @@ class Material:
 
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
-              emission_program=None, roughness=0.0, multiscatter=True):
+              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None):
         """Principled metallic: smooth at Cycles' delta roughness, else rough."""
-        kind = "rough_metal" if roughness > DELTA_ROUGHNESS else "metal"
-        return cls(name, kind, tuple(base_colour), emission=tuple(emission),
-                   roughness=float(roughness), multiscatter=bool(multiscatter),
-                   colour_program=colour_program, emission_program=emission_program)
+        rough = roughness > DELTA_ROUGHNESS or roughness_program is not None
+        return cls(name, "rough_metal" if rough else "metal", tuple(base_colour),
+                   emission=tuple(emission), roughness=float(roughness),
+                   multiscatter=bool(multiscatter), colour_program=colour_program,
+                   emission_program=emission_program, roughness_program=roughness_program)
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
-              emission_program=None, roughness=0.0, multiscatter=True):
+              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None):
         """Cycles' Glass BSDF: colour tints reflection and transmission alike."""
         c = tuple(colour)
-        return cls(name, _glass_kind(roughness, ior), c, ior, c, c, tuple(emission),
+        kind = _glass_kind(roughness, ior, roughness_program)
+        return cls(name, kind, c, ior, c, c, tuple(emission),
                    roughness=float(roughness), multiscatter=bool(multiscatter),
-                   emission_program=emission_program)
+                   emission_program=emission_program,
+                   roughness_program=roughness_program if kind == "rough_glass" else None)
 
     @classmethod
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
-                         emission_program=None, roughness=0.0, multiscatter=True):
+                         emission_program=None, roughness=0.0, multiscatter=True,
+                         roughness_program=None):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
         base = np.clip(np.asarray(base_colour, dtype=np.float64), 0.0, 1.0)
-        return cls(name, _glass_kind(roughness, ior), tuple(base_colour), ior, (1.0, 1.0, 1.0),
+        kind = _glass_kind(roughness, ior, roughness_program)
+        return cls(name, kind, tuple(base_colour), ior, (1.0, 1.0, 1.0),
                    tuple(np.sqrt(base)), tuple(emission), roughness=float(roughness),
-                   multiscatter=bool(multiscatter), emission_program=emission_program)
+                   multiscatter=bool(multiscatter), emission_program=emission_program,
+                   roughness_program=roughness_program if kind == "rough_glass" else None)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
-                   emission_program=None):
+                   emission_program=None, roughness_program=None):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
         ior = float(ior)
@@ -204,17 +216,19 @@ class Material:
             ior = float(eta if ior >= 1 else 1 / eta)
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
                    roughness=float(roughness), colour_program=colour_program,
-                   emission_program=emission_program)
+                   emission_program=emission_program, roughness_program=roughness_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
-               colour_program=None, emission_program=None, multiscatter=True):
+               colour_program=None, emission_program=None, multiscatter=True,
+               roughness_program=None):
         """Glossy BSDF: a mirror at (Cycles-)zero roughness, else rough GGX reflection."""
-        if roughness <= DELTA_ROUGHNESS:
+        if roughness <= DELTA_ROUGHNESS and roughness_program is None:
             return cls.mirror(name, colour, emission, colour_program, emission_program)
         return cls(name, "glossy", tuple(colour), emission=tuple(emission),
                    roughness=float(roughness), multiscatter=bool(multiscatter),
-                   colour_program=colour_program, emission_program=emission_program)
+                   colour_program=colour_program, emission_program=emission_program,
+                   roughness_program=roughness_program)
 
     @classmethod
     def transparent(cls, name, colour=(1, 1, 1)):
@@ -244,15 +258,16 @@ def _flatten_mixes(materials: list[Material]) -> tuple[list[Material], list]:
             continue
         if len(m.components) != 2:
             raise ValueError(f"material '{m.name}': a mix needs two components")
-        if m.emission_program is not None or any(c.emission_program is not None
-                                                 for c in m.components):
-            raise ValueError(f"material '{m.name}': a textured emission cannot be mixed")
+        if any(_emits(c, textured_only=True) for c in m.components) or \
+                m.emission_program is not None and any(_emits(c) for c in m.components):
+            raise ValueError(f"material '{m.name}': a textured emission can only be a mix's "
+                             f"own, with components that emit nothing")
         # A component row already carries the emission of the mix above it.
         total = _mixed_emission(m) if i < given else np.asarray(m.emission, np.float64)
-        out[i] = _with_emission(m, total)
+        out[i] = _with_emission(m, total, m.emission_program)
         rows = []
         for c in m.components:
-            out.append(_with_emission(c, total))
+            out.append(_with_emission(c, total, m.emission_program))
             rows.append(len(out) - 1)
         components.append(tuple(rows))
         i += 1
@@ -267,18 +282,28 @@ def _mixed_emission(m: Material) -> np.ndarray:
     return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
 
 
-def _with_emission(m: Material, emission) -> Material:
-    """m (and, for a mix, its components, recursively) emitting `emission` in total."""
+def _emits(m: Material, textured_only=False) -> bool:
+    """Whether m or anything mixed into it emits (has a textured emission)."""
+    own = m.emission_program is not None or not textured_only and max(m.emission) > 0
+    return own or any(_emits(c, textured_only) for c in m.components)
+
+
+def _with_emission(m: Material, emission, program=None) -> Material:
+    """m (and, for a mix, its components, recursively) emitting `emission` in total, or
+    its textured `program` (a mix's own textured emission, `emission` its constant)."""
+    e = tuple(float(x) for x in emission)
     if m.kind != "mix":
-        return dataclasses.replace(m, emission=tuple(float(e) for e in emission))
-    return dataclasses.replace(m, emission=tuple(float(e) for e in emission),
-                               components=tuple(_with_emission(c, emission)
+        return dataclasses.replace(m, emission=e, emission_program=program)
+    return dataclasses.replace(m, emission=e, emission_program=program,
+                               components=tuple(_with_emission(c, emission, program)
                                                 for c in m.components))
 
 
-def _glass_kind(roughness, ior) -> str:
-    """Smooth glass at Cycles' delta roughness, or at an IOR refracting straight through."""
-    rough = roughness > DELTA_ROUGHNESS and abs(float(ior) - 1.0) >= DELTA_IOR
+def _glass_kind(roughness, ior, roughness_program=None) -> str:
+    """Smooth glass at Cycles' delta roughness (unless textured), or at an IOR refracting
+    straight through."""
+    rough = (roughness > DELTA_ROUGHNESS or roughness_program is not None) and \
+        abs(float(ior) - 1.0) >= DELTA_IOR
     return "rough_glass" if rough else "glass"
 
 
@@ -314,17 +339,12 @@ class Materials:
     mix_fac: np.ndarray | None = None
     mix_scale: np.ndarray | None = None
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
+    roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
         materials, components = _flatten_mixes(list(materials))
         m = cls._rows(materials)
-        if m.colour_programs is None and any(x.fac_program is not None for x in materials):
-            none = [None] * len(materials)
-            m = dataclasses.replace(m, colour_programs=none, emission_programs=none,
-                                    normal_programs=none)
-        if m.colour_programs is not None:
-            m = dataclasses.replace(m, fac_programs=[x.fac_program for x in materials])
         fac = np.array([float(x.fac) if x.kind == "mix" else 0.0 for x in materials])
         scale = np.array([float(x.scale) if x.kind == "mix" else 1.0 for x in materials])
         return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
@@ -379,14 +399,28 @@ class Materials:
                                  f"got {m.normal_strength!r}")
         absorption = np.array([_colour(m.absorption, f"material '{m.name}' absorption")
                                for m in materials])
-        textured = any(p is not None for p in programs + emission_programs + normal_programs)
+        for m in materials:
+            if m.roughness_program is not None and m.kind not in ROUGH_KINDS:
+                raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
+                                 f"vary (textured roughness: {', '.join(ROUGH_KINDS)})")
+        lists = (programs, emission_programs, normal_programs,
+                 [m.fac_program for m in materials], [m.roughness_program for m in materials])
+        textured = any(p is not None for progs in lists for p in progs)
+        programs, emission_programs, normal_programs, fac_programs, roughness_programs = \
+            lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
                    np.array([bool(m.multiscatter) for m in materials]),
-                   programs if textured else None, emission_programs if textured else None,
-                   normal_programs if textured else None,
-                   np.array([float(m.normal_strength) for m in materials]), absorption)
+                   programs, emission_programs, normal_programs,
+                   np.array([float(m.normal_strength) for m in materials]), absorption,
+                   fac_programs=fac_programs, roughness_programs=roughness_programs)
+
+    def program_lists(self) -> tuple:
+        """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
+        roughness), each a list with one Program or None per row."""
+        return (self.colour_programs, self.emission_programs, self.normal_programs,
+                self.fac_programs, self.roughness_programs)
 
     def __len__(self):
         return len(self.kind)
@@ -869,8 +903,7 @@ class SceneBuilder:
         if materials.colour_programs is None:
             return None, None
         progs = [[p for p in pair if p is not None] for pair in
-                 zip(materials.colour_programs, materials.emission_programs,
-                     materials.normal_programs, materials.fac_programs)]
+                 zip(*materials.program_lists())]
         names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
         uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
         start = 0
@@ -888,8 +921,8 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        return uv, pack(materials.colour_programs, materials.emission_programs, names.index,
-                        materials.normal_programs, materials.fac_programs)
+        colour, emission, normal, fac, roughness = materials.program_lists()
+        return uv, pack(colour, emission, names.index, normal, fac, roughness)
 
 
 # -------------------------------------------------------------------- builder passes

@@ -140,27 +140,26 @@ class Program:
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
-#   colour, emission (k, 3) int64 per material: the colour's and the emission's program as
-#   first instruction (-1: none), end, result register.
-ProgramTable = namedtuple("ProgramTable", "code params texels textures colour emission normal "
-                                          "fac")
+#   colour, emission, normal, fac, roughness (k, 3) int64 per material: that input's
+#   program as first instruction (-1: none), end, result register.
+SLOTS = ("colour", "emission", "normal", "fac", "roughness")
+ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
 def pack(colour_programs: list, emission_programs: list | None, uv_index,
-         normal_programs: list | None = None, fac_programs: list | None = None) -> ProgramTable:
-    """Pack the materials' colour, emission, normal-map and mix-factor programs (one per
-    material, or None) into a ProgramTable; each program's UV map names become scene-wide
-    map indices through `uv_index(name)`."""
+         normal_programs: list | None = None, fac_programs: list | None = None,
+         roughness_programs: list | None = None) -> ProgramTable:
+    """Pack the materials' colour, emission, normal-map, mix-factor and roughness programs
+    (one per material, or None) into a ProgramTable; each program's UV map names become
+    scene-wide map indices through `uv_index(name)`."""
     k = len(colour_programs)
-    emission_programs = emission_programs or [None] * k
-    normal_programs = normal_programs or [None] * k
-    fac_programs = fac_programs or [None] * k
+    slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
+                                       fac_programs, roughness_programs)]
     code, params, texels, tex_rows = [], [], [], []
-    rows = np.full((4, k, 3), -1, np.int64)
+    rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
-    for slot, mat, prog in [(j, m, p) for j, progs in enumerate(
-            (colour_programs, emission_programs, normal_programs, fac_programs))
-            for m, p in enumerate(progs)]:
+    for slot, mat, prog in [(j, m, p) for j, progs in enumerate(slots)
+                            for m, p in enumerate(progs)]:
         if prog is None:
             continue
         first_tex = len(tex_rows)
@@ -183,8 +182,7 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
     return ProgramTable(np.array(code, np.int64).reshape(-1, WIDTH),
                         np.array(params + [0.0], np.float64),
                         (np.concatenate(texels) if texels else np.zeros((1, 4), np.float32)),
-                        np.array(tex_rows, np.int64).reshape(-1, 6), rows[0], rows[1], rows[2],
-                        rows[3])
+                        np.array(tex_rows, np.int64).reshape(-1, 6), *rows)
 
 
 # ------------------------------------------------------------------ node functions
@@ -582,6 +580,14 @@ def fac_at(mat, f, u, v, pt, uv, reg, fac):
     """Mix mat's factor at the hit: its factor program's first channel in [0, 1], or fac."""
     r, _, _ = result_at(pt.fac, mat, f, u, v, pt, uv, reg, fac, fac, fac)
     return min(r, 1.0)
+
+
+@njit(**INLINE)
+def roughness_at(mat, f, u, v, pt, uv, reg, r):
+    """Material mat's roughness at the hit: its roughness program's first channel in
+    [0, 1] (Cycles clamps it), or r where the roughness is constant."""
+    x, _, _ = result_at(pt.roughness, mat, f, u, v, pt, uv, reg, r, r, r)
+    return min(x, 1.0)
 
 
 @njit(**JIT)

@@ -443,6 +443,43 @@ def test_textured_transmission_and_metallic_are_nested_mixes(fresh):
                 pytest.approx(texel[channel], abs=1e-6)
 
 
+@pytest.mark.parametrize("node_type, metallic, transmission, want", [
+    ("ShaderNodeBsdfPrincipled", 0.0, 0.0, ("principled",)),
+    ("ShaderNodeBsdfPrincipled", 1.0, 0.0, ("metal",)),
+    ("ShaderNodeBsdfPrincipled", 0.0, 1.0, ("principled_glass",)),
+    ("ShaderNodeBsdfPrincipled", 0.5, 0.5, ("principled", "principled_glass", "metal")),
+    ("ShaderNodeBsdfGlossy", None, None, ("glossy",)),
+    ("ShaderNodeBsdfGlass", None, None, ("glass",)),
+])
+def test_a_textured_roughness_is_a_program_on_every_lobe(fresh, core, node_type, metallic,
+                                                         transmission, want):
+    """Roughness from a texture (the glTF importer's metallic-roughness green channel) is
+    a roughness program on each GGX lobe, the texture's mean standing for it, with no
+    warning; every lobe stays rough, even with a mean of 0 (a Glossy BSDF would otherwise
+    become a mirror), and the engine builds it so."""
+    inputs = {} if metallic is None else {"Metallic": metallic,
+                                          "Transmission Weight": transmission}
+    mat, node = node_material("Rough", node_type, **inputs)
+    texels = np.zeros((4, 4))
+    texels[:, 1] = (0.0, 0.3, 0.0, 0.9) if node_type != "ShaderNodeBsdfGlossy" else 0.0
+    texels[:, 3] = 1.0
+    img, stored = make_image("MR", texels, colorspace="Non-Color")
+    sep = mat.node_tree.nodes.new("ShaderNodeSeparateColor")
+    texture(mat, img, sep, "Color").interpolation = "Closest"
+    mat.node_tree.links.new(sep.outputs["Green"], node.inputs["Roughness"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    leaves = list(spec.leaves())
+    assert sorted(leaf.ctor for leaf in leaves) == sorted(want)
+    for leaf in leaves:
+        assert leaf.kwargs["roughness"] == pytest.approx(stored[:, 1].mean(), abs=1e-6)
+        for uv, texel in zip(TEXEL_CENTRES, stored):
+            assert _program_at(leaf.kwargs["roughness_program"], uv)[0] == \
+                pytest.approx(texel[1], abs=1e-6)
+    kinds = core.Materials.from_list([spec.to_core(core)]).kind
+    assert not set(kinds.tolist()) & {1, 2, 3, 4}  # never diffuse, mirror, metal or glass
+
+
 def test_alpha_weights_the_colour_seen(fresh):
     """Alpha output linked: the colour of what stays visible (alpha-weighted straight colour),
     mixed over transparent white by the texture's alpha at each hit; unlinked: Cycles'

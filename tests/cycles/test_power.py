@@ -180,6 +180,31 @@ def _emission_as_its_mean(scene, settings):
     return scene, settings
 
 
+def _roughness_as_its_mean(scene, settings):
+    """The renderer before roughness programs: every textured roughness its mean."""
+    scene.programs = scene.programs._replace(
+        roughness=np.full_like(scene.programs.roughness, -1))
+    return scene, settings
+
+
+def rougher_roughness_at(mat, f, u, v, pt, uv, reg, r):
+    """shading.roughness_at 10% higher where a program gives it (at most 1)."""
+    x = original_roughness_at(mat, f, u, v, pt, uv, reg, r)  # noqa: F821 - the copy's
+    return min(1.1 * x, 1.0) if x >= 0.0 else x
+
+
+@contextmanager
+def _textured_roughness_plus_10_percent():
+    """Every textured roughness 10% higher at each hit (a one-off kernel)."""
+    from tests.patching import module_with, one_off_kernels
+
+    shading = renderers.core().shading
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, shading=module_with(shading, roughness_at=rougher_roughness_at,
+                                                original_roughness_at=shading.roughness_at))
+        yield
+
+
 def _roughness_plus_10_percent(kind):
     def inject(scene, settings):
         m = scene.materials
@@ -334,6 +359,11 @@ INJECTIONS = {
                                          None),
     "one_transparent_bounce_more": ("transparent_limit", _one_transparent_bounce_more, None),
     "gltf_alpha_as_its_mean": ("gltf_glass_vase_flowers", _mix_factors_as_their_means, None),
+    "gltf_roughness_as_its_mean": ("gltf_transmission", _roughness_as_its_mean, None),
+    "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),
+    "helmet_roughness_as_its_mean": ("gltf_damaged_helmet", _roughness_as_its_mean, None),
+    "textured_roughness_plus_10_percent": ("textured_roughness", None,
+                                           _textured_roughness_plus_10_percent),
 }
 
 

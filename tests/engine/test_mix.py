@@ -1,11 +1,14 @@
 """Mixed shaders (scene.Material.mix): a hit shades with one component, picked by the mix's
 factor, carrying its scale; the image is the mixed BSDF's and the mixed emission's."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from engine import Material, RenderSettings, SceneBuilder, World, render
 from engine.plan import make_plan
+from engine.scene import Materials
 from tests import scenes
 from tests.engine.test_integrator import max_block_z
 
@@ -97,3 +100,37 @@ def test_a_textured_factor_picks_each_component_where_the_texture_says():
     np.testing.assert_allclose(img[1, 6], (0.9, 0.6, 0.3), rtol=1e-5)  # texel (1, 0)
     np.testing.assert_allclose(img[6, 1], (0.9, 0.6, 0.3), rtol=1e-5)  # texel (0, 1)
     np.testing.assert_allclose(img[6, 6], (0.2, 0.2, 0.2), rtol=1e-5)  # texel (1, 1)
+
+
+def test_a_mix_of_its_own_textured_emission_shows_it_on_every_component():
+    """A mix's own textured emission (a Principled BSDF's emission texture beside a textured
+    Metallic) is seen, texel by texel, whichever component a hit picks; a textured emission
+    inside a component cannot be mixed (the mix would have to scale a program)."""
+    from engine import Camera
+
+    emission = np.zeros((2, 2, 4), np.float32)
+    emission[..., 3] = 1.0
+    emission[0, 0, :3], emission[0, 1, :3] = (2.0, 0.5, 0.0), (0.0, 1.0, 3.0)
+    emission[1, 0, :3], emission[1, 1, :3] = (0.2, 0.2, 0.2), (1.0, 1.0, 1.0)
+    fac = np.zeros((2, 2, 4), np.float32)
+    fac[0, 1, :3] = fac[1, 0, :3] = 1.0
+    b = SceneBuilder()
+    mix = Material.mix("glow", Material.diffuse("a", (0.2, 0.2, 0.2)),
+                       Material.diffuse("b", (0.9, 0.6, 0.3)), 0.5,
+                       fac_program=scenes.image_program(fac))
+    mix = dataclasses.replace(mix, emission=tuple(emission[..., :3].mean(axis=(0, 1))),
+                              emission_program=scenes.image_program(emission))
+    v, t = scenes.quad((-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0))
+    b.add_mesh("quad", v, t, b.add_material(mix), uv_maps={"": scenes.quad_uvs()})
+    cam = Camera(type="ORTHO", ortho_scale=1.6,
+                 world_from_camera=scenes.look_at((0, 0, 2), (0, 0, 0), up=(0, 1, 0)))
+    r = render(b.build(cam, World((0.0, 0.0, 0.0))),
+               RenderSettings(width=8, height=8, samples=4, max_bounces=1, seed=2))
+    img = r.combined[..., :3]  # row 0 at the bottom (v = 0)
+    for (iy, ix), (py, px) in {(0, 0): (1, 1), (0, 1): (1, 6), (1, 0): (6, 1),
+                               (1, 1): (6, 6)}.items():
+        np.testing.assert_allclose(img[py, px], emission[iy, ix, :3], rtol=1e-5)
+    inner = Material.diffuse("c", (0.5, 0.5, 0.5), emission=(1.0, 1.0, 1.0),
+                             emission_program=scenes.image_program(emission))
+    with pytest.raises(ValueError, match="'bad'.*textured emission"):
+        Materials.from_list([Material.mix("bad", inner, Material.diffuse("d", RED), 0.5)])
