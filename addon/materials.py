@@ -398,6 +398,19 @@ def _c_math(k, node, out):
     return min(max(v, 0.0), 1.0) if node.use_clamp else v
 
 
+def _c_vector_math(k, node, out):
+    """Vector Math on constants, by the kernel's own node function."""
+    sh = core.load().shading
+    a, b, c, scale = (k.input(s) for s in node.inputs[:4])
+    if node.operation not in sh.VECTOR_MATHS or any(v is None for v in (a, b, c, scale)):
+        return None
+    reg = np.zeros(14)
+    reg[0:3], reg[3:6], reg[6:9], reg[9] = a, b, c, scale
+    sh.node_vector_math(np.array([sh.OP_VECTOR_MATH, 10, 0, 3, 6,
+                                  sh.VECTOR_MATHS.index(node.operation), 9, 0], np.int64), reg)
+    return float(reg[13]) if out.name == "Value" else tuple(float(x) for x in reg[10:13])
+
+
 NODE_CONSTANTS = {
     "NodeReroute": _c_reroute,
     "ShaderNodeRGB": _c_value,
@@ -417,6 +430,7 @@ NODE_CONSTANTS = {
     "ShaderNodeBrightContrast": _c_bright_contrast,
     "ShaderNodeValToRGB": _c_color_ramp,
     "ShaderNodeMath": _c_math,
+    "ShaderNodeVectorMath": _c_vector_math,
 }
 # Node trees are acyclic, but a chain this deep is not worth folding.
 MAX_CHAIN_DEPTH = 64

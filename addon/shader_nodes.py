@@ -394,6 +394,16 @@ def _n_hue_saturation(c, node, out):
     return c.program.emit(c.sh.OP_HSV, 3, a=col, b=hue, c=sat, d=val, e=fac), "RGBA"
 
 
+def _n_vector_math(c, node, out):
+    if node.operation not in c.sh.VECTOR_MATHS:
+        raise Unsupported(f"vector math '{node.name}' operation {node.operation}")
+    a, b, d = (c.input(s, "VECTOR") for s in node.inputs[:3])
+    scale = c.input(node.inputs[3], "VALUE")
+    reg = c.program.emit(c.sh.OP_VECTOR_MATH, 4, a=a, b=b, c=d,
+                         d=c.sh.VECTOR_MATHS.index(node.operation), e=scale)
+    return (reg + 3, "VALUE") if out.name == "Value" else (reg, "VECTOR")
+
+
 NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexCoord": _n_tex_coord,
@@ -417,6 +427,7 @@ NODES = {
     "ShaderNodeTexChecker": _n_checker,
     "ShaderNodeValToRGB": _n_color_ramp,
     "ShaderNodeHueSaturation": _n_hue_saturation,
+    "ShaderNodeVectorMath": _n_vector_math,
 }
 
 

@@ -51,6 +51,8 @@ OP_RAMP = 14        # reg[out:out+4] RGBA of the ramp table params[p:p+4b] (b en
 #                     reg[a]; c: interpolate between entries (Color Ramp)
 OP_HSV = 15         # reg[out:out+3] Hue/Saturation/Value of colour reg[a:a+3]: hue reg[b],
 #                     saturation reg[c], value reg[d], factor reg[e]
+OP_VECTOR_MATH = 16  # reg[out:out+3] vector, reg[out+3] value of vector math d on vectors
+#                     reg[a:a+3], reg[b:b+3], reg[c:c+3] and scale reg[e]
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
@@ -60,6 +62,18 @@ MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "MINI
          "LESS_THAN", "GREATER_THAN", "ABSOLUTE", "SQRT", "FLOOR", "CEIL", "FRACT", "MODULO",
          "SINE", "COSINE", "WRAP", "PINGPONG", "ROUND", "TRUNC", "SIGN", "EXPONENT",
          "LOGARITHM", "SNAP", "COMPARE", "FLOORED_MODULO")
+# Operations of OP_VECTOR_MATH (Cycles' svm_vector_math, kernel/svm/vector_math.h), and for
+# those done per component the Math operation that does it (-1: its own formula).
+VECTOR_MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "CROSS_PRODUCT",
+                "PROJECT", "REFLECT", "REFRACT", "FACEFORWARD", "DOT_PRODUCT", "DISTANCE",
+                "LENGTH", "SCALE", "NORMALIZE", "SNAP", "FLOOR", "CEIL", "MODULO", "WRAP",
+                "FRACTION", "ABSOLUTE", "POWER", "SIGN", "MINIMUM", "MAXIMUM", "SINE",
+                "COSINE", "TANGENT")
+# POWER is the Math node's safe one too: Cycles' powf per channel makes NaN where that
+# gives 0 (a negative base, a fractional exponent), and a NaN must never reach a pixel.
+PER_COMPONENT = tuple(MATHS.index({"FRACTION": "FRACT"}.get(op, op))
+                      if {"FRACTION": "FRACT"}.get(op, op) in MATHS else -1
+                      for op in VECTOR_MATHS)
 INTERPOLATIONS = ("Closest", "Linear", "Cubic", "Smart")  # Smart is Cubic on the CPU
 EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
 LUMINANCE = (0.2126, 0.7152, 0.0722)
@@ -297,6 +311,60 @@ def _math_more(op, a, b, c):
     if op == 26:
         return 1.0 if abs(a - b) <= max(c, 1e-5) else 0.0
     return a - math.floor(a / b) * b if b != 0.0 else 0.0
+
+
+@njit(**JIT)
+def node_vector_math(ins, reg):
+    """Cycles' Vector Math node (its safe division, projection and normalisation): the
+    vector and the value outputs, the one an operation does not make 0."""
+    op, a, b, c = ins[5], ins[2], ins[3], ins[4]
+    out, scale = ins[1], reg[ins[6]]
+    ax, ay, az = reg[a], reg[a + 1], reg[a + 2]
+    bx, by, bz = reg[b], reg[b + 1], reg[b + 2]
+    x = y = z = value = 0.0
+    k = PER_COMPONENT[op]
+    if k >= 0:
+        x, y, z = (math_op(k, ax, bx, reg[c]), math_op(k, ay, by, reg[c + 1]),
+                   math_op(k, az, bz, reg[c + 2]))
+    elif op == 5:  # CROSS_PRODUCT
+        x, y, z = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    elif op == 6:  # PROJECT
+        ll = bx * bx + by * by + bz * bz
+        t = (ax * bx + ay * by + az * bz) / ll if ll != 0.0 else 0.0
+        x, y, z = t * bx, t * by, t * bz
+    elif op == 7 or op == 8:  # REFLECT, REFRACT about the normalised b
+        nx, ny, nz = _safe_normalize(bx, by, bz)
+        d = nx * ax + ny * ay + nz * az
+        if op == 7:
+            x, y, z = ax - 2.0 * d * nx, ay - 2.0 * d * ny, az - 2.0 * d * nz
+        else:  # refract(a, n, eta = scale)
+            k2 = 1.0 - scale * scale * (1.0 - d * d)
+            if k2 >= 0.0:
+                m = scale * d + math.sqrt(k2)
+                x, y, z = scale * ax - m * nx, scale * ay - m * ny, scale * az - m * nz
+    elif op == 9:  # FACEFORWARD: a if dot(c, b) < 0, else -a
+        sign = 1.0 if reg[c] * bx + reg[c + 1] * by + reg[c + 2] * bz < 0.0 else -1.0
+        x, y, z = sign * ax, sign * ay, sign * az
+    elif op == 10:
+        value = ax * bx + ay * by + az * bz
+    elif op == 11:
+        value = math.sqrt((ax - bx) ** 2 + (ay - by) ** 2 + (az - bz) ** 2)
+    elif op == 12:
+        value = math.sqrt(ax * ax + ay * ay + az * az)
+    elif op == 13:
+        x, y, z = ax * scale, ay * scale, az * scale
+    elif op == 14:
+        x, y, z = _safe_normalize(ax, ay, az)
+    else:  # TANGENT
+        x, y, z = math.tan(ax), math.tan(ay), math.tan(az)
+    reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = x, y, z, value
+
+
+@njit(**JIT)
+def _safe_normalize(x, y, z):
+    """(x, y, z) normalised, or 0 (Cycles' safe_normalize)."""
+    ll = math.sqrt(x * x + y * y + z * z)
+    return (x / ll, y / ll, z / ll) if ll != 0.0 else (0.0, 0.0, 0.0)
 
 
 @njit(**JIT)
@@ -553,6 +621,8 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_ramp(ins, reg, pt.params)
         elif op == OP_HSV:
             node_hsv(ins, reg)
+        elif op == OP_VECTOR_MATH:
+            node_vector_math(ins, reg)
         else:
             node_colour_ops(ins, reg)
 

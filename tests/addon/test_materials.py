@@ -559,6 +559,39 @@ def test_missing_image_turns_no_emission_on(fresh):
     assert any(tex.name in w and "no pixels" in w for w in warnings)
 
 
+def test_vector_math_compiles_and_folds(fresh):
+    """Vector Math in a textured chain (UV scaled by 2 before the image: Repeat shows it
+    twice) runs per point; on constants (a Combine XYZ's length into Roughness) it folds
+    to the exact number, with no warning either way."""
+    mat, node = node_material("Tiled", "ShaderNodeBsdfPrincipled")
+    tree = mat.node_tree
+    img, stored = make_image("Tile", colorspace="Non-Color")
+    tex = texture(mat, img, node, "Base Color")
+    tex.interpolation = "Closest"
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    vmath = tree.nodes.new("ShaderNodeVectorMath")
+    vmath.operation = "SCALE"
+    vmath.inputs["Scale"].default_value = 2.0
+    tree.links.new(coords.outputs["UV"], vmath.inputs[0])
+    tree.links.new(vmath.outputs["Vector"], tex.inputs["Vector"])
+    xyz = tree.nodes.new("ShaderNodeCombineXYZ")
+    for axis, v in zip("XYZ", (0.2, 0.3, 0.1)):
+        xyz.inputs[axis].default_value = v
+    length = tree.nodes.new("ShaderNodeVectorMath")
+    length.operation = "LENGTH"
+    tree.links.new(xyz.outputs[0], length.inputs[0])
+    tree.links.new(length.outputs["Value"], node.inputs["Roughness"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.kwargs["roughness"] == pytest.approx(0.14 ** 0.5, abs=1e-6)
+    assert "roughness_program" not in spec.kwargs
+    for (u, v), texel in zip(TEXEL_CENTRES, stored):
+        assert _program_at(spec.kwargs["colour_program"], (u / 2, v / 2)) == \
+            pytest.approx(texel[:3], abs=1e-6)
+        assert _program_at(spec.kwargs["colour_program"], (u / 2 + 0.5, v / 2)) == \
+            pytest.approx(texel[:3], abs=1e-6)
+
+
 def test_exact_chains_do_not_warn(fresh):
     mat, node = node_material("Exact", "ShaderNodeBsdfDiffuse")
     rgb = mat.node_tree.nodes.new("ShaderNodeRGB")

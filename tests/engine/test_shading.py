@@ -115,6 +115,57 @@ def test_math_is_safe_where_cycles_is(op, a, b, want):
     assert math.isfinite(got) and got == pytest.approx(want)
 
 
+def _vector_math(op, a, b, c=(0.0, 0.0, 0.0), scale=1.0):
+    prog = Program()
+    ra, rb, rc, rs = prog.const(a), prog.const(b), prog.const(c), prog.const([scale])
+    out = prog.emit(shading.OP_VECTOR_MATH, 4, a=ra, b=rb, c=rc,
+                    d=shading.VECTOR_MATHS.index(op), e=rs)
+    reg = shading.evaluate(prog)
+    return reg[out:out + 3], reg[out + 3]
+
+
+def test_vector_math_is_cycles_per_operation(rng):
+    """Every Vector Math operation against its formula (Cycles' svm_vector_math, with its
+    safe division, projection and normalisation), on random vectors and at the zeros where
+    Cycles is safe."""
+    a, b, c = rng.normal(size=(3, 3))
+    s = 1.3
+    n = b / np.linalg.norm(b)
+    d = a @ n
+    k = 1 - s * s * (1 - d * d)
+    want = {
+        "ADD": a + b, "SUBTRACT": a - b, "MULTIPLY": a * b, "DIVIDE": a / b,
+        "MULTIPLY_ADD": a * b + c, "CROSS_PRODUCT": np.cross(a, b),
+        "PROJECT": b * (a @ b) / (b @ b), "REFLECT": a - 2 * d * n,
+        "REFRACT": s * a - (s * d + np.sqrt(max(k, 0))) * n if k >= 0 else np.zeros(3),
+        "FACEFORWARD": a if c @ b < 0 else -a, "DOT_PRODUCT": a @ b,
+        "DISTANCE": np.linalg.norm(a - b), "LENGTH": np.linalg.norm(a), "SCALE": a * s,
+        "NORMALIZE": a / np.linalg.norm(a), "SNAP": np.floor(a / b) * b,
+        "FLOOR": np.floor(a), "CEIL": np.ceil(a), "MODULO": np.fmod(a, b),
+        "WRAP": a - (b - c) * np.floor((a - c) / (b - c)), "FRACTION": a - np.floor(a),
+        "ABSOLUTE": np.abs(a), "POWER": np.where((a < 0) & (b != np.floor(b)), 0.0,
+                                                  np.abs(a) ** b * np.where(a < 0, np.nan, 1)),
+        "SIGN": np.sign(a), "MINIMUM": np.minimum(a, b), "MAXIMUM": np.maximum(a, b),
+        "SINE": np.sin(a), "COSINE": np.cos(a), "TANGENT": np.tan(a)}
+    assert set(want) == set(shading.VECTOR_MATHS)
+    for op, w in want.items():
+        vec, value = _vector_math(op, a, b, c, s)
+        got = value if np.ndim(w) == 0 else vec
+        if op == "POWER":  # a negative base with a fractional exponent gives 0
+            w = np.nan_to_num(w, nan=0.0)
+        np.testing.assert_allclose(got, w, rtol=1e-12, atol=1e-12, err_msg=op)
+        if np.ndim(w) == 0:
+            assert not vec.any(), op
+        else:
+            assert value == 0.0, op
+    zero = np.zeros(3)
+    for op in ("DIVIDE", "PROJECT", "SNAP", "MODULO"):  # by 0: 0, as Cycles' safe ones
+        vec, _ = _vector_math(op, a, zero)
+        assert not vec.any(), op
+    vec, _ = _vector_math("NORMALIZE", zero, zero)
+    assert not vec.any()
+
+
 def test_programs_of_several_materials_keep_their_own_images_and_parameters():
     progs = []
     for k in range(3):
