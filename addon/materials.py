@@ -585,12 +585,14 @@ class _Reader:
         if sock is None:
             return
         link = live_link(sock)
+        own = _own_value(sock)
+        if link is not None and isinstance(link.from_node, shader_nodes.GroupValue):
+            link, own = None, _own_value(link.from_socket)  # a group's input left unlinked
         if link is not None:
             self.warn(f"node '{node.name}' input '{socket_name}' is driven by node "
                       f"'{link.from_node.name}' ({_label(link.from_node)}), which Specula does "
                       f"not support; {rendered}")
             return
-        own = _own_value(sock)
         if neutral is not None and own is not None and \
                 np.max(np.abs(np.subtract(own, neutral))) > 1e-6:
             self.warn(f"node '{node.name}' input '{socket_name}' {_fmt(own)} is not supported; "

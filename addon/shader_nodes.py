@@ -29,12 +29,172 @@ class Unsupported(Exception):
     """A node (or a setting of one) that has no program instruction yet."""
 
 
+# ------------------------------------------------------------------ node groups
+# Cycles compiles a material as if its node groups were ungrouped. Here the nodes inside a
+# group are read in place, each seen through the group nodes that lead to it (`path`,
+# outermost first): a link from a group node continues inside its group at the Group
+# Output, a link from a Group Input continues outside at the group node's input. Every
+# node and socket reached through `live_link` carries its path, so the readers below and
+# materials.py walk through groups without knowing of them.
+
+class GroupSocket:
+    """A bpy node socket inside the groups on `path`."""
+
+    __slots__ = ("raw", "path")
+
+    def __init__(self, raw, path):
+        self.raw, self.path = raw, path
+
+    def __getattr__(self, name):
+        return getattr(self.raw, name)
+
+    @property
+    def node(self):
+        return GroupNode(self.raw.node, self.path)
+
+    def __eq__(self, other):
+        return isinstance(other, GroupSocket) and self.raw == other.raw and \
+            self.path == other.path
+
+    def __hash__(self):
+        return hash((self.raw.as_pointer(),) + tuple(g.as_pointer() for g in self.path))
+
+
+class GroupNode:
+    """A bpy node inside the groups on `path`: its sockets carry the path on."""
+
+    __slots__ = ("raw", "path")
+
+    def __init__(self, raw, path):
+        self.raw, self.path = raw, path
+
+    def __getattr__(self, name):
+        return getattr(self.raw, name)
+
+    @property
+    def inputs(self):
+        return _Sockets(self.raw.inputs, self.path)
+
+    @property
+    def outputs(self):
+        return _Sockets(self.raw.outputs, self.path)
+
+    @property
+    def internal_links(self):
+        return [Link(GroupSocket(k.from_socket, self.path), GroupSocket(k.to_socket, self.path))
+                for k in self.raw.internal_links]
+
+    def as_pointer(self):
+        """Distinct per node and path: a group used twice is two sets of nodes."""
+        return hash((self.raw.as_pointer(),) + tuple(g.as_pointer() for g in self.path))
+
+    def __eq__(self, other):
+        return isinstance(other, GroupNode) and self.raw == other.raw and \
+            self.path == other.path
+
+    def __hash__(self):
+        return self.as_pointer()
+
+
+class _Sockets:
+    """A node's inputs or outputs, each wrapped with the node's path."""
+
+    def __init__(self, raw, path):
+        self.raw, self.path = raw, path
+
+    def _wrap(self, s):
+        return None if s is None else GroupSocket(s, self.path)
+
+    def __getitem__(self, key):
+        if isinstance(key, slice):
+            return [self._wrap(s) for s in list(self.raw)[key]]
+        return self._wrap(self.raw[key])
+
+    def get(self, key, default=None):
+        s = self.raw.get(key)
+        return default if s is None else self._wrap(s)
+
+    def __iter__(self):
+        return (self._wrap(s) for s in self.raw)
+
+    def __len__(self):
+        return len(self.raw)
+
+    def __contains__(self, key):
+        return key in self.raw
+
+
+class Link:
+    """A link as the readers see it: its source socket (and node) past any group boundary."""
+
+    __slots__ = ("from_socket", "to_socket")
+
+    def __init__(self, from_socket, to_socket=None):
+        self.from_socket, self.to_socket = from_socket, to_socket
+
+    @property
+    def from_node(self):
+        return self.from_socket.node
+
+
+class GroupValue:
+    """What an unlinked socket of a group boundary holds (a Group Output's input, a group
+    node's input), seen as a Value or RGB node of that value."""
+
+    def __init__(self, socket):
+        self.bl_idname = "ShaderNodeRGB" if WIDTHS.get(socket.type) == 3 else "ShaderNodeValue"
+        self.bl_label, self.name, self.mute = "Value", socket.node.name, False
+        self.inputs, self.internal_links = [], []
+        self.outputs = [_GroupValueOutput(self, socket)]
+
+    def as_pointer(self):
+        return id(self)
+
+
+class _GroupValueOutput:
+    def __init__(self, node, socket):
+        self.node, self.name, self.identifier = node, socket.name, socket.identifier
+        self.type, self.default_value = socket.type, socket.default_value
+        self.is_linked, self.enabled = True, True
+
+
 def live_link(socket):
-    """The link that drives `socket`, or None: muted and invalid links do not count (Blender
-    then evaluates the socket's own value)."""
-    if not socket.is_linked:
+    """The link that drives `socket` (a bpy socket or a GroupSocket), past group
+    boundaries, or None: muted and invalid links do not count (Blender then evaluates the
+    socket's own value)."""
+    raw, path = (socket.raw, socket.path) if isinstance(socket, GroupSocket) else (socket, ())
+    if not raw.is_linked:
         return None
-    return next((k for k in socket.links if not k.is_muted and k.is_valid), None)
+    link = next((k for k in raw.links if not k.is_muted and k.is_valid), None)
+    return None if link is None else _source(link.from_socket, path, socket)
+
+
+def _source(out, path, to_socket):
+    """The Link from output socket `out` (inside `path`) to `to_socket`, continued into a
+    group (at its Group Output) or out of one (at the group node's input)."""
+    node = out.node
+    inner = None
+    if node.bl_idname == "ShaderNodeGroup" and node.node_tree is not None and not node.mute:
+        boundary = next((n for n in node.node_tree.nodes if n.bl_idname == "NodeGroupOutput"
+                         and n.is_active_output), None)
+        inner = None if boundary is None else \
+            (next((s for s in boundary.inputs if s.identifier == out.identifier), None),
+             path + (node,))
+    elif node.bl_idname == "NodeGroupInput" and path:
+        inner = (next((s for s in path[-1].inputs if s.identifier == out.identifier), None),
+                 path[:-1])
+    if inner is None:
+        return Link(GroupSocket(out, path), to_socket)
+    sock, inner_path = inner
+    if sock is None:
+        return None
+    wrapped = GroupSocket(sock, inner_path)
+    link = live_link(wrapped)
+    if link is not None:
+        return link
+    if sock.type == "SHADER" or getattr(sock, "default_value", None) is None:
+        return None
+    return Link(GroupValue(sock).outputs[0], to_socket)
 
 
 def enabled_input(node, name):
@@ -266,7 +426,7 @@ def _n_mapping(c, node, out):
 
 def _n_value(c, node, out):
     v = node.outputs[0].default_value
-    values = [float(x) for x in v[:3]] if out.type == "RGBA" else [float(v)]
+    values = [float(x) for x in v[:3]] if WIDTHS.get(out.type) == 3 else [float(v)]
     return c.program.const(values), out.type
 
 

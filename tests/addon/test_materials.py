@@ -782,3 +782,89 @@ def test_bump_map_correction_off_is_warned():
     mat.cycles.use_bump_map_correction = False
     _, warnings = materials.convert(mat)
     assert any("No correction" in w and "Bump Map Correction" in w for w in warnings)
+
+
+# ---- Node groups ------------------------------------------------------------------------------
+
+def shell_group(name="Shell"):
+    """A group of a Principled BSDF whose Base Color and Roughness come from the group's
+    inputs, with its Metallic set inside (0.0, through a Value node)."""
+    g = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    g.interface.new_socket("Base", in_out="INPUT", socket_type="NodeSocketColor")
+    g.interface.new_socket("Rough", in_out="INPUT", socket_type="NodeSocketFloat")
+    g.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    gin, gout = g.nodes.new("NodeGroupInput"), g.nodes.new("NodeGroupOutput")
+    p = g.nodes.new("ShaderNodeBsdfPrincipled")
+    value = g.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = 0.0
+    g.links.new(gin.outputs["Base"], p.inputs["Base Color"])
+    g.links.new(gin.outputs["Rough"], p.inputs["Roughness"])
+    g.links.new(value.outputs[0], p.inputs["Metallic"])
+    g.links.new(p.outputs[0], gout.inputs["BSDF"])
+    return g
+
+
+def group_node(tree, group, rough, base=(0.8, 0.8, 0.8, 1.0)):
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    node.inputs["Rough"].default_value = rough
+    node.inputs["Base"].default_value = base
+    return node
+
+
+def test_a_node_group_is_read_as_if_ungrouped(fresh):
+    """A Principled BSDF inside a group: its inputs reach through the group's inputs to a
+    texture outside (a program) and to the group node's own values; a group used twice
+    (mixed) is two sets of nodes with their own inputs; groups nest. No warning: nothing
+    is approximated."""
+    shell = shell_group()
+    mat, mix = node_material("Grouped", "ShaderNodeMixShader")
+    tree = mat.node_tree
+    mix.inputs["Fac"].default_value = 0.25
+    a, b = group_node(tree, shell, 0.2), group_node(tree, shell, 0.7, (0.1, 0.5, 0.9, 1.0))
+    img, stored = make_image("Albedo", colorspace="Non-Color")
+    texture(mat, img, a, "Base").interpolation = "Closest"
+    # b sits inside an outer group that passes its BSDF through.
+    outer = bpy.data.node_groups.new("Outer", "ShaderNodeTree")
+    outer.interface.new_socket("Out", in_out="OUTPUT", socket_type="NodeSocketShader")
+    inner = group_node(outer, shell, 0.7, (0.1, 0.5, 0.9, 1.0))
+    outer.links.new(inner.outputs["BSDF"], outer.nodes.new("NodeGroupOutput").inputs["Out"])
+    tree.nodes.remove(b)
+    wrapper = tree.nodes.new("ShaderNodeGroup")
+    wrapper.node_tree = outer
+    tree.links.new(a.outputs["BSDF"], mix.inputs[1])
+    tree.links.new(wrapper.outputs["Out"], mix.inputs[2])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.25)
+    first, second = spec.kwargs["first"], spec.kwargs["second"]
+    assert (first.ctor, second.ctor) == ("principled", "principled")
+    assert first.kwargs["roughness"] == pytest.approx(0.2)
+    assert second.kwargs["roughness"] == pytest.approx(0.7)
+    assert second.kwargs["base_colour"] == pytest.approx((0.1, 0.5, 0.9))
+    assert "colour_program" not in second.kwargs
+    for uv, texel in zip(TEXEL_CENTRES, stored):
+        assert _program_at(first.kwargs["colour_program"], uv) == \
+            pytest.approx(texel[:3], abs=1e-6)
+
+
+def test_an_unsupported_node_inside_a_group_is_named(fresh):
+    """A group's Toon BSDF falls back to diffuse of its colour, warned by the node's
+    name."""
+    g = bpy.data.node_groups.new("Toony", "ShaderNodeTree")
+    g.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    toon = g.nodes.new("ShaderNodeBsdfToon")
+    toon.name = "InnerToon"
+    toon.inputs["Color"].default_value = (0.2, 0.4, 0.6, 1.0)
+    g.links.new(toon.outputs[0], g.nodes.new("NodeGroupOutput").inputs["BSDF"])
+    mat, placeholder = node_material("Toon", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    tree.nodes.remove(placeholder)
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = g
+    surface = next(n for n in tree.nodes
+                   if n.bl_idname == "ShaderNodeOutputMaterial").inputs["Surface"]
+    tree.links.new(node.outputs["BSDF"], surface)
+    spec, warnings = convert(mat)
+    assert spec.ctor == "diffuse" and spec.kwargs["colour"] == pytest.approx((0.2, 0.4, 0.6))
+    assert any("InnerToon" in w for w in warnings), warnings

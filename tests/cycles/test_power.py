@@ -205,6 +205,24 @@ def _textured_roughness_plus_10_percent():
         yield
 
 
+@contextmanager
+def _group_inputs_unread():
+    """The exporter reads a socket linked to a Group Input as unlinked: its own value
+    inside the group, not the group node's input."""
+    from addon import shader_nodes
+
+    source = shader_nodes._source
+
+    def own_value_inside(out, path, to_socket):
+        if out.node.bl_idname == "NodeGroupInput" and path:
+            return None
+        return source(out, path, to_socket)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shader_nodes, "_source", own_value_inside)
+        yield
+
+
 def _roughness_plus_10_percent(kind):
     def inject(scene, settings):
         m = scene.materials
@@ -360,6 +378,7 @@ INJECTIONS = {
     "one_transparent_bounce_more": ("transparent_limit", _one_transparent_bounce_more, None),
     "gltf_alpha_as_its_mean": ("gltf_glass_vase_flowers", _mix_factors_as_their_means, None),
     "gltf_roughness_as_its_mean": ("gltf_transmission", _roughness_as_its_mean, None),
+    "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),
     "helmet_roughness_as_its_mean": ("gltf_damaged_helmet", _roughness_as_its_mean, None),
     "textured_roughness_plus_10_percent": ("textured_roughness", None,

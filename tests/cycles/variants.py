@@ -742,6 +742,80 @@ def textured_roughness():
         scene.collection.objects.link(obj)
 
 
+def _shell_group():
+    """A node group: a Principled BSDF whose Base Color and Roughness are the group's
+    inputs, its Metallic a Value node inside."""
+    g = bpy.data.node_groups.new("Shell", "ShaderNodeTree")
+    g.interface.new_socket("Base", in_out="INPUT", socket_type="NodeSocketColor")
+    g.interface.new_socket("Rough", in_out="INPUT", socket_type="NodeSocketFloat")
+    g.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    gin, gout = g.nodes.new("NodeGroupInput"), g.nodes.new("NodeGroupOutput")
+    p = g.nodes.new("ShaderNodeBsdfPrincipled")
+    metallic = g.nodes.new("ShaderNodeValue")
+    metallic.outputs[0].default_value = 0.0
+    g.links.new(gin.outputs["Base"], p.inputs["Base Color"])
+    g.links.new(gin.outputs["Rough"], p.inputs["Roughness"])
+    g.links.new(metallic.outputs[0], p.inputs["Metallic"])
+    g.links.new(p.outputs[0], gout.inputs["BSDF"])
+    return g
+
+
+def _grouped(name, group, base, rough):
+    """A material whose Surface is an instance of `group` with inputs Base and Rough."""
+    mat = bs.material(name, "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    tree.nodes.remove(next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse"))
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    node.inputs["Base"].default_value = base + (1.0,)
+    node.inputs["Rough"].default_value = rough
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(node.outputs["BSDF"], out.inputs["Surface"])
+    return mat, node
+
+
+def node_groups():
+    """Materials built from node groups (issue 14, point 1), read as if ungrouped: one group
+    (a Principled BSDF on the group's Base and Roughness) used by three balls with their
+    own inputs: a red one at 0.2, a green one at 0.6, and one whose Base is a Checker
+    Texture outside the group; and the back wall inside a group within a group."""
+    scene = _box()
+    shell = _shell_group()
+    red, _ = _grouped("Red", shell, (0.8, 0.1, 0.1), 0.2)
+    green, _ = _grouped("Green", shell, (0.1, 0.7, 0.2), 0.6)
+    checked, node = _grouped("Checked", shell, (0.5, 0.5, 0.5), 0.35)
+    tree = checked.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (0.9, 0.6, 0.1, 1.0)
+    checker.inputs["Color2"].default_value = (0.1, 0.3, 0.8, 1.0)
+    checker.inputs["Scale"].default_value = 4.0
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Color"], node.inputs["Base"])
+    for i, (mat, x) in enumerate(zip((red, green, checked), (-0.6, 0.0, 0.6))):
+        obj = bpy.data.objects.new(f"Ball{i}", _uv_sphere_mesh(f"Ball{i}", 0.27))
+        obj.location = (x, 0.0, 0.27)
+        obj.data.materials.append(mat)
+        scene.collection.objects.link(obj)
+    outer = bpy.data.node_groups.new("Outer", "ShaderNodeTree")
+    outer.interface.new_socket("Tint", in_out="INPUT", socket_type="NodeSocketColor")
+    outer.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    inner = outer.nodes.new("ShaderNodeGroup")
+    inner.node_tree = shell
+    inner.inputs["Rough"].default_value = 0.5
+    outer.links.new(outer.nodes.new("NodeGroupInput").outputs["Tint"], inner.inputs["Base"])
+    outer.links.new(inner.outputs["BSDF"], outer.nodes.new("NodeGroupOutput").inputs["BSDF"])
+    wall = bpy.data.objects["Back"]
+    mat = bs.material("Wall", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    tree.nodes.remove(next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse"))
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = outer
+    node.inputs["Tint"].default_value = (0.9, 0.8, 0.3, 1.0)
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(node.outputs["BSDF"], out.inputs["Surface"])
+    wall.data.materials[0] = mat
+
+
 def mixed_shaders():
     """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
     an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs with a
@@ -1248,6 +1322,7 @@ _add(Variant("textured_walls", textured_walls, max_bounces=8))
 _add(Variant("textured_emitter", textured_emitter, max_bounces=8, samples=256,
              cycles_samples=512))
 _add(Variant("normal_maps", normal_maps, max_bounces=8))
+_add(Variant("node_groups", node_groups, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
