@@ -547,13 +547,15 @@ class _Reader:
         return tuple(c if math.isfinite(c) and c > 0 else 0.0
                      for c in _rgb(_convert(v, "VALUE", "RGBA")))
 
-    def textured_colour(self, node, socket_name, default=DEFAULT_GREY, unknown=None):
+    def textured_colour(self, node, socket_name, default=DEFAULT_GREY, unknown=None,
+                        emission=False):
         """A colour input that may vary over the surface: (the constant standing for it where
         one is needed, e.g. its image's mean; its shader program, or None when it is one
-        constant or its chain does not compile, which is warned)."""
+        constant or its chain does not compile, which is warned). An `emission` cannot
+        depend on the view (Fresnel, Layer Weight)."""
         sock = enabled_input(node, socket_name)
         program, why = (None, "") if sock is None else \
-            shader_nodes.compile_colour(sock, self.constants.image_cache)
+            shader_nodes.compile_colour(sock, self.constants.image_cache, not emission)
         if program is None:
             warned = len(self.warnings)
             colour = self.colour(node, socket_name, default, unknown)
@@ -728,7 +730,8 @@ class _Reader:
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
             # the socket's own colour.
-            colour, program = self.textured_colour(node, "Color", (1.0, 1.0, 1.0))
+            colour, program = self.textured_colour(node, "Color", (1.0, 1.0, 1.0),
+                                                   emission=True)
             strength = max(self.number(node, "Strength", 1.0), 0.0)
             textured = program is not None and strength * max(colour) > 0
             return MaterialSpec("emission_only", name, {
@@ -858,7 +861,7 @@ class _Reader:
         # The colour input is "Emission Color" since 4.0 and "Emission" before.
         emission_socket = "Emission Color" if "Emission Color" in node.inputs else "Emission"
         colour, program = self.textured_colour(node, emission_socket, (1.0, 1.0, 1.0),
-                                               unknown=(0.0, 0.0, 0.0)) \
+                                               unknown=(0.0, 0.0, 0.0), emission=True) \
             if strength > 0 else ((0.0, 0.0, 0.0), None)
         emission = tuple(strength * c for c in colour)
         kwargs = {"emission": emission} if strength > 0 and max(emission) > 0 else {}

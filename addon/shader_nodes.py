@@ -22,7 +22,10 @@ from . import core
 WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 # Node kinds whose output varies over a surface: a chain with none of them is a constant.
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
-           "ShaderNodeTexChecker")
+           "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight")
+# Nodes that read the hit's view direction and normal: an emission cannot use them (a
+# light sampled from a shading point would need them from that point's side too).
+VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
 
 
 class Unsupported(Exception):
@@ -221,8 +224,9 @@ def varies(socket, seen=None) -> bool:
 class Compiler:
     """Compiles the chain behind one socket into a `shading.Program`."""
 
-    def __init__(self, texture_cache):
+    def __init__(self, texture_cache, view_dependent=True):
         self.sh = core.load().shading
+        self.view_dependent = view_dependent
         self.program = self.sh.Program()
         self.textures = texture_cache
         self.done = {}  # (node pointer, output identifier) -> (register, type)
@@ -261,6 +265,8 @@ class Compiler:
                 fn = NODES.get(node.bl_idname)
                 if fn is None:
                     raise Unsupported(f"node '{node.name}' ({node.bl_label or node.bl_idname})")
+                if node.bl_idname in VIEW_DEPENDENT and not self.view_dependent:
+                    raise Unsupported(f"node '{node.name}' ({node.bl_label}) in an emission")
                 self.done[key] = fn(self, node, out)
         return self.done[key]
 
@@ -564,6 +570,23 @@ def _n_vector_math(c, node, out):
     return (reg + 3, "VALUE") if out.name == "Value" else (reg, "VECTOR")
 
 
+def _normal(c, node):
+    """The register of a Fresnel or Layer Weight node's Normal, -1 for the hit's own."""
+    sock = node.inputs["Normal"]
+    return c.input(sock, "VECTOR") if live_link(sock) is not None else -1
+
+
+def _n_fresnel(c, node, out):
+    return c.program.emit(c.sh.OP_FRESNEL, 1, a=c.input(node.inputs["IOR"], "VALUE"),
+                          b=_normal(c, node)), "VALUE"
+
+
+def _n_layer_weight(c, node, out):
+    reg = c.program.emit(c.sh.OP_LAYER_WEIGHT, 2, a=c.input(node.inputs["Blend"], "VALUE"),
+                         b=_normal(c, node))
+    return (reg + 1 if out.name == "Facing" else reg), "VALUE"
+
+
 NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexCoord": _n_tex_coord,
@@ -588,6 +611,8 @@ NODES = {
     "ShaderNodeValToRGB": _n_color_ramp,
     "ShaderNodeHueSaturation": _n_hue_saturation,
     "ShaderNodeVectorMath": _n_vector_math,
+    "ShaderNodeFresnel": _n_fresnel,
+    "ShaderNodeLayerWeight": _n_layer_weight,
 }
 
 
@@ -608,14 +633,15 @@ def constant(colour):
     return program
 
 
-def compile_colour(socket, texture_cache):
+def compile_colour(socket, texture_cache, view_dependent=True):
     """(program or None, why not): the program for colour input `socket` when its chain
-    varies over the surface and every node in it compiles; (None, "") for a chain that does
-    not vary (the constant folding handles it exactly)."""
+    varies over the surface and every node in it compiles (with `view_dependent`, nodes
+    reading the view too); (None, "") for a chain that does not vary (the constant folding
+    handles it exactly)."""
     if not varies(socket):
         return None, ""
     try:
-        return Compiler(texture_cache).compile(socket, "RGBA"), ""
+        return Compiler(texture_cache, view_dependent).compile(socket, "RGBA"), ""
     except Unsupported as exc:
         return None, str(exc)
     except (ValueError, ArithmeticError) as exc:  # a program too large, an odd value

@@ -23,6 +23,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from .fresnel import fresnel_dielectric
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
 from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL
@@ -31,39 +32,6 @@ DELTA_PDF = np.inf
 
 
 # ----------------------------------------------------------------- Fresnel
-@njit(**JIT)
-def fresnel_dielectric(cos_i, eta, exact):
-    """Unpolarised Fresnel reflectance of a smooth dielectric and the transmitted cosine.
-
-    cos_i : cosine between the incident direction and the normal on the incident side
-        (its sign does not matter); eta : relative IOR n_transmitted / n_incident (> 0);
-    exact : the exact formula, else Schlick's approximation R0 + (1 - R0)(1 - cos)^5 with
-        the cosine taken in the optically thinner medium (cos_t when leaving glass), the
-        course project's model, which stays within its known bound from both sides.
-    Returns (F, cos_t), F = 1 under total internal reflection (cos_t = 0). cos_t is
-    sqrt(eta^2 - 1 + cos_i^2) / eta rather than sqrt(1 - sin_t^2), which keeps
-    cos_t == cos_i exactly at eta = 1 (an IOR-1 object must be invisible).
-    """
-    cos_i = min(max(abs(cos_i), 0.0), 1.0)
-    disc = eta * eta - 1.0 + cos_i * cos_i
-    if disc <= 0.0:
-        return 1.0, 0.0
-    cos_t = math.sqrt(disc) / eta
-    if exact:
-        d_par = eta * cos_i + cos_t
-        d_perp = cos_i + eta * cos_t
-        if not (d_par > 0 and d_perp > 0):  # grazing incidence at eta = 1
-            return 1.0, cos_t
-        r_par = (eta * cos_i - cos_t) / d_par
-        r_perp = (cos_i - eta * cos_t) / d_perp
-        f = 0.5 * (r_par * r_par + r_perp * r_perp)
-    else:
-        r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
-        c = cos_i if eta >= 1.0 else cos_t
-        f = r0 + (1.0 - r0) * (1.0 - c) ** 5
-    return min(max(f, 0.0), 1.0), cos_t
-
-
 @njit(**JIT)
 def fresnel_schlick_conductor(cos_theta, f0):
     """Principled metallic at roughness 0 with white specular tint (F82-tint, b = 0):

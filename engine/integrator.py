@@ -296,12 +296,19 @@ def handle_escaped(i, row, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def choose_closure(u, f, bu, bv, mat, sc, paths):
+def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
     """Down a mix of shaders to one component, the second with probability fac (its
-    program's value at the hit where it is textured; one sample u in [0, 1) serves every
-    level: its remainder is reused): (material, the mixes' scale product)."""
+    program's value at the hit of a ray along d where it is textured; one sample u in
+    [0, 1) serves every level: its remainder is reused): (material, the mixes' scale
+    product)."""
     mt = sc.materials
     scale = 1.0
+    if HAS_TEXTURES:  # a factor may read the hit's geometry (Fresnel, Layer Weight)
+        g = sc.geometry
+        front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
+        sx, sy, sz = shading_normal(f, np.float64(bu), np.float64(bv),
+                                    1.0 if front else -1.0, sc)
+        shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
     while mt.kind[mat] == MIX:
         fac = mt.mix_fac[mat]
         if HAS_TEXTURES:
@@ -336,17 +343,10 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     front = dx * nx + dy * ny + dz * nz < 0.0
     sign = 1.0 if front else -1.0
     nx, ny, nz = nx * sign, ny * sign, nz * sign
-    sx, sy, sz = nx, ny, nz
-    if HAS_SHADING_NORMALS:
-        if g.smooth[f]:
-            nm = g.normals
-            ax = (w0 * nm[f, 0, 0] + u * nm[f, 1, 0] + v * nm[f, 2, 0]) * sign
-            ay = (w0 * nm[f, 0, 1] + u * nm[f, 1, 1] + v * nm[f, 2, 1]) * sign
-            az = (w0 * nm[f, 0, 2] + u * nm[f, 1, 2] + v * nm[f, 2, 2]) * sign
-            length = math.sqrt(ax * ax + ay * ay + az * az)
-            if length > 1e-12:
-                sx, sy, sz = ax / length, ay / length, az / length
+    sx, sy, sz = shading_normal(f, u, v, sign, sc)
     bx, by, bz = sx, sy, sz
+    if HAS_TEXTURES:
+        shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
     if HAS_NORMAL_MAPS and sc.materials.programs.normal[mat, 0] >= 0:
         sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
@@ -355,6 +355,24 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     scale = offset_scale(g, f, px, py, pz)
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
                   v, mat, np.float64(tfar), scale, bx, by, bz)
+
+
+def shading_normal(f, u, v, sign, sc):
+    """The mesh's smooth normal at barycentrics (u, v) of triangle f, turned to the side
+    `sign` of its geometric normal; the geometric normal on flat triangles or where the
+    interpolation degenerates."""
+    g = sc.geometry
+    nx, ny, nz = g.tri_normal[f, 0] * sign, g.tri_normal[f, 1] * sign, g.tri_normal[f, 2] * sign
+    if HAS_SHADING_NORMALS and g.smooth[f]:
+        nm = g.normals
+        w0 = 1.0 - u - v
+        ax = (w0 * nm[f, 0, 0] + u * nm[f, 1, 0] + v * nm[f, 2, 0]) * sign
+        ay = (w0 * nm[f, 0, 1] + u * nm[f, 1, 1] + v * nm[f, 2, 1]) * sign
+        az = (w0 * nm[f, 0, 2] + u * nm[f, 1, 2] + v * nm[f, 2, 2]) * sign
+        length = math.sqrt(ax * ax + ay * ay + az * az)
+        if length > 1e-12:
+            return ax / length, ay / length, az / length
+    return nx, ny, nz
 
 
 def mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths):
@@ -853,7 +871,8 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         scale = 1.0
         if HAS_MIXES:
             u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(vertex, CLOSURE))
-            mat, scale = choose_closure(u, f, bu[i], bv[i], mat, sc, paths)
+            mat, scale = choose_closure(u, f, bu[i], bv[i], paths.d64[i, 0], paths.d64[i, 1],
+                                        paths.d64[i, 2], mat, sc, paths)
         x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
         k = sc.materials.kind[x.mat]
         if depth == 0 and not (HAS_TRANSPARENCY and k == TRANSPARENT):
@@ -940,7 +959,9 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         if HAS_MIXES:
             seed = hash_combine(paths.pseed[row], np.uint64(SHADOW_CLOSURE_SALT + crossed))
             u = sample_1d(seed, rev_sample, bounce_dim(shadow.vertex[j], CLOSURE))
-            mat, scale = choose_closure(u, f, bu[j], bv[j], mat, sc, paths)
+            d = shadow.direction[j]
+            mat, scale = choose_closure(u, f, bu[j], bv[j], np.float64(d[0]), np.float64(d[1]),
+                                        np.float64(d[2]), mat, sc, paths)
         if sc.materials.kind[mat] != TRANSPARENT:
             continue
         # Go on along the ray itself, past the surface by the usual offset measured along
@@ -979,7 +1000,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
-    surface_interaction,
+    surface_interaction, shading_normal,
     mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,

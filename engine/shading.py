@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .fresnel import fresnel_dielectric
 from .jit import ALLOCATING, INLINE, JIT, njit
 
 # ------------------------------------------------------------------ opcodes
@@ -53,6 +54,9 @@ OP_HSV = 15         # reg[out:out+3] Hue/Saturation/Value of colour reg[a:a+3]: 
 #                     saturation reg[c], value reg[d], factor reg[e]
 OP_VECTOR_MATH = 16  # reg[out:out+3] vector, reg[out+3] value of vector math d on vectors
 #                     reg[a:a+3], reg[b:b+3], reg[c:c+3] and scale reg[e]
+OP_FRESNEL = 17     # reg[out] = Fresnel node of IOR reg[a], normal reg[b:b+3] (b < 0: the hit's)
+OP_LAYER_WEIGHT = 18  # reg[out] Fresnel, reg[out+1] Facing of Layer Weight: blend reg[a],
+#                     normal reg[b:b+3] (b < 0: the hit's)
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
@@ -79,8 +83,12 @@ EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
 LUMINANCE = (0.2126, 0.7152, 0.0722)
 # Entries of a Color Ramp's table (Cycles' RAMP_TABLE_SIZE).
 RAMP_TABLE_SIZE = 256
-# The registers one program may use (the kernel's scratch per path batch).
+# The registers one program may use (the kernel's scratch per path batch); the last
+# seven hold the hit's geometry for the nodes that read it (set_geometry): the shading
+# normal, facing the incoming side (3), the direction toward the viewer (3) and whether
+# the surface is seen from its back (1), Cycles' sd->N, sd->wi and SD_BACKFACING.
 MAX_REGISTERS = 256
+GEOMETRY = MAX_REGISTERS - 7
 WIDTH = 8  # int64 columns of an instruction
 
 
@@ -125,8 +133,8 @@ class Program:
     def register(self, width: int) -> int:
         r = self.registers
         self.registers += width
-        if self.registers > MAX_REGISTERS:
-            raise ValueError(f"the node chain needs more than {MAX_REGISTERS} registers")
+        if self.registers > GEOMETRY:
+            raise ValueError(f"the node chain needs more than {GEOMETRY} registers")
         return r
 
     def emit(self, op, width, a=0, b=0, c=0, d=0, e=0, params=()) -> int:
@@ -358,6 +366,54 @@ def node_vector_math(ins, reg):
     else:  # TANGENT
         x, y, z = math.tan(ax), math.tan(ay), math.tan(az)
     reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = x, y, z, value
+
+
+@njit(**JIT)
+def set_geometry(reg, nx, ny, nz, ix, iy, iz, backfacing):
+    """The hit's geometry into the registers the Fresnel and Layer Weight nodes read."""
+    reg[GEOMETRY], reg[GEOMETRY + 1], reg[GEOMETRY + 2] = nx, ny, nz
+    reg[GEOMETRY + 3], reg[GEOMETRY + 4], reg[GEOMETRY + 5] = ix, iy, iz
+    reg[GEOMETRY + 6] = 1.0 if backfacing else 0.0
+
+
+@njit(**JIT)
+def _facing_cosine(normal, reg):
+    """The cosine between the view and the normal in reg[normal:normal+3] (normalised), or
+    the hit's shading normal where normal < 0."""
+    g = GEOMETRY
+    if normal < 0:
+        nx, ny, nz = reg[g], reg[g + 1], reg[g + 2]
+    else:
+        nx, ny, nz = _safe_normalize(reg[normal], reg[normal + 1], reg[normal + 2])
+    return nx * reg[g + 3] + ny * reg[g + 4] + nz * reg[g + 5]
+
+
+@njit(**JIT)
+def node_fresnel(ins, reg):
+    """Cycles' Fresnel node (svm_node_fresnel): the dielectric Fresnel at the view's angle
+    to the normal, of IOR max(ior, 1e-5), inverted on a back face."""
+    eta = max(reg[ins[2]], 1e-5)
+    if reg[GEOMETRY + 6] != 0.0:
+        eta = 1.0 / eta
+    reg[ins[1]] = fresnel_dielectric(_facing_cosine(ins[3], reg), eta, True)[0]
+
+
+@njit(**JIT)
+def node_layer_weight(ins, reg):
+    """Cycles' Layer Weight node (svm_node_layer_weight): Fresnel, the dielectric Fresnel
+    of eta = 1 / max(1 - blend, 1e-5) (not inverted on a back face); Facing, 1 - |cos|
+    raised to the blend's power curve."""
+    blend = reg[ins[2]]
+    cos = _facing_cosine(ins[3], reg)
+    eta = max(1.0 - blend, 1e-5)
+    if reg[GEOMETRY + 6] == 0.0:
+        eta = 1.0 / eta
+    reg[ins[1]] = fresnel_dielectric(cos, eta, True)[0]
+    facing = abs(cos)
+    if blend != 0.5:
+        b = min(max(blend, 0.0), 1.0 - 1e-5)
+        facing = facing ** (2.0 * b if b < 0.5 else 0.5 / (1.0 - b))
+    reg[ins[1] + 1] = 1.0 - facing
 
 
 @njit(**JIT)
@@ -623,6 +679,10 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_hsv(ins, reg)
         elif op == OP_VECTOR_MATH:
             node_vector_math(ins, reg)
+        elif op == OP_FRESNEL:
+            node_fresnel(ins, reg)
+        elif op == OP_LAYER_WEIGHT:
+            node_layer_weight(ins, reg)
         else:
             node_colour_ops(ins, reg)
 
@@ -695,12 +755,15 @@ def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
             r2 if r2 > 0.0 and math.isfinite(r2) else 0.0)
 
 
-def evaluate(program: Program, uv=(0.0, 0.0)):
+def evaluate(program: Program, uv=(0.0, 0.0), normal=(0.0, 0.0, 1.0), incoming=(0.0, 0.0, 1.0),
+             backfacing=False):
     """Run a program outside the kernel (tests, constant folding): the registers after it
-    ran at UV coordinates `uv` on every map."""
+    ran at UV coordinates `uv` on every map, at a hit of that shading normal, direction
+    toward the viewer and side."""
     pt = pack([program], None, lambda name: 0)
     corners = np.broadcast_to(np.asarray([[uv[0], uv[1]]] * 3, np.float32),
                               (max(len(program.uv_maps), 1), 1, 3, 2)).copy()
     reg = np.zeros(MAX_REGISTERS)
+    set_geometry(reg, *normal, *incoming, backfacing)
     run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
     return reg

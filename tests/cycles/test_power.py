@@ -223,6 +223,24 @@ def _group_inputs_unread():
         yield
 
 
+def front_facing_geometry(reg, nx, ny, nz, ix, iy, iz, backfacing):
+    """shading.set_geometry that never says the hit is on a back face."""
+    original_set_geometry(reg, nx, ny, nz, ix, iy, iz, False)  # noqa: F821 - the copy's
+
+
+@contextmanager
+def _back_faces_unseen():
+    """Fresnel and Layer Weight evaluated as if every hit were on a front face (a one-off
+    kernel): the IOR inverted on the wrong side."""
+    from tests.patching import module_with, one_off_kernels
+
+    shading = renderers.core().shading
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, shading=module_with(shading, set_geometry=front_facing_geometry,
+                                                original_set_geometry=shading.set_geometry))
+        yield
+
+
 def _roughness_plus_10_percent(kind):
     def inject(scene, settings):
         m = scene.materials
@@ -379,6 +397,8 @@ INJECTIONS = {
     "gltf_alpha_as_its_mean": ("gltf_glass_vase_flowers", _mix_factors_as_their_means, None),
     "gltf_roughness_as_its_mean": ("gltf_transmission", _roughness_as_its_mean, None),
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
+    "view_factors_as_their_means": ("view_factors", _mix_factors_as_their_means, None),
+    "back_faces_unseen": ("view_factors", None, _back_faces_unseen),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),
     "helmet_roughness_as_its_mean": ("gltf_damaged_helmet", _roughness_as_its_mean, None),
     "textured_roughness_plus_10_percent": ("textured_roughness", None,

@@ -690,6 +690,49 @@ def _mix_of(name, node, first, second, fac=None):
     return mat
 
 
+def _view_factor(mat, kind, output, **inputs):
+    """`mat`'s Mix Shader Fac driven by a `kind` node's `output` (Fresnel, Layer Weight)."""
+    tree = mat.node_tree
+    node = tree.nodes.new(kind)
+    for key, value in inputs.items():
+        node.inputs[key].default_value = value
+    mix = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeMixShader")
+    tree.links.new(node.outputs[output], mix.inputs["Fac"])
+    return mat
+
+
+def view_factors():
+    """Mix factors that read the view at the hit (issue 14, point 1): a Diffuse and a rough
+    Glossy mixed by a Fresnel node (IOR 1.5, the classic coated look), two Diffuse colours
+    by Layer Weight's Facing (blend 0.3: red face-on, blue at the rim), and a clear glass
+    and a blue Diffuse by Layer Weight's Fresnel (blend 0.2), seen from inside the glass
+    too; and a card above them turned away from the camera, a red and a blue Diffuse mixed
+    by a Fresnel node (IOR 1.5): on a back face the node inverts the IOR, so at the card's
+    angle it reflects totally (blue), where a front face would be mostly red."""
+    _box()
+    card = _card("BackCard", (0.0, 0.6, 0.95), (0.8, 0.35), _view_factor(
+        _mix_of("BackFresnel", "ShaderNodeMixShader",
+                ("ShaderNodeBsdfDiffuse", {"Color": (0.8, 0.1, 0.1, 1.0)}),
+                ("ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.2, 0.9, 1.0)})),
+        "ShaderNodeFresnel", "Fac", IOR=1.5))
+    card.rotation_euler = (0.0, 0.0, 0.8)  # (bs.quad winds it toward +y)
+    _balls([
+        _view_factor(_mix_of("Coated", "ShaderNodeMixShader",
+                             ("ShaderNodeBsdfDiffuse", {"Color": (0.7, 0.15, 0.1, 1.0)}),
+                             ("ShaderNodeBsdfGlossy", {"Color": (1.0, 1.0, 1.0, 1.0),
+                                                       "Roughness": 0.15})),
+                     "ShaderNodeFresnel", "Fac", IOR=1.5),
+        _view_factor(_mix_of("Facing", "ShaderNodeMixShader",
+                             ("ShaderNodeBsdfDiffuse", {"Color": (0.8, 0.1, 0.1, 1.0)}),
+                             ("ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.2, 0.9, 1.0)})),
+                     "ShaderNodeLayerWeight", "Facing", Blend=0.3),
+        _view_factor(_mix_of("RimGlass", "ShaderNodeMixShader",
+                             ("ShaderNodeBsdfGlass", {"Color": (1.0, 1.0, 1.0, 1.0),
+                                                      "Roughness": 0.0, "IOR": 1.45}),
+                             ("ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.2, 0.9, 1.0)})),
+                     "ShaderNodeLayerWeight", "Fresnel", Blend=0.2)])
+
+
 def _checker_metallic(mat):
     """The Principled BSDF's Metallic from a Checker Texture on the UV map: 1 and 0.3 in
     squares."""
@@ -1302,7 +1345,7 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
 # Rough glass and metal (issue 14): light reaches the floor and the camera through two rough
 # interfaces, mostly by next-event estimation at the inner one.
 for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass,
-               mixed_shaders, alpha_cutouts, transparent_limit):
+               mixed_shaders, alpha_cutouts, transparent_limit, view_factors):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Roughness varying in squares: 10% more roughness shows at |z| 10.6 at these samples,
 # only 5.6 at rough glass' 512 / 1024 (measured): four times those, for a clear margin.

@@ -166,6 +166,45 @@ def test_vector_math_is_cycles_per_operation(rng):
     assert not vec.any()
 
 
+def _fresnel_exact(cos, eta):
+    """The unpolarised dielectric Fresnel, written out (Cycles' fresnel_dielectric_cos)."""
+    c = abs(cos)
+    g2 = eta * eta - 1 + c * c
+    if g2 <= 0:
+        return 1.0
+    g = math.sqrt(g2)
+    a, b = (g - c) / (g + c), (c * (g + c) - 1) / (c * (g - c) + 1)
+    return 0.5 * a * a * (1 + b * b)
+
+
+@pytest.mark.parametrize("backfacing", [False, True])
+def test_fresnel_and_layer_weight_read_the_view_at_the_hit(rng, backfacing):
+    """Cycles' Fresnel and Layer Weight nodes at random views of a hit: the IOR inverted
+    on a back face (Fresnel), not inverted there (Layer Weight's Fresnel, whose eta is
+    1 / (1 - blend) from the front), Facing as 1 - |cos|^(blend curve); an explicit
+    Normal input replaces the hit's."""
+    prog = Program()
+    ior, blend = prog.const([1.45]), prog.const([0.3])
+    tilted = prog.const([0.0, 0.6, 0.8])
+    fresnel = prog.emit(shading.OP_FRESNEL, 1, a=ior, b=-1)
+    fresnel_tilted = prog.emit(shading.OP_FRESNEL, 1, a=ior, b=tilted)
+    layer = prog.emit(shading.OP_LAYER_WEIGHT, 2, a=blend, b=-1)
+    for _ in range(20):
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        i = rng.normal(size=3)
+        i /= np.linalg.norm(i)
+        reg = shading.evaluate(prog, normal=n, incoming=i, backfacing=backfacing)
+        cos = n @ i
+        eta = 1 / 1.45 if backfacing else 1.45
+        assert reg[fresnel] == pytest.approx(_fresnel_exact(cos, eta), abs=1e-12)
+        assert reg[fresnel_tilted] == pytest.approx(
+            _fresnel_exact(np.array([0.0, 0.6, 0.8]) @ i, eta), abs=1e-12)
+        eta_lw = 0.7 if backfacing else 1 / 0.7
+        assert reg[layer] == pytest.approx(_fresnel_exact(cos, eta_lw), abs=1e-12)
+        assert reg[layer + 1] == pytest.approx(1 - abs(cos) ** 0.6, abs=1e-12)
+
+
 def test_programs_of_several_materials_keep_their_own_images_and_parameters():
     progs = []
     for k in range(3):
