@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
-from . import materials, shader_nodes
+from . import core, materials, shader_nodes
 
 # Object types `Object.to_mesh()` can turn into triangles.
 GEOMETRY_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
@@ -116,6 +116,22 @@ def _uv_maps(mesh, tri_loops) -> dict:
     return maps
 
 
+def _texture_spaces(mesh, co, tri_verts, spaces) -> dict:
+    """Per-corner (t, 3, 3) coordinates of the texture spaces named in `spaces`: Object, the
+    vertex in the object's own space; Generated, the mesh's texture space as Cycles'
+    mesh_texture_space maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis)."""
+    sh = core.load().shading
+    out = {}
+    if sh.OBJECT in spaces:
+        out[sh.OBJECT] = co[tri_verts]
+    if sh.GENERATED in spaces:
+        loc = np.array(mesh.texspace_location, np.float32)
+        size = np.array(mesh.texspace_size, np.float32)
+        scale = np.divide(0.5, size, out=np.zeros(3, np.float32), where=size != 0)
+        out[sh.GENERATED] = co[tri_verts] * scale - (loc * scale - 0.5)
+    return out
+
+
 def _tangents(mesh, tri_loops, names, warn) -> dict:
     """Blender's tangents (Mesh.calc_tangents) per triangle corner for the UV maps `names`
     ("" the render-active one): (t, 3, 4) float32, xyz and the bitangent sign."""
@@ -142,9 +158,10 @@ def _tangents(mesh, tri_loops, names, warn) -> dict:
     return out
 
 
-def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None) -> MeshData:
+def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None, spaces=()) -> MeshData:
     """Read a bpy Mesh into numpy with foreach_get (no per-triangle Python); `uv`: its UV
-    maps too; `tangent_maps`: the UV maps whose tangents normal maps need."""
+    maps too, and the texture `spaces` (shading.GENERATED, OBJECT) programs read;
+    `tangent_maps`: the UV maps whose tangents normal maps need."""
     n_vert, n_loops = len(mesh.vertices), len(mesh.loops)
     co = np.zeros(n_vert * 3, np.float32)
     mesh.vertices.foreach_get("co", co)
@@ -163,9 +180,11 @@ def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None) -> MeshD
     if getattr(mesh, "has_custom_normals", False):
         smooth[:] = True
     tangents = _tangents(mesh, tri_loops, tangent_maps, warn or (lambda msg: None))
+    maps = _uv_maps(mesh, tri_loops) if uv else {}
+    if uv:
+        maps.update(_texture_spaces(mesh, co.reshape(-1, 3), tri_verts.reshape(-1, 3), spaces))
     return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
-                    mat_index, normals.astype(np.float64), smooth, material_lut,
-                    _uv_maps(mesh, tri_loops) if uv else {}, tangents)
+                    mat_index, normals.astype(np.float64), smooth, material_lut, maps, tangents)
 
 
 def to_world(mesh: MeshData, matrix_world):
@@ -205,6 +224,7 @@ class _Exporter:
         self._image_means = {}  # image means shared by this export's materials
         self._warned = set()
         self.textured = False
+        self.spaces = []  # the texture spaces programs read (shading.GENERATED, OBJECT)
 
     def warn(self, text):
         if text not in self._warned:
@@ -230,8 +250,12 @@ class _Exporter:
         for id_ in self.depsgraph.ids:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
-        self.textured = any(key in spec.kwargs for m in self.out.materials
-                            for spec in m.parts() for key in materials.PROGRAM_KEYS)
+        programs = [spec.kwargs[key] for m in self.out.materials for spec in m.parts()
+                    for key in materials.PROGRAM_KEYS if key in spec.kwargs]
+        self.textured = bool(programs)
+        sh = core.load().shading
+        self.spaces = sorted({name for p in programs for name in p.uv_maps
+                              if name in (sh.GENERATED, sh.OBJECT)})
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:
@@ -304,7 +328,7 @@ class _Exporter:
                                 np.zeros((0, 3, 3)), np.zeros(0, bool), np.zeros(0, np.int32))
             else:
                 data = read_mesh(mesh, self.slot_lut(mesh.materials), self.textured,
-                                 self.tangent_maps, self.warn)
+                                 self.tangent_maps, self.warn, self.spaces)
         finally:
             obj.to_mesh_clear()
         self.out.meshes[key] = data

@@ -396,9 +396,12 @@ def _n_image(c, node, out):
 
 
 def _n_tex_coord(c, node, out):
-    if out.name != "UV" or node.from_instancer:
-        raise Unsupported(f"texture coordinate '{node.name}' output {out.name}")
-    return c.program.uv(""), "VECTOR"
+    spaces = {"UV": "", "Generated": c.sh.GENERATED, "Object": c.sh.OBJECT}
+    if out.name not in spaces or node.from_instancer or \
+            out.name == "Object" and node.object is not None:
+        raise Unsupported(f"texture coordinate '{node.name}' output {out.name}"
+                          + (" of another object" if out.name == "Object" else ""))
+    return c.program.uv(spaces[out.name]), "VECTOR"
 
 
 def _n_uv_map(c, node, out):
@@ -532,9 +535,8 @@ def _n_bright_contrast(c, node, out):
 
 def _n_checker(c, node, out):
     vec = enabled_input(node, "Vector")
-    if live_link(vec) is None:
-        raise Unsupported(f"checker '{node.name}' on Generated coordinates")
-    co = c.input(vec, "VECTOR")
+    # Unlinked, a procedural texture reads Generated coordinates (Cycles' default).
+    co = c.input(vec, "VECTOR") if live_link(vec) is not None else c.program.uv(c.sh.GENERATED)
     c1, c2 = c.input(node.inputs["Color1"], "RGBA"), c.input(node.inputs["Color2"], "RGBA")
     scale = c.input(node.inputs["Scale"], "VALUE")
     reg = c.program.emit(c.sh.OP_CHECKER, 4, a=co, b=c1, c=c2, d=scale)

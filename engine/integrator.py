@@ -98,7 +98,7 @@ STAGE_NAMES = ("", "generate camera rays", "handle light hits", "handle escaped 
 # The scene as the kernel reads it. Parts a plan does not use are None (not passed).
 #   vertices (t, 3, 3), tri_normal (t, 3), tri_scale (t,), material_index (t,);
 #   normals (t, 3, 3) and smooth (t,) with shading normals; object_index (t,) and
-#   terminator_offset (objects,) with the terminator offset; uv (maps, t, 3, 2) float32
+#   terminator_offset (objects,) with the terminator offset; uv (maps, t, 3, 3) float32
 #   with textures; tangents (t, 3, 4) float32 (xyz, bitangent sign) with normal maps.
 Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index normals "
                                   "smooth object_index terminator_offset uv tangents")

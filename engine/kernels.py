@@ -202,7 +202,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     if scene.programs is not None and (plan.textures or generic):
         uv, programs = scene.uv, scene.programs
     elif generic:  # no material has a program
-        uv = np.zeros((1, 1, 3, 2), np.float32)
+        uv = np.zeros((1, 1, 3, 3), np.float32)
         none = np.full((len(scene.materials), 3), -1, np.int64)
         programs = ProgramTable(np.zeros((0, 8), np.int64), np.zeros(1), np.zeros((1, 4), F32),
                                 np.zeros((0, 6), np.int64), *[none] * len(SLOTS))

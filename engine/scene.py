@@ -701,7 +701,8 @@ class Scene:
         relative to `origin` and (t, 3) int32 (shared_vertices[shared_triangles] equals
         `vertices`): what the acceleration structure is built from, since embree's buffers
         fill several times faster with a vertex shared by its triangles copied once
-    uv : (maps, t, 3, 2) float32 per-corner texture coordinates of the UV maps the colour
+    uv : (maps, t, 3, 3) float32 per-corner texture coordinates of the UV maps (w = 0) and
+        the Generated and Object coordinates (shading.GENERATED, OBJECT) the colour
         programs read, or None without programs
     programs : the materials' shading.ProgramTable, or None without textured materials
     tangents : (t, 3, 4) float32 per-corner world-space tangents and bitangent signs for
@@ -779,7 +780,8 @@ class SceneBuilder:
         smooth : optional (t,) bool; triangles not smooth use their geometric normal
         terminator_offset : the object's shadow terminator geometry offset, 0..1 (Cycles'
             default for a Blender object is 0.1; 0 starts shadow rays on the flat triangles)
-        uv_maps : optional dict, UV map name -> (t, 3, 2) per-corner coordinates; the name ""
+        uv_maps : optional dict, UV map name -> (t, 3, 2) or (t, 3, 3) per-corner
+            coordinates (shading.GENERATED and OBJECT name the texture spaces); the name ""
             is the map an Image Texture without a Vector input reads (Blender's render-active
             map)
         tangents : optional (t, 3, 4) per-corner world-space tangent (xyz, unnormalised as
@@ -818,8 +820,7 @@ class SceneBuilder:
         if normals is not None:
             # Unusable shading normals fall back to the flat normal for that triangle.
             sm &= _normals_usable(normals)
-        uvs = {str(k): np.asarray(m, np.float32).reshape(t, 3, 2)
-               for k, m in (uv_maps or {}).items()}
+        uvs = {str(k): _corner_coordinates(m, t) for k, m in (uv_maps or {}).items()}
         tan = None if tangents is None else np.asarray(tangents, np.float32).reshape(t, 3, 4)
         if not keep.all():
             sm, mi, tri = sm[keep], mi[keep], tri[keep]
@@ -905,7 +906,7 @@ class SceneBuilder:
         progs = [[p for p in pair if p is not None] for pair in
                  zip(*materials.program_lists())]
         names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
-        uv = np.zeros((len(names), sum(counts), 3, 2), np.float32)
+        uv = np.zeros((len(names), sum(counts), 3, 3), np.float32)
         start = 0
         for (name, *_, mi, _), maps, count in zip(self._meshes, self._uv_maps, counts):
             for j, uv_name in enumerate(names):
@@ -923,6 +924,14 @@ class SceneBuilder:
             start += count
         colour, emission, normal, fac, roughness = materials.program_lists()
         return uv, pack(colour, emission, names.index, normal, fac, roughness)
+
+
+def _corner_coordinates(m, t) -> np.ndarray:
+    """(t, 3, 3) float32 per-corner coordinates from (t, 3, 2) UVs (w = 0) or (t, 3, 3)."""
+    m = np.asarray(m, np.float32)
+    if m.size == t * 6:
+        return np.concatenate([m.reshape(t, 3, 2), np.zeros((t, 3, 1), np.float32)], axis=2)
+    return m.reshape(t, 3, 3)
 
 
 # -------------------------------------------------------------------- builder passes

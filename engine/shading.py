@@ -32,7 +32,8 @@ from .jit import ALLOCATING, INLINE, JIT, njit
 
 # ------------------------------------------------------------------ opcodes
 OP_CONST = 0        # reg[out:out+c] = params[p:p+c]
-OP_UV = 1           # reg[out:out+3] = (u, v, 0) of UV map a at the hit
+OP_UV = 1           # reg[out:out+3] = (u, v, 0) of UV map a at the hit, or its Generated or
+#                     Object coordinates (the maps named GENERATED, OBJECT)
 OP_MAPPING = 2      # reg[out:out+3] = M (params[p:p+12], 3x4 row-major) (reg[a:a+3], 1)
 OP_IMAGE = 3        # reg[out:out+3] colour, reg[out+3] alpha of image b at reg[a:a+2];
 #                     c: un-associate alpha
@@ -57,6 +58,11 @@ OP_VECTOR_MATH = 16  # reg[out:out+3] vector, reg[out+3] value of vector math d 
 OP_FRESNEL = 17     # reg[out] = Fresnel node of IOR reg[a], normal reg[b:b+3] (b < 0: the hit's)
 OP_LAYER_WEIGHT = 18  # reg[out] Fresnel, reg[out+1] Facing of Layer Weight: blend reg[a],
 #                     normal reg[b:b+3] (b < 0: the hit's)
+
+# The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
+# Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
+# as Cycles' mesh_texture_space) and its Object output (P in the object's own space).
+GENERATED, OBJECT = "\x00generated", "\x00object"
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
@@ -506,14 +512,14 @@ def node_image(ins, reg, pt):
 
 @njit(**INLINE)
 def node_uv(ins, reg, uv, f, u, v):
-    """The hit's coordinates on UV map a, interpolated from the triangle's corners."""
+    """The hit's coordinates on map a (a UV map, w = 0, or a texture space), interpolated
+    from the triangle's corners."""
     m = ins[2]
     w0 = 1.0 - u - v
     out = ins[1]
-    for j in range(2):
+    for j in range(3):
         reg[out + j] = (w0 * np.float64(uv[m, f, 0, j]) + u * np.float64(uv[m, f, 1, j])
                         + v * np.float64(uv[m, f, 2, j]))
-    reg[out + 2] = 0.0
 
 
 @njit(**INLINE)
@@ -758,11 +764,12 @@ def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
 def evaluate(program: Program, uv=(0.0, 0.0), normal=(0.0, 0.0, 1.0), incoming=(0.0, 0.0, 1.0),
              backfacing=False):
     """Run a program outside the kernel (tests, constant folding): the registers after it
-    ran at UV coordinates `uv` on every map, at a hit of that shading normal, direction
-    toward the viewer and side."""
+    ran at coordinates `uv` (u, v or u, v, w) on every map, at a hit of that shading
+    normal, direction toward the viewer and side."""
     pt = pack([program], None, lambda name: 0)
-    corners = np.broadcast_to(np.asarray([[uv[0], uv[1]]] * 3, np.float32),
-                              (max(len(program.uv_maps), 1), 1, 3, 2)).copy()
+    w = uv[2] if len(uv) > 2 else 0.0
+    corners = np.broadcast_to(np.asarray([[uv[0], uv[1], w]] * 3, np.float32),
+                              (max(len(program.uv_maps), 1), 1, 3, 3)).copy()
     reg = np.zeros(MAX_REGISTERS)
     set_geometry(reg, *normal, *incoming, backfacing)
     run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)

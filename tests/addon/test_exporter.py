@@ -507,3 +507,28 @@ def test_a_textured_mix_factor_alone_exports_the_uv_maps(fresh, core):
     assert not any("no UV map" in w for w in warnings), warnings
     assert scene.uv is not None and np.ptp(scene.uv[0]) > 0.5
     assert scene.programs is not None and (scene.programs.fac[:, 0] >= 0).any()
+
+
+def test_generated_and_object_coordinates_follow_the_mesh(fresh, core):
+    """A Checker Texture with its Vector unlinked reads Generated coordinates, the mesh's
+    texture space ((P - location) / (2 size) + 1/2: the default cube's corners at 0 and 1),
+    and Texture Coordinate's Object output the vertex in the object's space, whatever the
+    object's transform (meshes carry them only where a program reads them)."""
+    obj = cube_object("Crate")
+    obj.location, obj.scale = (3.0, 0.0, 0.0), (2.0, 1.0, 1.0)
+    mat, node = node_material("Procedural", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    tree.links.new(checker.outputs["Color"], node.inputs["Color"])
+    obj.data.materials.append(mat)
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert warnings == [] and scene.uv.shape[0] == 1 and scene.programs.colour[0, 0] >= 0
+    generated = scene.uv[0].copy()
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Object"], checker.inputs["Vector"])
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert warnings == []
+    local = scene.uv[0]  # the cube's own corners, unmoved and unscaled
+    np.testing.assert_array_equal(np.abs(local), 1.0)
+    assert len(np.unique(local.reshape(-1, 3), axis=0)) == 8
+    np.testing.assert_allclose(generated, local * 0.5 + 0.5, atol=1e-6)

@@ -241,6 +241,25 @@ def _back_faces_unseen():
         yield
 
 
+@contextmanager
+def _generated_as_object():
+    """The exporter gives Generated coordinates the Object ones (no texture space)."""
+    from addon import exporter
+
+    spaces = exporter._texture_spaces
+
+    def object_for_generated(mesh, co, tri_verts, names):
+        sh = renderers.core().shading
+        out = spaces(mesh, co, tri_verts, names)
+        if sh.GENERATED in out:
+            out[sh.GENERATED] = co[tri_verts]
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_texture_spaces", object_for_generated)
+        yield
+
+
 def _roughness_plus_10_percent(kind):
     def inject(scene, settings):
         m = scene.materials
@@ -397,6 +416,7 @@ INJECTIONS = {
     "gltf_alpha_as_its_mean": ("gltf_glass_vase_flowers", _mix_factors_as_their_means, None),
     "gltf_roughness_as_its_mean": ("gltf_transmission", _roughness_as_its_mean, None),
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
+    "generated_as_object": ("texture_spaces", None, _generated_as_object),
     "view_factors_as_their_means": ("view_factors", _mix_factors_as_their_means, None),
     "back_faces_unseen": ("view_factors", None, _back_faces_unseen),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),

@@ -217,7 +217,7 @@ def test_programs_of_several_materials_keep_their_own_images_and_parameters():
     names = ["map0", "map1", "map2"]
     pt = shading.pack([progs[0], None, progs[1], progs[2]], None, names.index)
     assert pt.colour[1, 0] == -1
-    uv = np.zeros((3, 1, 3, 2), np.float32)
+    uv = np.zeros((3, 1, 3, 3), np.float32)
     reg = np.zeros(shading.MAX_REGISTERS)
     for mat, k in ((0, 0), (2, 1), (3, 2)):
         c = shading.colour_at(mat, 0, 0.2, 0.2, pt, uv, reg, -1.0, -1.0, -1.0)
@@ -252,8 +252,8 @@ def test_uv_maps_follow_their_triangles_and_a_missing_map_is_named():
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("always")
         scene = b.build(scenes.cornell_camera(), World())
-    assert scene.uv.shape == (1, 4, 3, 2)
-    np.testing.assert_array_equal(scene.uv[0, :2], scenes.quad_uvs())
+    assert scene.uv.shape == (1, 4, 3, 3)
+    np.testing.assert_array_equal(scene.uv[0, :2, :, :2], scenes.quad_uvs())
     np.testing.assert_array_equal(scene.uv[0, 2:], 0.0)
     assert any("'plain'" in w and "UV map" in w and "'tex'" in w for w in scene.warnings)
 
