@@ -116,12 +116,20 @@ def _uv_maps(mesh, tri_loops) -> dict:
     return maps
 
 
-def _texture_spaces(mesh, co, tri_verts, spaces) -> dict:
-    """Per-corner (t, 3, 3) coordinates of the texture spaces named in `spaces`: Object, the
-    vertex in the object's own space; Generated, the mesh's texture space as Cycles'
-    mesh_texture_space maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis)."""
+def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None) -> dict:
+    """Per-corner (t, 3, 3) values of the maps named in `spaces`: Object, the vertex in the
+    object's own space; Generated, the mesh's texture space as Cycles' mesh_texture_space
+    maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis); colour attributes
+    (shading.COLOUR_ATTRIBUTE), linear RGB, per corner or per point (a mesh without the
+    attribute has no map: it reads 0 there, warned, as Cycles' missing attribute)."""
     sh = core.load().shading
     out = {}
+    for name in spaces:
+        if name.startswith(sh.COLOUR_ATTRIBUTE):
+            colours = _colour_attribute(mesh, name[len(sh.COLOUR_ATTRIBUTE):], tri_verts,
+                                        tri_loops)
+            if colours is not None:
+                out[name] = colours
     if sh.OBJECT in spaces:
         out[sh.OBJECT] = co[tri_verts]
     if sh.GENERATED in spaces:
@@ -130,6 +138,20 @@ def _texture_spaces(mesh, co, tri_verts, spaces) -> dict:
         scale = np.divide(0.5, size, out=np.zeros(3, np.float32), where=size != 0)
         out[sh.GENERATED] = co[tri_verts] * scale - (loc * scale - 0.5)
     return out
+
+
+def _colour_attribute(mesh, name, tri_verts, tri_loops):
+    """(t, 3, 3) linear RGB of colour attribute `name` ("": the default one) per triangle
+    corner, or None where the mesh has none by that name."""
+    attributes = mesh.color_attributes
+    attr = attributes.get(name or attributes.default_color_name or "")
+    if attr is None or attr.domain not in ("POINT", "CORNER"):
+        return None
+    rgba = np.zeros(len(attr.data) * 4, np.float32)
+    attr.data.foreach_get("color", rgba)  # linear, byte colours decoded from sRGB
+    rgb = rgba.reshape(-1, 4)[:, :3]
+    index = tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)
+    return rgb[index]
 
 
 def _tangents(mesh, tri_loops, names, warn) -> dict:
@@ -182,7 +204,8 @@ def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None, spaces=(
     tangents = _tangents(mesh, tri_loops, tangent_maps, warn or (lambda msg: None))
     maps = _uv_maps(mesh, tri_loops) if uv else {}
     if uv:
-        maps.update(_texture_spaces(mesh, co.reshape(-1, 3), tri_verts.reshape(-1, 3), spaces))
+        maps.update(_texture_spaces(mesh, co.reshape(-1, 3), tri_verts.reshape(-1, 3), spaces,
+                                    tri_loops))
     return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
                     mat_index, normals.astype(np.float64), smooth, material_lut, maps, tangents)
 
@@ -255,7 +278,8 @@ class _Exporter:
         self.textured = bool(programs)
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
-                              if name in (sh.GENERATED, sh.OBJECT)})
+                              if name in (sh.GENERATED, sh.OBJECT)
+                              or name.startswith(sh.COLOUR_ATTRIBUTE)})
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:

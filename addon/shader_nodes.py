@@ -22,7 +22,8 @@ from . import core
 WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 # Node kinds whose output varies over a surface: a chain with none of them is a constant.
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
-           "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight")
+           "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
+           "ShaderNodeVertexColor")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -404,6 +405,12 @@ def _n_tex_coord(c, node, out):
     return c.program.uv(spaces[out.name]), "VECTOR"
 
 
+def _n_color_attribute(c, node, out):
+    if out.name != "Color":
+        raise Unsupported(f"color attribute '{node.name}' output {out.name}")
+    return c.program.uv(c.sh.COLOUR_ATTRIBUTE + node.layer_name), "RGBA"
+
+
 def _n_uv_map(c, node, out):
     if node.from_instancer:
         raise Unsupported(f"UV map '{node.name}' from the instancer")
@@ -593,6 +600,7 @@ NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexCoord": _n_tex_coord,
     "ShaderNodeUVMap": _n_uv_map,
+    "ShaderNodeVertexColor": _n_color_attribute,
     "ShaderNodeMapping": _n_mapping,
     "ShaderNodeRGB": _n_value,
     "ShaderNodeValue": _n_value,

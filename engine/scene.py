@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .jit import ALLOCATING, njit
-from .shading import Program, ProgramTable, pack
+from .shading import Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
@@ -916,9 +916,8 @@ class SceneBuilder:
                 users = [materials.names[k] for k in np.unique(mi)
                          if any(uv_name in p.uv_maps for p in progs[k])]
                 if users:
-                    label = f"UV map '{uv_name}'" if uv_name else "UV map"
-                    msg = (f"object '{name}' has no {label}, which material '{users[0]}' "
-                           f"reads: its texture coordinates there are 0")
+                    msg = (f"object '{name}' has no {map_label(uv_name)}, which material "
+                           f"'{users[0]}' reads: its values there are 0")
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count

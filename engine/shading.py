@@ -63,6 +63,21 @@ OP_LAYER_WEIGHT = 18  # reg[out] Fresnel, reg[out+1] Facing of Layer Weight: ble
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
 # as Cycles' mesh_texture_space) and its Object output (P in the object's own space).
 GENERATED, OBJECT = "\x00generated", "\x00object"
+# A Color Attribute node's colours (linear RGB per corner) are the map of this prefix and
+# the attribute's name ("": the mesh's default colour attribute, as Cycles reads it).
+COLOUR_ATTRIBUTE = "\x00colour:"
+
+
+def map_label(name: str) -> str:
+    """How a warning names a per-corner map."""
+    if name == GENERATED:
+        return "Generated coordinates"
+    if name == OBJECT:
+        return "Object coordinates"
+    if name.startswith(COLOUR_ATTRIBUTE):
+        attribute = name[len(COLOUR_ATTRIBUTE):]
+        return f"colour attribute '{attribute}'" if attribute else "colour attribute"
+    return f"UV map '{name}'" if name else "UV map"
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",

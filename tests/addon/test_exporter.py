@@ -532,3 +532,29 @@ def test_generated_and_object_coordinates_follow_the_mesh(fresh, core):
     np.testing.assert_array_equal(np.abs(local), 1.0)
     assert len(np.unique(local.reshape(-1, 3), axis=0)) == 8
     np.testing.assert_allclose(generated, local * 0.5 + 0.5, atol=1e-6)
+
+
+def test_colour_attributes_are_read_per_corner_and_named_when_missing(fresh, core):
+    """A Color Attribute node reads the mesh's default colour attribute (layer name empty)
+    in linear RGB, per corner, interpolated like a UV map; an object without the attribute
+    it names reads 0 there, and the warning names the attribute and the object."""
+    obj = cube_object("Painted")
+    attr = obj.data.color_attributes.new("Paint", "BYTE_COLOR", "CORNER")
+    rgba = np.random.default_rng(3).random((len(attr.data), 4)).astype(np.float32)
+    attr.data.foreach_set("color", rgba.ravel())
+    stored = np.zeros(len(attr.data) * 4, np.float32)
+    attr.data.foreach_get("color", stored)  # bytes: the linear value of the stored byte
+    mat, node = node_material("Vertex", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    colour = tree.nodes.new("ShaderNodeVertexColor")
+    tree.links.new(colour.outputs["Color"], node.inputs["Color"])
+    obj.data.materials.append(mat)
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert warnings == [] and scene.uv.shape[0] == 1
+    corners = sorted(map(tuple, scene.uv[0].reshape(-1, 3).round(5)))
+    want = sorted(map(tuple, stored.reshape(-1, 4)[:, :3].round(5)))
+    assert len(corners) == 36 and set(corners) == set(want)
+    colour.layer_name = "Wetness"
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert any("'Painted'" in w and "colour attribute 'Wetness'" in w for w in warnings)
+    assert not scene.uv.any()

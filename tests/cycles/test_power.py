@@ -248,15 +248,31 @@ def _generated_as_object():
 
     spaces = exporter._texture_spaces
 
-    def object_for_generated(mesh, co, tri_verts, names):
+    def object_for_generated(mesh, co, tri_verts, names, tri_loops=None):
         sh = renderers.core().shading
-        out = spaces(mesh, co, tri_verts, names)
+        out = spaces(mesh, co, tri_verts, names, tri_loops)
         if sh.GENERATED in out:
             out[sh.GENERATED] = co[tri_verts]
         return out
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(exporter, "_texture_spaces", object_for_generated)
+        yield
+
+
+@contextmanager
+def _colour_attributes_encoded():
+    """The exporter reads colour attributes as stored sRGB, not decoded to linear."""
+    from addon import exporter
+
+    colour_attribute = exporter._colour_attribute
+
+    def encoded(mesh, name, tri_verts, tri_loops):
+        rgb = colour_attribute(mesh, name, tri_verts, tri_loops)
+        return None if rgb is None else np.maximum(rgb, 0.0) ** (1.0 / 2.2)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_colour_attribute", encoded)
         yield
 
 
@@ -417,6 +433,7 @@ INJECTIONS = {
     "gltf_roughness_as_its_mean": ("gltf_transmission", _roughness_as_its_mean, None),
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
     "generated_as_object": ("texture_spaces", None, _generated_as_object),
+    "colour_attributes_encoded": ("colour_attributes", None, _colour_attributes_encoded),
     "view_factors_as_their_means": ("view_factors", _mix_factors_as_their_means, None),
     "back_faces_unseen": ("view_factors", None, _back_faces_unseen),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),

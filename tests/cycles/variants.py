@@ -901,6 +901,46 @@ def texture_spaces():
     ball.rotation_euler = (0.4, 0.0, 0.9)
 
 
+def _painted_ball(name, centre, domain, data_type, attribute="Paint"):
+    """A smooth UV sphere of radius 0.27 whose colour attribute `attribute` (per `domain`)
+    paints bands of colour from its vertices' positions, Diffuse-shaded by a Color
+    Attribute node reading it by name ("" for the mesh's default)."""
+    mesh = _uv_sphere_mesh(name, 0.27)
+    attr = mesh.color_attributes.new(attribute, data_type, domain)
+    co = np.array([v.co[:] for v in mesh.vertices])
+    points = co if domain == "POINT" else co[[loop.vertex_index for loop in mesh.loops]]
+    if domain == "CORNER":  # per face: a hard pattern only corners can hold
+        face = np.repeat(np.arange(len(mesh.polygons)),
+                         [len(p.vertices) for p in mesh.polygons])
+        points = points + 0.05 * (face % 3)[:, None]
+    rgba = np.ones((len(points), 4))
+    rgba[:, 0] = 0.5 + 0.5 * np.sin(12.0 * points[:, 2])
+    rgba[:, 1] = 0.5 + 0.5 * np.cos(9.0 * points[:, 0])
+    rgba[:, 2] = np.clip(0.3 + 2.0 * points[:, 1], 0.0, 1.0)
+    attr.data.foreach_set("color", rgba.astype(np.float32).ravel())
+    mat = bs.material(name, "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    node = tree.nodes.new("ShaderNodeVertexColor")
+    node.layer_name = attribute if attribute != "Paint" else ""
+    tree.links.new(node.outputs["Color"], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse").inputs["Color"])
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = centre
+    obj.data.materials.append(mat)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def colour_attributes():
+    """Color Attribute nodes (issue 14, point 1): a byte colour attribute per face corner
+    read as the mesh's default (its layer name empty), and a float one per point read by
+    name beside another attribute."""
+    _box()
+    _painted_ball("Corners", (-0.35, 0.0, 0.27), "CORNER", "BYTE_COLOR")
+    ball = _painted_ball("Points", (0.35, 0.0, 0.27), "POINT", "FLOAT_COLOR", "Tint")
+    ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
+
+
 def mixed_shaders():
     """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
     an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs with a
@@ -1409,6 +1449,7 @@ _add(Variant("textured_emitter", textured_emitter, max_bounces=8, samples=256,
 _add(Variant("normal_maps", normal_maps, max_bounces=8))
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
+_add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
