@@ -23,7 +23,7 @@ Fallbacks:
     transparent white. Inputs Specula does not render (Coat, Sheen, Subsurface,
     Anisotropic, Specular Tint, Thin Film, Diffuse Roughness) warn when used.
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
-  * any other shader node (Toon, Translucent, ...): diffuse of its 'Color' / 'Base Color'
+  * any other shader node (Toon, Refraction, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
     `_Constants`: an image's mean colour in scene-linear space, RGB / Value / Math / Mix /
@@ -742,6 +742,10 @@ class _Reader:
             return self.with_alpha(node, self.principled(node))
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
+        if kind == "ShaderNodeBsdfTranslucent":
+            self.normal(node)
+            colour, program = self.textured_colour(node, "Color")
+            return MaterialSpec("translucent", name, {"colour": colour, **_with(program)})
         colour_socket = next((s for s in ("Color", "Base Color") if s in node.inputs), None)
         colour = DEFAULT_GREY if colour_socket is None else self.colour(node, colour_socket)
         self.warn(f"node '{node.name}' ({node.bl_label or kind}) is not supported; rendered as "

@@ -50,7 +50,7 @@ from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_S
                        bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
                        sample_1d, sample_2d)
 from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
-                    ROUGH_METAL, TRANSPARENT)
+                    ROUGH_METAL, TRANSLUCENT, TRANSPARENT)
 
 # Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
 # scrambled by this (and the crossing's number), apart from the path's own choices.
@@ -72,8 +72,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "HAS_VOLUMES", "HAS_MIXES", "HAS_TRANSPARENCY", "EXACT_FRESNEL", "PROFILE",
-                  "DEBUG")
+                  "HAS_VOLUMES", "HAS_MIXES", "HAS_TRANSPARENCY", "HAS_TRANSLUCENT",
+                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -86,6 +86,7 @@ HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
 HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
 HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one component
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
+HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -350,7 +351,7 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     if HAS_NORMAL_MAPS and sc.materials.programs.normal[mat, 0] >= 0:
         sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
-    if sc.materials.kind[mat] != DIFFUSE:
+    if sc.materials.kind[mat] != DIFFUSE and sc.materials.kind[mat] != TRANSLUCENT:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
     scale = offset_scale(g, f, px, py, pz)
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
@@ -517,9 +518,12 @@ def emitter_pmf(px, py, pz, normal, entry, em):
 
 def lit_side(x, sc):
     """The normal whose side light reaches vertex x from, for choosing emitters by their
-    importance there: the shading normal, or zeros (both sides) where the BSDF transmits."""
+    importance there: the shading normal, its opposite for Lambertian transmission, or
+    zeros (both sides) where the BSDF both reflects and transmits."""
     if HAS_ROUGH_GLASS and sc.materials.kind[x.mat] == ROUGH_GLASS:
         return 0.0, 0.0, 0.0
+    if HAS_TRANSLUCENT and sc.materials.kind[x.mat] == TRANSLUCENT:
+        return -x.sx, -x.sy, -x.sz
     return x.sx, x.sy, x.sz
 
 
@@ -617,6 +621,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     elif HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         g0, g1, g2, pdf_b = bsdf.eval_rough_dielectric(x.wox, x.woy, x.woz, wx, wy, wz, x.mx,
                                                        x.my, x.mz, lobe)
+    elif HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normal
+        pdf_b = bsdf.eval_lambert(wx, wy, wz, -x.sx, -x.sy, -x.sz)
+        g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
         shadowing = pdf_b
@@ -693,6 +700,11 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
             shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
                                             True, False)
         return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
+    if HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normals
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        wx, wy, wz, pdf, ok = bsdf.sample_lambert(-x.sx, -x.sy, -x.sz, -x.nx, -x.ny, -x.nz,
+                                                  ua, ub)
+        return wx, wy, wz, c[0], c[1], c[2], pdf, ok
     if HAS_GLASS and k == GLASS:
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
@@ -904,7 +916,8 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         if PROFILE:
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
-                                   or k == ROUGH_GLASS or k == ROUGH_METAL):
+                                   or k == ROUGH_GLASS or k == ROUGH_METAL
+                                   or k == TRANSLUCENT):
             n_shadow = sample_light(i, row, vertex, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:

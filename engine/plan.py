@@ -24,6 +24,7 @@ from .scene import (
     PRINCIPLED,
     ROUGH_GLASS,
     ROUGH_METAL,
+    TRANSLUCENT,
     TRANSPARENT,
     RenderSettings,
     Scene,
@@ -78,12 +79,14 @@ class Plan:
     mixes: bool = False
     # Some material used is (or mixes in) a Transparent BSDF: paths and shadow rays cross it.
     transparency: bool = False
+    # Some material used is (or mixes in) a Translucent BSDF (Lambertian transmission).
+    translucent: bool = False
 
     @property
     def light_sampling(self) -> bool:
         """Next-event estimation runs only where a non-delta surface can see an emitter."""
         return self.emitters and (self.diffuse or self.principled or self.glossy
-                                  or self.rough_glass or self.rough_metal)
+                                  or self.rough_glass or self.rough_metal or self.translucent)
 
     def stages(self) -> list[str]:
         s = ["generate camera rays"]
@@ -116,7 +119,8 @@ class Plan:
                                 ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass),
                                 ("rough glass", self.rough_glass),
-                                ("rough metal", self.rough_metal)) if f]
+                                ("rough metal", self.rough_metal),
+                                ("translucent", self.translucent)) if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
         if self.light_tracing:
@@ -142,7 +146,7 @@ class Plan:
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
             HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
-            HAS_TRANSPARENCY=self.transparency,
+            HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -204,17 +208,20 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         textures=scene.programs is not None and any(
             bool(np.any(getattr(scene.programs, slot)[used, 0] >= 0)) for slot in SLOTS),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
+        translucent=TRANSLUCENT in kinds,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not), and
         # a normal map's shadowing term is not (light paths are not weighted by it), nor
         # are paths through media (light paths carry no volume stack), mixed shaders
-        # (light paths do not choose among them) or transparent surfaces (nor cross them).
+        # (light paths do not choose among them) or transparent and translucent surfaces
+        # (nor cross them).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
                            and not volumes and not mixes and not transparency
+                           and TRANSLUCENT not in kinds
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

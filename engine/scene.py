@@ -23,17 +23,19 @@ from .shading import Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
- TRANSPARENT) = range(11)
+ TRANSPARENT, TRANSLUCENT) = range(12)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
-              ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent"}
+              ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent",
+              TRANSLUCENT: "translucent"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
 DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
-TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal")
+TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal",
+                  "translucent")
 # The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes.
 ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass")
 FRESNEL_MODELS = ("exact", "schlick")
@@ -93,6 +95,9 @@ class Material:
         - rough_glass: glass with roughness > 0: GGX reflection and refraction (Walter et
           al. 2007) with the tints and the dielectric Fresnel of glass, Multiscatter GGX
           energy compensation from the glass' own albedo tables (bsdf.py).
+        - translucent: Cycles' Translucent BSDF: Lambert transmission, f = colour / pi
+          toward the other side of the surface (diffuse light through a leaf or a lamp
+          shade). It does not enter a medium inside the mesh (Cycles would).
         - none: no BSDF (a pure Emission shader): paths end here.
         - transparent: Cycles' Transparent BSDF: light passes straight through, weighted by
           `colour`, as if the surface were not there (no bounce counted, only a transparent
@@ -229,6 +234,11 @@ class Material:
                    roughness=float(roughness), multiscatter=bool(multiscatter),
                    colour_program=colour_program, emission_program=emission_program,
                    roughness_program=roughness_program)
+
+    @classmethod
+    def translucent(cls, name, colour, colour_program=None):
+        """Cycles' Translucent BSDF: Lambertian transmission tinted by colour."""
+        return cls(name, "translucent", tuple(colour), colour_program=colour_program)
 
     @classmethod
     def transparent(cls, name, colour=(1, 1, 1)):

@@ -276,6 +276,16 @@ def _colour_attributes_encoded():
         yield
 
 
+def _translucent_as_diffuse(scene, settings):
+    """The Translucent BSDF rendered as a Diffuse one of its colour: reflecting, not
+    transmitting."""
+    m = scene.materials
+    core_scene = renderers.core().scene
+    kind = np.where(m.kind == core_scene.TRANSLUCENT, core_scene.DIFFUSE, m.kind)
+    scene.materials = dataclasses.replace(m, kind=kind.astype(m.kind.dtype))
+    return scene, settings
+
+
 def _roughness_plus_10_percent(kind):
     def inject(scene, settings):
         m = scene.materials
@@ -434,6 +444,7 @@ INJECTIONS = {
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
     "generated_as_object": ("texture_spaces", None, _generated_as_object),
     "colour_attributes_encoded": ("colour_attributes", None, _colour_attributes_encoded),
+    "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
     "view_factors_as_their_means": ("view_factors", _mix_factors_as_their_means, None),
     "back_faces_unseen": ("view_factors", None, _back_faces_unseen),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),

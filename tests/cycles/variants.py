@@ -941,6 +941,22 @@ def colour_attributes():
     ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
 
 
+def translucency():
+    """The Translucent BSDF (issue 14, point 1): a greenish translucent card under the
+    ceiling light, lighting the floor below it through itself and seen from below, and a
+    leaf-like ball mixing a Diffuse and a Translucent BSDF (0.5)."""
+    _box()
+    col = bpy.context.scene.collection
+    leaf = bs.material("Leaf", "ShaderNodeBsdfTranslucent", Color=(0.4, 0.8, 0.2, 1.0))
+    card = bs.quad("Leaf", [(-0.4, -0.4, 0.0), (0.4, -0.4, 0.0), (0.4, 0.4, 0.0),
+                            (-0.4, 0.4, 0.0)], leaf, col)
+    card.location = (-0.3, 0.2, 1.05)
+    _sphere(_mix_of("Foliage", "ShaderNodeMixShader",
+                    ("ShaderNodeBsdfDiffuse", {"Color": (0.3, 0.6, 0.2, 1.0)}),
+                    ("ShaderNodeBsdfTranslucent", {"Color": (0.8, 0.9, 0.3, 1.0)}), fac=0.5),
+            (0.45, -0.1, 0.3), 0.3, "Foliage")
+
+
 def mixed_shaders():
     """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
     an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs with a
@@ -1450,6 +1466,7 @@ _add(Variant("normal_maps", normal_maps, max_bounces=8))
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
+_add(Variant("translucency", translucency, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
