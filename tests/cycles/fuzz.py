@@ -271,6 +271,24 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if o["material"]["kind"] in ("principled", "metal", "principled_glass") and \
                 not o["material"].get("volume") and alphas.random() < 0.25:
             o["material"]["alpha"] = _r(alphas.uniform(0.2, 0.9))
+    # Node inputs that vary over a surface, each from a stream of its own: a Checker Texture
+    # (on Generated coordinates) for a GGX lobe's Roughness; a mix's factor from Fresnel or
+    # Layer Weight; a mixed-in Diffuse that transmits instead (Translucent).
+    varying = np.random.default_rng([seed, 0x2006])
+    for o in params["objects"]:
+        m = o["material"]
+        if (m["kind"] in ("principled", "metal") or m["kind"] == "glossy"
+                and m["roughness"] > 0) and varying.random() < 0.25:
+            low = varying.uniform(0.05, 0.5)
+            m["roughness_checker"] = [_r(low, 3), _r(low + varying.uniform(0.1, 0.5), 3)]
+        mix = m.get("mix")
+        if mix and varying.random() < 0.4:
+            factor = str(varying.choice(["fresnel", "layer_fresnel", "layer_facing"]))
+            mix["factor"] = {"kind": factor, "value": _r(varying.uniform(1.1, 2.5) if
+                                                          factor == "fresnel"
+                                                          else varying.uniform(0.1, 0.9), 3)}
+        if mix and mix["shader"] == "diffuse" and varying.random() < 0.3:
+            mix["shader"] = "translucent"
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -300,6 +318,9 @@ def features(params) -> list[str]:
                  + (":emissive" if m.get("emission_strength") else "")
                  + (":absorbing" if m.get("volume") else "")
                  + (f":mix_{m['mix']['shader']}" if m.get("mix") else "")
+                 + (f":fac_{m['mix']['factor']['kind']}" if m.get("mix", {}).get("factor")
+                    else "")
+                 + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":alpha" if m.get("alpha") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
@@ -367,6 +388,12 @@ def _simpler_material(m):
     out = []
     if m["kind"] != "diffuse":
         out.append(("diffuse", {"kind": "diffuse", "colour": [0.8, 0.8, 0.8]}))
+    if m.get("roughness_checker"):
+        out.append(("untextured roughness",
+                    {k: v for k, v in m.items() if k != "roughness_checker"}))
+    if m.get("mix", {}).get("factor"):
+        out.append(("constant mix factor", {**m, "mix": {k: v for k, v in m["mix"].items()
+                                                         if k != "factor"}}))
     for key, value in (("emission_strength", None), ("colour", [0.8, 0.8, 0.8]),
                        ("roughness", 0.0), ("specular_ior_level", 0.5), ("ior", 1.5)):
         if key not in m or m[key] == value or (m["kind"] == "emission" and key == "colour"):
@@ -503,17 +530,46 @@ def _mix_surface(mat, mix):
     first = out.inputs["Surface"].links[0].from_node
     node = tree.nodes.new("ShaderNodeMixShader")
     node.inputs["Fac"].default_value = mix["fac"]
-    second = tree.nodes.new("ShaderNodeBsdfGlossy" if mix["shader"] == "glossy"
-                            else "ShaderNodeBsdfDiffuse")
+    second = tree.nodes.new({"glossy": "ShaderNodeBsdfGlossy",
+                             "translucent": "ShaderNodeBsdfTranslucent"}.get(
+                                 mix["shader"], "ShaderNodeBsdfDiffuse"))
     second.inputs["Color"].default_value = (*mix["colour"], 1.0)
-    second.inputs["Roughness"].default_value = mix["roughness"] if mix["shader"] == "glossy" \
-        else 0.0
+    if "Roughness" in second.inputs:
+        second.inputs["Roughness"].default_value = mix["roughness"] \
+            if mix["shader"] == "glossy" else 0.0
+    factor = mix.get("factor")
+    if factor:
+        kind = "ShaderNodeFresnel" if factor["kind"] == "fresnel" else "ShaderNodeLayerWeight"
+        source = tree.nodes.new(kind)
+        source.inputs["IOR" if factor["kind"] == "fresnel" else "Blend"].default_value = \
+            factor["value"]
+        tree.links.new(source.outputs["Facing" if factor["kind"] == "layer_facing" else 0],
+                       node.inputs["Fac"])
     tree.links.new(first.outputs[0], node.inputs[1])
     tree.links.new(second.outputs[0], node.inputs[2])
     tree.links.new(node.outputs[0], out.inputs["Surface"])
 
 
+def _roughness_checker(mat, low_high):
+    """The surface shader's Roughness from a Checker Texture (Generated coordinates)."""
+    tree = mat.node_tree
+    shader = next(n for n in tree.nodes if "Roughness" in n.inputs)
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (low_high[0],) * 3 + (1.0,)
+    checker.inputs["Color2"].default_value = (low_high[1],) * 3 + (1.0,)
+    checker.inputs["Scale"].default_value = 3.0
+    tree.links.new(checker.outputs["Color"], shader.inputs["Roughness"])  # grey: exact
+    return mat
+
+
 def _bpy_surface(name, m):
+    mat = _bpy_surface_shader(name, m)
+    if m.get("roughness_checker"):
+        _roughness_checker(mat, m["roughness_checker"])
+    return mat
+
+
+def _bpy_surface_shader(name, m):
     from blend_scenes import build_scenes as bs
     rgba = (*m.get("colour", (0.8, 0.8, 0.8)), 1.0)
     kind = m["kind"]

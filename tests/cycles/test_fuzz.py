@@ -66,6 +66,12 @@ def _all_features(seeds, avoid_known=False):
         found.update("absorbing glass" for o in p["objects"] if o["material"].get("volume"))
         found.update("mixed shader" for o in p["objects"] if o["material"].get("mix"))
         found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
+        found.update("textured roughness" for o in p["objects"]
+                     if o["material"].get("roughness_checker"))
+        found.update(f"factor:{o['material']['mix']['factor']['kind']}" for o in p["objects"]
+                     if o["material"].get("mix", {}).get("factor"))
+        found.update("translucent mix" for o in p["objects"]
+                     if o["material"].get("mix", {}).get("shader") == "translucent")
         found.update("smooth monkey" for o in p["objects"]
                      if o["shape"] == "monkey" and o["smooth"])
         found.update(f"known:{k}" for k in fuzz.known_issue_features(p))
@@ -78,7 +84,8 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "world:colour", "world:map", "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
-              "absorbing glass", "mixed shader", "alpha",
+              "absorbing glass", "mixed shader", "alpha", "textured roughness",
+              "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c"}
 
 
