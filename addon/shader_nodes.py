@@ -41,8 +41,8 @@ class Unsupported(Exception):
 # node and socket reached through `live_link` carries its path, so the readers below and
 # materials.py walk through groups without knowing of them.
 
-class GroupSocket:
-    """A bpy node socket inside the groups on `path`."""
+class _InGroups:
+    """A bpy node or socket (`raw`) inside the groups on `path`; otherwise the bpy item."""
 
     __slots__ = ("raw", "path")
 
@@ -51,29 +51,32 @@ class GroupSocket:
 
     def __getattr__(self, name):
         return getattr(self.raw, name)
+
+    def as_pointer(self):
+        """Distinct per item and path: a group used twice is two sets of nodes."""
+        return hash((self.raw.as_pointer(),) + tuple(g.as_pointer() for g in self.path))
+
+    def __eq__(self, other):
+        return type(other) is type(self) and self.raw == other.raw and self.path == other.path
+
+    def __hash__(self):
+        return self.as_pointer()
+
+
+class GroupSocket(_InGroups):
+    """A bpy node socket inside the groups on `path`."""
+
+    __slots__ = ()
 
     @property
     def node(self):
         return GroupNode(self.raw.node, self.path)
 
-    def __eq__(self, other):
-        return isinstance(other, GroupSocket) and self.raw == other.raw and \
-            self.path == other.path
 
-    def __hash__(self):
-        return hash((self.raw.as_pointer(),) + tuple(g.as_pointer() for g in self.path))
-
-
-class GroupNode:
+class GroupNode(_InGroups):
     """A bpy node inside the groups on `path`: its sockets carry the path on."""
 
-    __slots__ = ("raw", "path")
-
-    def __init__(self, raw, path):
-        self.raw, self.path = raw, path
-
-    def __getattr__(self, name):
-        return getattr(self.raw, name)
+    __slots__ = ()
 
     @property
     def inputs(self):
@@ -87,17 +90,6 @@ class GroupNode:
     def internal_links(self):
         return [Link(GroupSocket(k.from_socket, self.path), GroupSocket(k.to_socket, self.path))
                 for k in self.raw.internal_links]
-
-    def as_pointer(self):
-        """Distinct per node and path: a group used twice is two sets of nodes."""
-        return hash((self.raw.as_pointer(),) + tuple(g.as_pointer() for g in self.path))
-
-    def __eq__(self, other):
-        return isinstance(other, GroupNode) and self.raw == other.raw and \
-            self.path == other.path
-
-    def __hash__(self):
-        return self.as_pointer()
 
 
 class _Sockets:

@@ -66,7 +66,7 @@ def test_no_material_is_default_grey():
 
 @pytest.mark.parametrize("shader, expect_ctor", [
     ("ShaderNodeBsdfToon", "diffuse"),
-    ("ShaderNodeBsdfTranslucent", "diffuse"),
+    ("ShaderNodeBsdfRefraction", "diffuse"),
 ])
 def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     mat, node = node_material("Odd", shader)
@@ -545,11 +545,11 @@ def test_transparent_bsdf_is_transparent(fresh):
 
 
 def test_unreducible_chains_keep_what_the_object_is(fresh):
-    """A Color Attribute cannot be reduced: Base Color keeps its own value, emission is off
+    """A Noise Texture cannot be reduced: Base Color keeps its own value, emission is off
     (the socket's own white would turn the surface into a light)."""
     mat, node = node_material("Painted", "ShaderNodeBsdfPrincipled",
                               **{"Base Color": (0.2, 0.4, 0.6, 1.0), "Emission Strength": 1.0})
-    attr = mat.node_tree.nodes.new("ShaderNodeVertexColor")
+    attr = mat.node_tree.nodes.new("ShaderNodeTexNoise")
     mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Base Color"])
     mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Emission Color"])
     spec, warnings = convert(mat)
