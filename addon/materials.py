@@ -571,6 +571,32 @@ class _Reader:
         del self.warnings[warned:]  # the constant only stands in; the program is exact
         return colour, program
 
+    def emission(self, node, colour_socket, strength_socket, default_strength, unknown_colour,
+                 unknown_strength):
+        """An emission's colour and strength: (the colour's and the strength's constants,
+        e.g. their means; the program of their product where either varies, or None). A
+        chain that cannot be reduced takes `unknown_*` (None: the socket's own value)."""
+        strength, strength_program = self.textured_colour(
+            node, strength_socket, (default_strength,) * 3,
+            unknown=None if unknown_strength is None else (unknown_strength,) * 3,
+            emission=True)
+        strength = strength[0]
+        if not strength > 0:
+            return (0.0, 0.0, 0.0), 0.0, None
+        colour, colour_program = self.textured_colour(node, colour_socket, (1.0, 1.0, 1.0),
+                                                      unknown=unknown_colour, emission=True)
+        if (colour_program is None and strength_program is None) or not max(colour) > 0:
+            return colour, strength, None
+        if strength_program is None:
+            return colour, strength, shader_nodes.scaled(colour_program, strength)
+        program, why = shader_nodes.compile_product(enabled_input(node, colour_socket),
+                                                    enabled_input(node, strength_socket),
+                                                    self.constants.image_cache)
+        if program is None:
+            self.warn(f"node '{node.name}': its emission cannot be evaluated per point "
+                      f"({why}); rendered as its constant")
+        return colour, strength, program
+
     def number(self, node, socket_name, default=0.0, unknown=None):
         v = self.value(node, socket_name, None, unknown)
         v = None if v is None else float(_convert(v, "RGBA", "VALUE"))
@@ -730,14 +756,11 @@ class _Reader:
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
             # the socket's own colour.
-            colour, program = self.textured_colour(node, "Color", (1.0, 1.0, 1.0),
-                                                   emission=True)
-            strength = max(self.number(node, "Strength", 1.0), 0.0)
-            textured = program is not None and strength * max(colour) > 0
+            colour, strength, program = self.emission(node, "Color", "Strength", 1.0, None,
+                                                      None)
             return MaterialSpec("emission_only", name, {
                 "colour": colour, "strength": strength,
-                **({"emission_program": shader_nodes.scaled(program, strength)}
-                   if textured else {})})
+                **({"emission_program": program} if program is not None else {})})
         if kind == "ShaderNodeBsdfPrincipled":
             return self.with_alpha(node, self.principled(node))
         if kind == "ShaderNodeBsdfTransparent":
@@ -861,16 +884,14 @@ class _Reader:
         roughness = self.roughness(node)
         # A linked emission that cannot be reduced is off, not the sockets' own values:
         # Emission Color's is white, and a textured surface must not become a white light.
-        strength = self.number(node, "Emission Strength", 0.0, unknown=0.0)
         # The colour input is "Emission Color" since 4.0 and "Emission" before.
         emission_socket = "Emission Color" if "Emission Color" in node.inputs else "Emission"
-        colour, program = self.textured_colour(node, emission_socket, (1.0, 1.0, 1.0),
-                                               unknown=(0.0, 0.0, 0.0), emission=True) \
-            if strength > 0 else ((0.0, 0.0, 0.0), None)
+        colour, strength, program = self.emission(node, emission_socket, "Emission Strength",
+                                                  0.0, (0.0, 0.0, 0.0), 0.0)
         emission = tuple(strength * c for c in colour)
-        kwargs = {"emission": emission} if strength > 0 and max(emission) > 0 else {}
+        kwargs = {"emission": emission} if max(emission) > 0 else {}
         if kwargs and program is not None:
-            kwargs["emission_program"] = shader_nodes.scaled(program, strength)
+            kwargs["emission_program"] = program
         multiscatter = self.multiscatter(node)
 
         def metal():

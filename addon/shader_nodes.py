@@ -225,8 +225,11 @@ class Compiler:
         self.done = {}  # (node pointer, output identifier) -> (register, type)
 
     def compile(self, socket, to_type="RGBA"):
-        """The program computing `socket`'s value as `to_type` (its result register set)."""
-        self.program.out = self.input(socket, to_type)
+        """The program computing `socket`'s value as `to_type` (its result register set):
+        converted to the socket's own type first, as Blender converts a link (an image's
+        colour into a Roughness is its luminance, then repeated)."""
+        own = socket.type if socket.type in WIDTHS else to_type
+        self.program.out = self.convert(self.input(socket, own), own, to_type)
         return self.program
 
     def input(self, socket, to_type):
@@ -633,6 +636,22 @@ def constant(colour):
     program = core.load().shading.Program()
     program.out = program.const([float(c) for c in colour])
     return program
+
+
+def compile_product(colour, strength, texture_cache):
+    """(program or None, why not): colour socket x strength socket per point (an emission
+    whose colour, strength or both vary), in one program; no view-dependent nodes."""
+    try:
+        c = Compiler(texture_cache, view_dependent=False)
+        a = c.input(colour, "RGBA")
+        b = c.convert(c.input(strength, "VALUE"), "VALUE", "RGBA")  # as compile()
+        c.program.out = c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
+                                       d=c.sh.BLENDS.index("MULTIPLY"))
+        return c.program, ""
+    except Unsupported as exc:
+        return None, str(exc)
+    except (ValueError, ArithmeticError) as exc:
+        return None, f"{type(exc).__name__}: {exc}"
 
 
 def compile_colour(socket, texture_cache, view_dependent=True):

@@ -482,6 +482,7 @@ def test_a_textured_roughness_is_a_program_on_every_lobe(fresh, core, node_type,
     assert sorted(leaf.ctor for leaf in leaves) == sorted(want)
     for leaf in leaves:
         assert leaf.kwargs["roughness"] == pytest.approx(stored[:, 1].mean(), abs=1e-6)
+        assert "roughness_program" in leaf.kwargs
         for uv, texel in zip(TEXEL_CENTRES, stored):
             assert _program_at(leaf.kwargs["roughness_program"], uv)[0] == \
                 pytest.approx(texel[1], abs=1e-6)
@@ -566,6 +567,20 @@ def test_missing_image_turns_no_emission_on(fresh):
     spec, warnings = convert(mat)
     assert "emission" not in spec.kwargs
     assert any(tex.name in w and "no pixels" in w for w in warnings)
+
+
+def test_a_colour_into_a_float_input_is_its_luminance_per_point(fresh):
+    """An image's Color linked straight into Roughness: Blender converts it by luminance,
+    and so does the program (not its red channel)."""
+    mat, node = node_material("Grey", "ShaderNodeBsdfPrincipled")
+    img, stored = make_image("Rough", colorspace="Non-Color")
+    texture(mat, img, node, "Roughness").interpolation = "Closest"
+    spec, warnings = convert(mat)
+    assert warnings == []
+    luminance = stored[:, :3] @ np.array([0.2126, 0.7152, 0.0722])
+    for uv, want in zip(TEXEL_CENTRES, luminance):
+        assert _program_at(spec.kwargs["roughness_program"], uv)[0] == \
+            pytest.approx(want, abs=1e-6)
 
 
 def test_vector_math_compiles_and_folds(fresh):
@@ -877,3 +892,31 @@ def test_an_unsupported_node_inside_a_group_is_named(fresh):
     spec, warnings = convert(mat)
     assert spec.ctor == "diffuse" and spec.kwargs["colour"] == pytest.approx((0.2, 0.4, 0.6))
     assert any("InnerToon" in w for w in warnings), warnings
+
+
+@pytest.mark.parametrize("shader, colour_socket, strength_socket", [
+    ("ShaderNodeEmission", "Color", "Strength"),
+    ("ShaderNodeBsdfPrincipled", "Emission Color", "Emission Strength")])
+def test_a_textured_emission_strength_scales_the_colour_per_point(fresh, shader, colour_socket,
+                                                                  strength_socket):
+    """Emission Strength from a texture (with the colour textured too, or not) is the
+    product of the two at each point; the product of their means stands in for lights."""
+    mat, node = node_material("Glow", shader)
+    img, stored = make_image("Mask", colorspace="Non-Color")
+    texture(mat, img, node, strength_socket, output="Color").interpolation = "Closest"
+    node.inputs[colour_socket].default_value = (1.0, 0.5, 0.25, 1.0)
+    luminance = stored[:, :3] @ np.array([0.2126, 0.7152, 0.0722])  # colour -> float
+    spec, warnings = convert(mat)
+    assert warnings == []
+    part = next(p for p in spec.parts() if "emission_program" in p.kwargs)
+    for uv, strength in zip(TEXEL_CENTRES, luminance):
+        assert _program_at(part.kwargs["emission_program"], uv) == \
+            pytest.approx(strength * np.array([1.0, 0.5, 0.25]), abs=1e-5)
+    colour_img, colour_texels = make_image("Tint", colorspace="Non-Color")
+    texture(mat, colour_img, node, colour_socket).interpolation = "Closest"
+    spec, warnings = convert(mat)
+    assert warnings == []
+    part = next(p for p in spec.parts() if "emission_program" in p.kwargs)
+    for uv, strength, colour in zip(TEXEL_CENTRES, luminance, colour_texels):
+        assert _program_at(part.kwargs["emission_program"], uv) == \
+            pytest.approx(strength * colour[:3], abs=1e-5)

@@ -445,6 +445,8 @@ INJECTIONS = {
     "generated_as_object": ("texture_spaces", None, _generated_as_object),
     "colour_attributes_encoded": ("colour_attributes", None, _colour_attributes_encoded),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
+    "emission_strength_as_its_mean": ("emission_strength_texture", _emission_as_its_mean,
+                                      None),
     "view_factors_as_their_means": ("view_factors", _mix_factors_as_their_means, None),
     "back_faces_unseen": ("view_factors", None, _back_faces_unseen),
     "helmet_emission_as_its_mean": ("gltf_damaged_helmet", _emission_as_its_mean, None),

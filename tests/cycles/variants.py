@@ -957,6 +957,42 @@ def translucency():
             (0.45, -0.1, 0.3), 0.3, "Foliage")
 
 
+def emission_strength_texture():
+    """Emission Strength from textures (issue 14, point 1): an Emission card on the back
+    wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
+    Principled ball whose Emission Strength is a Checker's colour (its luminance) under an
+    orange Emission Color."""
+    _box()
+    card = bs.material("Sign", "ShaderNodeEmission", Color=(0.9, 0.9, 1.0, 1.0))
+    tree = card.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 4.0
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], checker.inputs["Vector"])
+    times = tree.nodes.new("ShaderNodeMath")
+    times.operation = "MULTIPLY"
+    times.inputs[1].default_value = 3.0
+    tree.links.new(checker.outputs["Fac"], times.inputs[0])
+    tree.links.new(times.outputs[0], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission").inputs["Strength"])
+    sign = _card("Sign", (0.0, 0.95, 0.8), (0.8, 0.5), card)
+    _quad_uvs(sign)
+    ball = _principled("Lantern", **{"Base Color": (0.2, 0.2, 0.2, 1.0),
+                                     "Emission Color": (1.0, 0.5, 0.1, 1.0)})
+    tree = ball.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (2.0, 2.0, 2.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.2, 0.2, 0.2, 1.0)
+    checker.inputs["Scale"].default_value = 3.0
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Color"], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"
+    ).inputs["Emission Strength"])
+    obj = bpy.data.objects.new("Lantern", _uv_sphere_mesh("Lantern", 0.25))
+    obj.location = (0.4, -0.1, 0.25)
+    obj.data.materials.append(ball)
+    bpy.context.scene.collection.objects.link(obj)
+
+
 def mixed_shaders():
     """Mixed closures (issue 14, point 1): a Mix Shader of a red Diffuse and a rough Glossy,
     an Add Shader of a dark Diffuse and a faint Glossy, and Principled BSDFs with a
@@ -1467,6 +1503,7 @@ _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("translucency", translucency, max_bounces=8))
+_add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
