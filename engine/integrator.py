@@ -304,7 +304,7 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
     product)."""
     mt = sc.materials
     scale = 1.0
-    if HAS_TEXTURES:  # a factor may read the hit's geometry (Fresnel, Layer Weight)
+    if HAS_TEXTURES and mt.kind[mat] == MIX:  # a factor may read the hit's geometry
         g = sc.geometry
         front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
         sx, sy, sz = shading_normal(f, np.float64(bu), np.float64(bv),
