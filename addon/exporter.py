@@ -274,7 +274,7 @@ class _Exporter:
             if isinstance(id_, bpy.types.Material):
                 self.material(id_)
         programs = [spec.kwargs[key] for m in self.out.materials for spec in m.parts()
-                    for key in materials.PROGRAM_KEYS if key in spec.kwargs]
+                    for key in materials.PROGRAM_KEYS if spec.kwargs.get(key) is not None]
         self.textured = bool(programs)
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps

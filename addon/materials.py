@@ -20,8 +20,9 @@ Fallbacks:
   * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
     and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
     (a mix of shaders where two or more weigh > 0), and Alpha < 1 (or textured) mixes in
-    transparent white. Inputs Specula does not render (Coat, Sheen, Subsurface,
-    Anisotropic, Specular Tint, Thin Film, Diffuse Roughness) warn when used.
+    transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes.
+    Inputs Specula does not render (Sheen, Subsurface, Anisotropic, Specular Tint, Thin
+    Film, Diffuse Roughness) warn when used.
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * any other shader node (Toon, Refraction, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
@@ -56,7 +57,6 @@ MEAN_SIDE = 512
 # The Principled BSDF's inputs Specula does not render yet: (input, the value at which it has
 # no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
 PRINCIPLED_IGNORED = (
-    ("Coat Weight", 0.0, "rendered without a coat"),
     ("Sheen Weight", 0.0, "rendered without sheen"),
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
     ("Anisotropic", 0.0, "rendered isotropic"),
@@ -92,7 +92,7 @@ class MaterialSpec:
     def normal_uv(self):
         """The UV map of the normal maps below this spec (one per material), or None."""
         return next((leaf.kwargs["normal_uv"] for leaf in self.leaves()
-                     if "normal_program" in leaf.kwargs), None)
+                     if leaf.kwargs.get("normal_program") is not None), None)
 
     def to_core(self, core):
         if self.ctor == "mix":
@@ -100,7 +100,10 @@ class MaterialSpec:
             m = core.Material.mix(self.name, k["first"].to_core(core),
                                   k["second"].to_core(core), k["fac"], k["scale"],
                                   k.get("fac_program"))
-            extra = {key: tuple(k[key]) for key in ("absorption", "emission") if key in k}
+            extra = {key: tuple(k[key]) for key in ("absorption", "emission", "coat_tint")
+                     if key in k}
+            if "coat_ior" in k:
+                extra["coat_ior"] = float(k["coat_ior"])
             if "emission_program" in k:
                 extra["emission_program"] = k["emission_program"]
             return dataclasses.replace(m, **extra) if extra else m
@@ -125,6 +128,17 @@ def default_material():
 def _with(program, key="colour_program"):
     """The keyword of an input's shader program (a colour's, by default), when it has one."""
     return {} if program is None else {key: program}
+
+
+def _give_normal_map(spec, normal_map):
+    """A shader's normal map (MaterialSpec keywords, or None) on every leaf of its spec
+    without one of its own (a coat's lobe has its Coat Normal's, or none: normal_program
+    None)."""
+    if normal_map is None:
+        return
+    for leaf in spec.leaves():
+        if "normal_program" not in leaf.kwargs:
+            leaf.kwargs.update(normal_map)
 
 
 def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
@@ -627,10 +641,16 @@ class _Reader:
                       f"{rendered}")
 
     def normal(self, node):
-        """The shader's Normal input: a tangent-space Normal Map node is compiled (its
-        colour as a program, its strength and UV map, into self.normal_map); anything else
-        there is warned and the mesh's normals are used."""
-        sock = enabled_input(node, "Normal")
+        """The shader's Normal input into self.normal_map (normal_map_of)."""
+        normal_map = self.normal_map_of(node, "Normal")
+        if normal_map is not None:
+            self.normal_map = normal_map
+
+    def normal_map_of(self, node, socket_name):
+        """A normal input (Normal, Coat Normal): a tangent-space Normal Map node is compiled
+        (its colour as a program, its strength and UV map, as MaterialSpec keywords);
+        anything else there is warned and the mesh's normals are used (None)."""
+        sock = enabled_input(node, socket_name)
         link = None if sock is None else live_link(sock)
         src = None if link is None else link.from_node
         if src is not None and src.bl_idname == "ShaderNodeNormalMap" and \
@@ -642,15 +662,15 @@ class _Reader:
             if not strength >= 0.0:
                 self.warn(f"node '{src.name}' strength {strength:.3g} is negative; using 0")
                 strength = 0.0
-            self.normal_map = {"normal_program": program, "normal_strength": strength,
-                               "normal_uv": src.uv_map}
-            return
+            return {"normal_program": program, "normal_strength": strength,
+                    "normal_uv": src.uv_map}
         if src is not None and src.bl_idname == "ShaderNodeNormalMap":
             self.warn(f"node '{src.name}' space {src.space} is not supported (only Tangent "
                       f"Space); rendered with the mesh's normals")
-            return
-        self.ignored(node, "Normal", None,
+            return None
+        self.ignored(node, socket_name, None,
                      "bump maps are not supported: rendered with the mesh's normals")
+        return None
 
     def viewport_fallback(self, why):
         self.warn(f"{why}; rendered as diffuse of its viewport colour")
@@ -695,9 +715,7 @@ class _Reader:
             return self.viewport_fallback(f"a reroute before '{out.name}' Surface leads "
                                           f"nowhere")
         spec = self.shader(source.from_node)
-        if self.normal_map is not None:
-            for leaf in spec.leaves():
-                leaf.kwargs.update(self.normal_map)
+        _give_normal_map(spec, self.normal_map)
         if absorption is not None and max(absorption) > 0:
             spec.kwargs["absorption"] = absorption
         return spec
@@ -788,9 +806,7 @@ class _Reader:
             part = self.shader(link.from_node) if link is not None else \
                 MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),
                                                                    "strength": 0.0})
-            if self.normal_map is not None:
-                for leaf in part.leaves():
-                    leaf.kwargs.update(self.normal_map)
+            _give_normal_map(part, self.normal_map)
             self.normal_map = None
             parts.append(part)
         if not add and program is None and fac in (0.0, 1.0):
@@ -866,9 +882,6 @@ class _Reader:
                     and node.inputs[socket_name].type != "RGBA":
                 continue  # a float before 4.0, where 0 meant untinted
             self.ignored(node, socket_name, neutral, rendered)
-        coat = enabled_input(node, "Coat Weight")
-        if coat is not None and (live_link(coat) is not None or coat.default_value > 0):
-            self.ignored(node, "Coat Normal", None, "no coat is rendered")
 
     def principled(self, node):
         """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x
@@ -892,6 +905,11 @@ class _Reader:
         kwargs = {"emission": emission} if max(emission) > 0 else {}
         if kwargs and program is not None:
             kwargs["emission_program"] = program
+        coat = enabled_input(node, "Coat Weight")
+        if kwargs and coat is not None and (live_link(coat) is not None
+                                            or coat.default_value > 0):
+            self.warn(f"node '{node.name}' emission under its coat is rendered undimmed by "
+                      f"the coat (Cycles dims it by the coat's reflectance and tint)")
         multiscatter = self.multiscatter(node)
 
         def metal():
@@ -915,11 +933,48 @@ class _Reader:
         def non_metal():
             return either(lambda: self.dielectric(node), glass, transmission, glass_program)
 
-        spec = either(non_metal, metal, metallic, metal_program)
+        spec = self.coat(node, either(non_metal, metal, metallic, metal_program))
         if spec.ctor != "mix":
             spec.kwargs.update(kwargs)
             return spec
         return self.with_emission(node, spec, kwargs)
+
+    def coat(self, node, spec):
+        """The Principled BSDF's coat over `spec` (Cycles: over every lobe but the sheen):
+        Coat Weight and Coat Roughness (either may vary), Coat IOR (at least 1, as Cycles
+        clamps it), Coat Tint (its mean where it varies, warned) and the Coat Normal's
+        normal map (the Normal's where unlinked, as in Cycles). Emission below a coat is
+        not dimmed by it (warned)."""
+        if "Coat Weight" not in node.inputs:
+            return spec
+        weight, weight_program = self.textured_unit(node, "Coat Weight", 0.0)
+        if weight_program is None and weight <= 0.0:
+            return spec
+        roughness, roughness_program = self.textured_unit(node, "Coat Roughness", 0.03)
+        ior = self.number(node, "Coat IOR", 1.5)
+        if ior < 1.0:
+            self.warn(f"node '{node.name}' Coat IOR {ior:.3g} is below 1; using 1 (as Cycles)")
+            ior = 1.0
+        tint, tint_program = self.textured_colour(node, "Coat Tint", (1.0, 1.0, 1.0))
+        if tint_program is not None:
+            self.warn(f"node '{node.name}' input 'Coat Tint' varies over the surface; "
+                      f"rendered as its mean {_fmt(tint)}")
+        lobe = MaterialSpec("coat_lobe", self.material.name, {
+            "roughness": roughness, "ior": ior,
+            **_with(roughness_program, "roughness_program")})
+        # Unlinked, the Coat Normal is the mesh's own (Cycles links it to the geometry's
+        # normal), not the Normal: a smooth coat over a normal-mapped base.
+        lobe.kwargs.update(self.normal_map_of(node, "Coat Normal") or {"normal_program": None})
+        coat_uv, shared = lobe.normal_uv, self.normal_map
+        if coat_uv is not None and shared is not None and coat_uv != shared["normal_uv"]:
+            self.warn(f"node '{node.name}' Coat Normal and Normal read UV maps '{coat_uv}' and "
+                      f"'{shared['normal_uv']}'; only one per material is supported: the "
+                      f"coat's normal map is not rendered")
+            lobe.kwargs.update(normal_program=None, normal_strength=1.0)
+            lobe.kwargs.pop("normal_uv")
+        mix = self.mixed(spec, lobe, weight, 1.0, weight_program)
+        mix.kwargs.update(coat_ior=ior, coat_tint=tint)
+        return mix
 
     def with_alpha(self, node, spec):
         """A Principled BSDF's Alpha (which may vary, e.g. a texture's alpha channel): the

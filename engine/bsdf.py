@@ -603,6 +603,20 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness):
 
 
 @njit(**JIT)
+def coat_layering(cos_o, ior, weight, tint):
+    """Cycles' Principled coat of IOR `ior` and Coat Weight `weight` seen at cosine cos_o
+    to its normal: (F, the tint's attenuation (3 values)). Its lobe reflects F of the
+    light at the view, the smooth dielectric's Fresnel (Cycles' albedo estimate for a
+    dielectric Fresnel), so what lies below keeps 1 - weight x F; the tint is the colour
+    kept through the coat head-on, so along the view refracted into it, at cosine cos_t,
+    it is tint^(1 / cos_t), applied by weight (Cycles: mix(1, tint^(1 / cos_t), weight))."""
+    fr, cos_t = fresnel_dielectric(cos_o, ior, True)
+    depth = 1.0 / max(cos_t, 1e-12)
+    return (fr, 1.0 - weight + weight * tint[0] ** depth,
+            1.0 - weight + weight * tint[1] ** depth, 1.0 - weight + weight * tint[2] ** depth)
+
+
+@njit(**JIT)
 def bump_shadowing(bx, by, bz, sx, sy, sz, wx, wy, wz, diffuse, evaluated):
     """Cycles' bump_shadowing_term for a lobe whose normal s a normal map tilted away from
     the mesh's shading normal b, toward light direction w. Zero where w and s lie on

@@ -72,7 +72,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "HAS_VOLUMES", "HAS_MIXES", "HAS_TRANSPARENCY", "HAS_TRANSLUCENT",
+                  "HAS_VOLUMES", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY", "HAS_TRANSLUCENT",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
@@ -85,6 +85,7 @@ HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
 HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
 HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one component
+HAS_COATS = True  # Principled coats (scene.Material.coated): layers over mixed components
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
 HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
@@ -107,11 +108,12 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
 # strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
-# component rows (k, 2), fac and scale (k,) (scene.Materials).
+# component rows (k, 2), fac and scale (k,), and coats' IOR (k,) and tint (k, 3)
+# (scene.Materials).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength absorption mix_components "
-                                            "mix_fac mix_scale")
+                                            "mix_fac mix_scale coat_ior coat_tint")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -299,11 +301,12 @@ def handle_escaped(i, row, sc, paths, mis):
 
 def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
     """Down a mix of shaders to one component, the second with probability fac (its
-    program's value at the hit of a ray along d where it is textured; one sample u in
-    [0, 1) serves every level: its remainder is reused): (material, the mixes' scale
-    product)."""
+    program's value at the hit of a ray along d where it is textured; a coat's lobe with
+    probability its weight x its Fresnel, coat_layer; one sample u in [0, 1) serves every
+    level: its remainder is reused): (material, the weight (3,) the choices carry: the
+    mixes' scales, a coat's)."""
     mt = sc.materials
-    scale = 1.0
+    w0 = w1 = w2 = 1.0
     if HAS_TEXTURES and mt.kind[mat] == MIX:  # a factor may read the hit's geometry
         g = sc.geometry
         front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
@@ -315,14 +318,46 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
         if HAS_TEXTURES:
             fac = shading.fac_at(mat, f, np.float64(bu), np.float64(bv), mt.programs,
                                  sc.geometry.uv, paths.svm, fac)
-        scale *= mt.mix_scale[mat]
+        if HAS_COATS and mt.coat_ior[mat] > 0.0:
+            mat, u, c0, c1, c2 = coat_layer(u, f, bu, bv, dx, dy, dz, mat, fac, sc, paths)
+            w0, w1, w2 = w0 * c0, w1 * c1, w2 * c2
+            continue
+        s = mt.mix_scale[mat]
+        w0, w1, w2 = w0 * s, w1 * s, w2 * s
         if u < fac:
             u = u / fac
             mat = mt.mix_components[mat, 1]
         else:
             u = (u - fac) / (1.0 - fac)
             mat = mt.mix_components[mat, 0]
-    return mat, scale
+    return mat, (w0, w1, w2)
+
+
+def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
+    """Cycles' Principled coat `mat` of Coat Weight `weight` at a hit along d. Its lobe
+    (the mix's second component) weighs `weight`; what is below (the first) weighs
+    1 - weight x F, F the coat's Fresnel at the view about its normal (Cycles'
+    closure_layering_weight with the smooth-surface albedo it takes for a dielectric
+    Fresnel) times the tint's (bsdf.coat_layering). The lobe is chosen with probability
+    weight x F, which leaves what is below the tint's weight alone. Returns (component,
+    u's remainder, its weight (3))."""
+    mt = sc.materials
+    g = sc.geometry
+    coat = mt.mix_components[mat, 1]
+    u_b, v_b = np.float64(bu), np.float64(bv)
+    nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
+    sign = 1.0 if dx * nx + dy * ny + dz * nz < 0.0 else -1.0
+    sx, sy, sz = shading_normal(f, u_b, v_b, sign, sc)
+    if HAS_NORMAL_MAPS and mt.programs.normal[coat, 0] >= 0:  # the Coat Normal
+        sx, sy, sz = mapped_normal(f, u_b, v_b, sign, sx, sy, sz, coat, sc, paths)
+    mx, my, mz = bsdf.valid_specular_normal(nx * sign, ny * sign, nz * sign, -dx, -dy, -dz,
+                                            sx, sy, sz)
+    fr, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), mt.coat_ior[mat],
+                                        weight, mt.coat_tint[mat])
+    p = weight * fr
+    if u < p:
+        return coat, u / p, 1.0 / fr, 1.0 / fr, 1.0 / fr
+    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
 
 
 def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
@@ -880,20 +915,20 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             handle_escaped(i, row, sc, paths, mis)
             continue
         mat = sc.geometry.material_index[f]
-        scale = 1.0
+        weight = (1.0, 1.0, 1.0)
         if HAS_MIXES:
             u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(vertex, CLOSURE))
-            mat, scale = choose_closure(u, f, bu[i], bv[i], paths.d64[i, 0], paths.d64[i, 1],
-                                        paths.d64[i, 2], mat, sc, paths)
+            mat, weight = choose_closure(u, f, bu[i], bv[i], paths.d64[i, 0], paths.d64[i, 1],
+                                         paths.d64[i, 2], mat, sc, paths)
         x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
         k = sc.materials.kind[x.mat]
         if depth == 0 and not (HAS_TRANSPARENCY and k == TRANSPARENT):
             write_passes(row, x, sc, paths)
         if HAS_EMISSION:
             handle_emission(i, row, depth, x, sc, paths, mis)
-        if HAS_MIXES and scale != 1.0:  # after the emission, which is the whole mix's
+        if HAS_MIXES:  # after the emission, which is the whole mix's
             for j in range(3):
-                paths.throughput[i, j] *= scale
+                paths.throughput[i, j] *= weight[j]
         if HAS_TRANSPARENCY:
             # Past the transparent limit a surface only adds emission (Cycles: terminate on
             # the next surface); a transparent one is crossed even past the bounce limit.
@@ -968,13 +1003,13 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         if crossed > transparent_max:  # (Cycles: the path's crossings count too)
             continue
         mat = sc.geometry.material_index[f]
-        scale = 1.0
+        weight = (1.0, 1.0, 1.0)
         if HAS_MIXES:
             seed = hash_combine(paths.pseed[row], np.uint64(SHADOW_CLOSURE_SALT + crossed))
             u = sample_1d(seed, rev_sample, bounce_dim(shadow.vertex[j], CLOSURE))
             d = shadow.direction[j]
-            mat, scale = choose_closure(u, f, bu[j], bv[j], np.float64(d[0]), np.float64(d[1]),
-                                        np.float64(d[2]), mat, sc, paths)
+            mat, weight = choose_closure(u, f, bu[j], bv[j], np.float64(d[0]), np.float64(d[1]),
+                                         np.float64(d[2]), mat, sc, paths)
         if sc.materials.kind[mat] != TRANSPARENT:
             continue
         # Go on along the ray itself, past the surface by the usual offset measured along
@@ -988,7 +1023,7 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         for c in range(3):
             shadow.origin[out, c] = o[c] + d[c] * t
             shadow.direction[out, c] = d[c]
-            shadow.contrib[out, c] = shadow.contrib[j, c] * scale * sc.materials.colour[mat, c]
+            shadow.contrib[out, c] = shadow.contrib[j, c] * weight[c] * sc.materials.colour[mat, c]
         shadow.tmax[out] = shadow.tmax[j] - t
         shadow.row[out] = row
         shadow.transparent[out] = crossed
@@ -1013,6 +1048,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
+    coat_layer,
     surface_interaction, shading_normal,
     mapped_normal,
     surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,

@@ -227,7 +227,9 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.absorption if plan.volumes or generic else None,
                               m.mix_components if needs_mixes else None,
                               m.mix_fac if needs_mixes else None,
-                              m.mix_scale if needs_mixes else None)
+                              m.mix_scale if needs_mixes else None,
+                              m.coat_ior if plan.coats or generic else None,
+                              m.coat_tint if plan.coats or generic else None)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

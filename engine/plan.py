@@ -77,6 +77,8 @@ class Plan:
     volumes: bool = False
     # Some material used is a mix of two (Mix / Add Shader): each hit picks one.
     mixes: bool = False
+    # Some mix used is a Principled coat (scene.Material.coated): a layer over the rest.
+    coats: bool = False
     # Some material used is (or mixes in) a Transparent BSDF: paths and shadow rays cross it.
     transparency: bool = False
     # Some material used is (or mixes in) a Translucent BSDF (Lambertian transmission).
@@ -104,7 +106,7 @@ class Plan:
         if self.volumes:
             s.append("absorb in media")
         if self.mixes:
-            s.append("choose one of mixed shaders")
+            s.append("choose one of mixed shaders" + (" (coats)" if self.coats else ""))
         if self.transparency:
             s.append("pass through transparent surfaces")
         if self.light_hits or self.sun_discs:
@@ -146,6 +148,7 @@ class Plan:
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
             HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
+            HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
@@ -208,6 +211,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         textures=scene.programs is not None and any(
             bool(np.any(getattr(scene.programs, slot)[used, 0] >= 0)) for slot in SLOTS),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
+        coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
         translucent=TRANSLUCENT in kinds,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian

@@ -108,6 +108,13 @@ class Material:
           hit, the second with probability fac, and carries the scale (an unbiased
           estimate of the sum: the components are sampled and evaluated alone). Emission
           is the components' emission mixed the same way (plus the mix's own).
+          A mix with coat_ior > 0 is instead Cycles' Principled coat layer
+          (Material.coated): components[1] is the coat's lobe (GGX with a dielectric
+          Fresnel of index coat_ior, no energy compensation) of weight fac (the Coat
+          Weight), and components[0] what lies below, dimmed by the coat's reflectance at
+          the view, 1 - fac x F(cos_o), and by its tint, mix(1, coat_tint^(1 / cos_t), fac),
+          cos_t the view's cosine refracted into the coat. Emission below a coat is taken
+          undimmed (Cycles dims it the same way; the exporter warns).
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
         texture on the colour), or None. `colour` is then what the program's result is
@@ -151,6 +158,8 @@ class Material:
     fac_program: Program | None = field(default=None, compare=False)
     scale: float = 1.0  # mix: the factor of the whole sum
     roughness_program: Program | None = field(default=None, compare=False)
+    coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
+    coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -161,6 +170,27 @@ class Material:
                              f">= 0, got fac {fac!r}, scale {scale!r}")
         return cls(name, "mix", (0.0, 0.0, 0.0), components=(first, second), fac=fac,
                    scale=scale, fac_program=fac_program)
+
+    @classmethod
+    def coated(cls, name, base, weight, roughness=0.03, ior=1.5, tint=(1.0, 1.0, 1.0),
+               weight_program=None, roughness_program=None):
+        """Cycles' Principled coat (Coat Weight, Roughness, IOR, Tint) over `base`: a mix
+        whose second component is the coat's own lobe, a Principled specular layer over
+        black with plain GGX (Cycles' coat is not energy compensated)."""
+        ior = float(ior)
+        if not (math.isfinite(ior) and ior >= 1.0):
+            raise ValueError(f"material '{name}': a coat's IOR must be >= 1, got {ior!r}")
+        m = cls.mix(name, base, cls.coat_lobe(name, roughness, ior, roughness_program), weight,
+                    1.0, weight_program)
+        return dataclasses.replace(m, coat_ior=ior, coat_tint=tuple(tint))
+
+    @classmethod
+    def coat_lobe(cls, name, roughness=0.03, ior=1.5, roughness_program=None):
+        """The lobe of Cycles' Principled coat: GGX reflection with the dielectric Fresnel of
+        `ior` and no energy compensation, i.e. a Principled specular layer over black with
+        plain GGX."""
+        return cls.principled(name, (0.0, 0.0, 0.0), roughness, ior,
+                              roughness_program=roughness_program, multiscatter=False)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -210,7 +240,7 @@ class Material:
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
-                   emission_program=None, roughness_program=None):
+                   emission_program=None, roughness_program=None, multiscatter=True):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
         ior = float(ior)
@@ -221,7 +251,8 @@ class Material:
             ior = float(eta if ior >= 1 else 1 / eta)
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
                    roughness=float(roughness), colour_program=colour_program,
-                   emission_program=emission_program, roughness_program=roughness_program)
+                   emission_program=emission_program, roughness_program=roughness_program,
+                   multiscatter=bool(multiscatter))
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -289,6 +320,8 @@ def _mixed_emission(m: Material) -> np.ndarray:
     if m.kind != "mix":
         return own
     a, b = (_mixed_emission(c) for c in m.components)
+    if m.coat_ior > 0:  # the coat's lobe emits nothing; what is below is taken undimmed
+        return own + a
     return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
 
 
@@ -348,6 +381,10 @@ class Materials:
     mix_components: np.ndarray | None = None
     mix_fac: np.ndarray | None = None
     mix_scale: np.ndarray | None = None
+    # Coats (mixes with Material.coat_ior > 0): per row the coat's IOR (0: a plain mix) and
+    # its tint (k, 3).
+    coat_ior: np.ndarray | None = None
+    coat_tint: np.ndarray | None = None
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
 
@@ -357,8 +394,16 @@ class Materials:
         m = cls._rows(materials)
         fac = np.array([float(x.fac) if x.kind == "mix" else 0.0 for x in materials])
         scale = np.array([float(x.scale) if x.kind == "mix" else 1.0 for x in materials])
+        coat_ior = np.array([float(x.coat_ior) if x.kind == "mix" else 0.0 for x in materials])
+        if not np.all((coat_ior == 0.0) | (coat_ior >= 1.0)):  # also NaN
+            bad = next(x for x, c in zip(materials, coat_ior) if not (c == 0 or c >= 1))
+            raise ValueError(f"material '{bad.name}': a coat's IOR must be >= 1, got "
+                             f"{bad.coat_ior!r}")
+        tint = np.array([_colour(x.coat_tint, f"material '{x.name}' coat tint")
+                         for x in materials]).reshape(-1, 3)
         return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
-                                   mix_fac=fac, mix_scale=scale)
+                                   mix_fac=fac, mix_scale=scale, coat_ior=coat_ior,
+                                   coat_tint=tint)
 
     def reachable(self, rows) -> np.ndarray:
         """`rows` and every mix component below them (the materials a hit can shade with)."""

@@ -731,8 +731,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "bump"), ("Coat Weight", 1.0),
-    ("Coat Weight", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
+    ("Normal", "bump"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
     ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
@@ -751,11 +750,55 @@ def test_ignored_principled_inputs_warn(fresh, socket, value):
     assert "material 'Ignored'" in hits[0] and f"node '{node.name}'" in hits[0]
 
 
-def test_coat_normal_warns_with_a_coat(fresh):
-    mat, node = node_material("Coated", "ShaderNodeBsdfPrincipled", **{"Coat Weight": 1.0})
-    add_normal_map(mat, node, "Coat Normal")
-    _, warnings = convert(mat)
-    assert any("input 'Coat Normal'" in w for w in warnings)
+def test_principled_coat_is_a_layer_over_its_lobes(fresh, core):
+    """Coat Weight, Roughness, IOR and Tint make a coat over the Principled's lobes (here a
+    mix with the metal): its lobe takes the Coat Normal's normal map, the lobes below the
+    Normal's; unlinked, the Coat Normal is the mesh's normal (Cycles links it to the
+    geometry's), not the Normal. An emission below the coat, which Specula does not dim,
+    is warned; an IOR below 1 is 1."""
+    mat, node = node_material("Coated", "ShaderNodeBsdfPrincipled", Metallic=0.4, **{
+        "Coat Weight": 0.8, "Coat Roughness": 0.2, "Coat IOR": 1.7,
+        "Coat Tint": (0.9, 0.7, 0.5, 1.0)})
+    add_normal_map(mat, node)
+    coat_map = add_normal_map(mat, node, "Coat Normal")
+    coat_map.inputs["Strength"].default_value = 0.5
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["fac"] == pytest.approx(0.8)
+    assert spec.kwargs["coat_ior"] == pytest.approx(1.7)
+    assert spec.kwargs["coat_tint"] == pytest.approx((0.9, 0.7, 0.5))
+    lobe, below = spec.kwargs["second"], spec.kwargs["first"]
+    assert (lobe.ctor, below.ctor) == ("coat_lobe", "mix")
+    assert lobe.kwargs["roughness"] == pytest.approx(0.2)
+    assert lobe.kwargs["normal_strength"] == pytest.approx(0.5)
+    assert all(leaf.kwargs["normal_strength"] == 1.0 for leaf in below.leaves())
+    m = spec.to_core(core)
+    assert m.kind == "mix" and m.coat_ior == pytest.approx(1.7)
+    assert m.coat_tint == pytest.approx((0.9, 0.7, 0.5))
+    assert m.components[1].kind == "principled" and not m.components[1].multiscatter
+    assert m.components[1].normal_strength == pytest.approx(0.5)
+    mat.node_tree.nodes.remove(coat_map)
+    node.inputs["Coat IOR"].default_value = 0.8
+    node.inputs["Emission Strength"].default_value = 2.0
+    spec, warnings = convert(mat)
+    assert spec.kwargs["second"].kwargs["normal_program"] is None  # the mesh's normals
+    assert spec.to_core(core).components[1].normal_program is None
+    assert spec.kwargs["coat_ior"] == 1.0
+    assert len(warnings) == 2, warnings
+    assert "undimmed" in warnings[0] and "Coat IOR" in warnings[1]
+    assert spec.to_core(core).emission == pytest.approx((2.0, 2.0, 2.0))
+
+
+def test_a_textured_coat_weight_is_the_coat_factor(fresh, core):
+    mat, node = node_material("Patchy", "ShaderNodeBsdfPrincipled")
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Coat Weight"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and "fac_program" in spec.kwargs and "coat_ior" in spec.kwargs
+    node.inputs["Coat Weight"].default_value = 0.0
+    mat.node_tree.nodes.remove(checker)
+    assert convert(mat)[0].ctor == "principled"  # no coat at weight 0
 
 
 def test_default_principled_has_no_ignored_input_warnings(fresh):

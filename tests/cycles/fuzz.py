@@ -289,6 +289,17 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                                                           else varying.uniform(0.1, 0.9), 3)}
         if mix and mix["shader"] == "diffuse" and varying.random() < 0.3:
             mix["shader"] = "translucent"
+    # Some Principled surfaces coated (Coat Weight, Roughness, IOR, Tint), from a stream of
+    # their own; not emitting ones (Specula does not dim an emission under a coat, warned).
+    coats = np.random.default_rng([seed, 0xc0a7])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("principled", "metal", "principled_glass") and \
+                coats.random() < 0.3 and not o["material"].get("emission_strength"):
+            o["material"]["coat"] = {
+                "weight": _r(coats.uniform(0.3, 1.0)), "roughness": _r(coats.uniform(0.0, 0.5), 3),
+                "ior": _r(coats.uniform(1.3, 2.0), 3),
+                "tint": [_r(c) for c in coats.uniform(0.4, 1.0, 3)]
+                if coats.random() < 0.5 else [1.0, 1.0, 1.0]}
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -321,7 +332,8 @@ def features(params) -> list[str]:
                  + (f":fac_{m['mix']['factor']['kind']}" if m.get("mix", {}).get("factor")
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
-                 + (":alpha" if m.get("alpha") else ""))
+                 + (":alpha" if m.get("alpha") else "")
+                 + (":coat" if m.get("coat") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
         if light.get("scale", [1, 1, 1]) != [1.0, 1.0, 1.0]:
@@ -391,6 +403,8 @@ def _simpler_material(m):
     if m.get("roughness_checker"):
         out.append(("untextured roughness",
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
+    if m.get("coat"):
+        out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("mix", {}).get("factor"):
         out.append(("constant mix factor", {**m, "mix": {k: v for k, v in m["mix"].items()
                                                          if k != "factor"}}))
@@ -591,6 +605,10 @@ def _bpy_surface_shader(name, m):
         inputs.update({"IOR": m["ior"], "Transmission Weight": 1.0})
     if m.get("alpha"):
         inputs["Alpha"] = m["alpha"]
+    if m.get("coat"):
+        c = m["coat"]
+        inputs.update({"Coat Weight": c["weight"], "Coat Roughness": c["roughness"],
+                       "Coat IOR": c["ior"], "Coat Tint": (*c["tint"], 1.0)})
     if m.get("emission_strength"):
         inputs.update({"Emission Color": (*m["emission_colour"], 1.0),
                        "Emission Strength": m["emission_strength"]})

@@ -403,6 +403,49 @@ def _opaque_shadows():
 
 
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
+def _coat_ior_plus_10_percent(scene, settings):
+    """Every coat's IOR 10% higher, its lobe's with it."""
+    m = scene.materials
+    coats = np.flatnonzero(m.coat_ior > 0)
+    ior = m.ior.copy()
+    ior[m.mix_components[coats, 1]] *= 1.1
+    scene.materials = dataclasses.replace(m, coat_ior=m.coat_ior * 1.1, ior=ior)
+    return scene, settings
+
+
+def _coat_tint_ignored(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, coat_tint=np.ones_like(m.coat_tint))
+    return scene, settings
+
+
+@contextmanager
+def _coats_ignored():
+    """The exporter before coats: a Principled BSDF's coat is left out."""
+    from addon import materials
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(materials._Reader, "coat", lambda self, node, spec: spec)
+        yield
+
+
+@contextmanager
+def _coat_normal_as_the_normal():
+    """An unlinked Coat Normal read as the Principled's Normal (its normal map), not as
+    the mesh's normal."""
+    from addon import materials
+
+    normal_map_of = materials._Reader.normal_map_of
+
+    def shared(self, node, socket_name):
+        own = normal_map_of(self, node, socket_name)
+        return self.normal_map if own is None and socket_name == "Coat Normal" else own
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(materials._Reader, "normal_map_of", shared)
+        yield
+
+
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
     "schlick_fresnel": ("glass_sheet_fresnel", _schlick, None),
@@ -453,6 +496,11 @@ INJECTIONS = {
     "helmet_roughness_as_its_mean": ("gltf_damaged_helmet", _roughness_as_its_mean, None),
     "textured_roughness_plus_10_percent": ("textured_roughness", None,
                                            _textured_roughness_plus_10_percent),
+    "coat_ior_plus_10_percent": ("coat", _coat_ior_plus_10_percent, None),
+    "coat_tint_ignored": ("coat", _coat_tint_ignored, None),
+    "coat_weight_as_its_mean": ("coat", _mix_factors_as_their_means, None),
+    "coats_ignored": ("gltf_clear_coat", None, _coats_ignored),
+    "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
 }
 
 

@@ -941,6 +941,31 @@ def colour_attributes():
     ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
 
 
+def coat():
+    """The Principled BSDF's coat (issue 14, point 1): a smooth clear coat over a red
+    Principled, a tinted coat of IOR 1.8 and weight 0.7 over rough gold metal, and a coat
+    of IOR 2.2 whose weight is a Checker Texture (1 and 0 on Generated coordinates) over
+    a dark blue Principled without a specular layer (Specular IOR Level 0), on the box's
+    floor under its light."""
+    _box()
+    red = _principled("Lacquer", **{"Base Color": (0.6, 0.05, 0.03, 1.0), "Roughness": 0.5,
+                                    "Coat Weight": 1.0, "Coat Roughness": 0.03})
+    gold = _principled("TintedCoat", **{
+        "Base Color": (1.0, 0.75, 0.35, 1.0), "Metallic": 1.0, "Roughness": 0.4,
+        "Coat Weight": 0.7, "Coat IOR": 1.8, "Coat Roughness": 0.1,
+        "Coat Tint": (0.5, 0.8, 1.0, 1.0)})
+    blue = _principled("PatchyCoat", **{"Base Color": (0.02, 0.03, 0.1, 1.0), "Roughness": 1.0,
+                                        "Specular IOR Level": 0.0, "Coat Roughness": 0.1,
+                                        "Coat IOR": 2.2})
+    checker = blue.node_tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    checker.inputs["Scale"].default_value = 3.0
+    node = next(n for n in blue.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    blue.node_tree.links.new(checker.outputs["Color"], node.inputs["Coat Weight"])
+    _balls([red, gold, blue])
+
+
 def translucency():
     """The Translucent BSDF (issue 14, point 1): a greenish translucent card under the
     ceiling light, lighting the floor below it through itself and seen from below, and a
@@ -1424,6 +1449,13 @@ def gltf_damaged_helmet():
     _gltf("DamagedHelmet", direction=(0.3, -1.0, 0.2), distance=2.0, ext=".gltf")
 
 
+def gltf_clear_coat():
+    """Khronos ClearCoatTest: each row a base, the base coated and the coat alone; a coat
+    weight and a coat roughness from textures, and normal maps on the base, on the coat
+    and on both."""
+    _gltf("ClearCoatTest", direction=(0.0, -1.0, 0.0), distance=1.6)
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -1503,6 +1535,7 @@ _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("translucency", translucency, max_bounces=8))
+_add(Variant("coat", coat, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
@@ -1515,6 +1548,9 @@ for _setup, _name in ((gltf_box_textured, "BoxTextured"),
 _add(Variant("gltf_transmission", gltf_transmission, max_bounces=8, samples=512,
              cycles_samples=1024,
              files=(os.path.join(GLTF_DIR, "TransmissionTest", "TransmissionTest.glb"),)))
+_add(Variant("gltf_clear_coat", gltf_clear_coat, resolution=(64, 96), max_bounces=8,
+             samples=512, cycles_samples=1024,
+             files=(os.path.join(GLTF_DIR, "ClearCoatTest", "ClearCoatTest.glb"),)))
 _add(Variant("gltf_damaged_helmet", gltf_damaged_helmet, max_bounces=8,
              files=tuple(os.path.join(GLTF_DIR, "DamagedHelmet", f) for f in (
                  "DamagedHelmet.gltf", "DamagedHelmet.bin", "Default_albedo.jpg",

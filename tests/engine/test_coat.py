@@ -1,0 +1,97 @@
+"""Cycles' Principled coat (scene.Material.coated): a dielectric GGX layer of weight w over
+the rest, which keeps 1 - w x F of the light at the view and the tint over the path through
+the coat (bsdf.coat_layering)."""
+
+import numpy as np
+import pytest
+
+from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from engine.fresnel import fresnel_dielectric
+from engine.plan import make_plan
+from tests import scenes
+
+BASE = np.array([0.6, 0.3, 0.1])
+TINT = np.array([0.9, 0.5, 0.7])
+
+
+def _pane_under_a_glowing_ceiling(material, samples=16, seed=3):
+    """A large quad at z = 0 under a larger emitter of radiance 1 at z = 1 (a black world),
+    seen head-on from above by an orthographic camera at z = 0.5 looking straight down:
+    every camera ray meets the pane at normal incidence."""
+    b = SceneBuilder()
+    v, t = scenes.quad((-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0))
+    b.add_mesh("pane", v, t, b.add_material(material))
+    v, t = scenes.quad((-500, -500, 1), (-500, 500, 1), (500, 500, 1), (500, -500, 1))
+    b.add_mesh("ceiling", v, t, b.add_material(Material.emission_only("sky", (1, 1, 1), 1.0)))
+    cam = Camera(type="ORTHO", ortho_scale=2.0,
+                 world_from_camera=scenes.look_at((0, 0, 0.5), (0, 0, 0), up=(0, 1, 0)))
+    return render(b.build(cam, World((0.0, 0.0, 0.0))),
+                  RenderSettings(width=16, height=16, samples=samples, max_bounces=2,
+                                 seed=seed))
+
+
+def _coated(weight, ior, roughness=0.0):
+    return Material.coated("lacquer", Material.diffuse("paint", tuple(BASE)), weight,
+                           roughness=roughness, ior=ior, tint=tuple(TINT))
+
+
+def test_a_coat_that_reflects_nothing_dims_by_its_tint_alone():
+    """At IOR 1 the coat reflects nothing, so head-on it only tints what is below by
+    mix(1, tint, weight): the pane is the diffuse of that colour, sample for sample (the
+    coat's choice takes a sampler dimension of its own)."""
+    coated = _pane_under_a_glowing_ceiling(_coated(0.7, 1.0))
+    plain = _pane_under_a_glowing_ceiling(
+        Material.diffuse("same", tuple(BASE * (1.0 - 0.7 + 0.7 * TINT))))
+    assert coated.plan.coats and not plain.plan.coats
+    np.testing.assert_allclose(coated.combined[..., :3], plain.combined[..., :3], rtol=1e-9)
+
+
+@pytest.mark.parametrize("weight", [1.0, 0.5])
+def test_a_smooth_coat_reflects_its_fresnel_and_dims_what_is_below(weight):
+    """A smooth coat (IOR 1.5, F = 0.04 head-on) over a diffuse pane under a ceiling of
+    radiance 1: w F of the ceiling reflected plus (1 - w F) x mix(1, tint, w) x base.
+    The mean agrees within 4 standard errors; a coat that does not dim what is below
+    (w F more of it) is rejected."""
+    img = _pane_under_a_glowing_ceiling(_coated(weight, 1.5), samples=64)
+    f = fresnel_dielectric(1.0, 1.5, True)[0]
+    below = BASE * (1.0 - weight + weight * TINT)
+    expected = weight * f + (1.0 - weight * f) * below
+    px = img.combined[..., :3].reshape(-1, 3)  # pixels: independent, alike estimates
+    se = px.std(axis=0, ddof=1) / np.sqrt(px.shape[0])
+    z = np.abs(px.mean(axis=0) - expected) / se
+    assert np.all(z < 4.0), (px.mean(axis=0), expected, z)
+    undimmed = weight * f + below
+    assert np.max(np.abs(px.mean(axis=0) - undimmed) / se) > 8.0  # red, the brightest
+
+
+def test_a_coat_plans_as_a_mix_and_its_lobe_as_plain_ggx():
+    """A coat is a mix to the plan (no light tracing), with its own constant; its lobe is a
+    Principled layer over black without energy compensation, of the coat's IOR."""
+    b = scenes.cornell_box(spheres=False)
+    v, t, n = scenes.uv_sphere((0.0, 0.0, 0.4), 0.4)
+    b.add_mesh("ball", v, t, b.add_material(_coated(0.8, 1.6, 0.2)), corner_normals=n)
+    scene = b.build(scenes.cornell_camera(), World((0, 0, 0)))
+    plan = make_plan(scene, scenes.settings())
+    assert plan.coats and plan.mixes and plan.principled and not plan.light_tracing
+    assert plan.kernel_constants(False)["HAS_COATS"]
+    m = scene.materials
+    top = m.names.index("lacquer")
+    base, lobe = m.mix_components[top]
+    assert m.coat_ior[top] == 1.6 and m.coat_ior[base] == 0.0
+    np.testing.assert_allclose(m.coat_tint[top], TINT)
+    assert m.ior[lobe] == 1.6 and not m.multiscatter[lobe] and m.colour[lobe].max() == 0
+    assert not make_plan(scenes.cbspheres(), scenes.settings()).coats
+
+
+def test_a_coat_is_validated():
+    with pytest.raises(ValueError, match="'bad'.*IOR"):
+        Material.coated("bad", Material.diffuse("a", BASE), 0.5, ior=0.8)
+    with pytest.raises(ValueError, match="'bad'.*fac"):
+        Material.coated("bad", Material.diffuse("a", BASE), 1.5)
+    with pytest.raises(ValueError, match="'bad'.*coat tint"):
+        b = SceneBuilder()
+        b.add_material(Material.coated("bad", Material.diffuse("a", BASE), 0.5,
+                                       tint=(1.0, -0.1, 1.0)))
+        v, t = scenes.quad((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0))
+        b.add_mesh("q", v, t, 0)
+        b.build(scenes.cornell_camera(), World((0, 0, 0)))
