@@ -24,7 +24,8 @@ Fallbacks:
     Inputs Specula does not render (Sheen, Subsurface, Anisotropic, Specular Tint, Thin
     Film, Diffuse Roughness) warn when used.
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
-  * any other shader node (Toon, Refraction, ...): diffuse of its 'Color' / 'Base Color'
+  * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
+  * any other shader node (Toon, Sheen, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
     `_Constants`: an image's mean colour in scene-linear space, RGB / Value / Math / Mix /
@@ -753,7 +754,8 @@ class _Reader:
         name, kind = self.material.name, node.bl_idname
         if kind in ("ShaderNodeMixShader", "ShaderNodeAddShader"):
             return self.mix(node)
-        if kind in ("ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass") or kind in GLOSSY_NODES:
+        if kind in ("ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass",
+                    "ShaderNodeBsdfRefraction") or kind in GLOSSY_NODES:
             self.normal(node)
         if kind == "ShaderNodeBsdfDiffuse":
             if self.unit(node, "Roughness") > ROUGHNESS_EPSILON:
@@ -771,6 +773,11 @@ class _Reader:
             return MaterialSpec("glass", name, {"colour": self.colour(node, "Color"),
                                                 "ior": self.ior(node), **self.roughness(node),
                                                 "multiscatter": self.multiscatter(node)})
+        if kind == "ShaderNodeBsdfRefraction":
+            self.multiscatter(node)  # Beckmann (its default) is rendered as GGX, warned
+            return MaterialSpec("refraction", name, {"colour": self.colour(node, "Color"),
+                                                     "ior": self.ior(node),
+                                                     **self.roughness(node)})
         if kind == "ShaderNodeEmission":
             # An Emission shader is a light whatever its colour: an unreducible chain keeps
             # the socket's own colour.

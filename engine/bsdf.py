@@ -23,7 +23,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .fresnel import fresnel_dielectric
+from .fresnel import fresnel_dielectric, glass_fresnel
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
 from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL
@@ -110,8 +110,9 @@ def reflect(wox, woy, woz, nx, ny, nz):
 
 
 @njit(**JIT)
-def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact):
-    """Smooth dielectric (Cycles' Glass BSDF and Principled transmission at roughness 0).
+def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact, fresnel_on):
+    """Smooth dielectric (Cycles' Glass BSDF and Principled transmission at roughness 0;
+    without fresnel_on, the Refraction BSDF: glass_fresnel).
 
     eta : relative IOR across the surface as seen from wo (IOR on front faces, 1/IOR on
     back faces); r_tint, t_tint : (3,) tints. Reflection R = F x r_tint, transmission
@@ -119,7 +120,7 @@ def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact):
     weight is R / p or T / (1 - p), as in Cycles. Returns (w, weight (3 values), ok).
     """
     wx, wy, wz, cos_o = reflect(wox, woy, woz, nx, ny, nz)
-    fr, cos_t = fresnel_dielectric(cos_o, eta, exact)
+    fr, cos_t = glass_fresnel(cos_o, eta, exact, fresnel_on)
     r0, r1, r2 = fr * r_tint[0], fr * r_tint[1], fr * r_tint[2]
     q0, q1, q2 = (1.0 - fr) * t_tint[0], (1.0 - fr) * t_tint[1], (1.0 - fr) * t_tint[2]
     r_avg = (r0 + r1 + r2) / 3.0
@@ -584,10 +585,10 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness):
 
 
 @njit(**INLINE)
-def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness):
+def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_on):
     """The rough glass lobe of material `mat` at view cosine mu, on its front side (eta =
     IOR) or its back side (eta = 1 / IOR), from its LayerTables lt; roughness as
-    layer_at's."""
+    layer_at's; without fresnel_on, the Refraction BSDF's (glass_fresnel)."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     if front:
         missing = table_at(mu, lt, lt.missing, r0, r1, w)
@@ -597,7 +598,7 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness):
         missing = table_at(mu, lt, lt.missing_back, r0, r1, w)
         f0, f1, f2 = fms_at(lt.fms_back, r0, r1, w)
         eta = 1.0 / ior
-    return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, True,
+    return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  t_tint[0], t_tint[1], t_tint[2])
 
@@ -730,7 +731,7 @@ def eval_rough_dielectric(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
         return 0.0, 0.0, 0.0, 0.0
     hx, hy, hz = hx / length, hy / length, hz / length
     cos_ho = hx * wox + hy * woy + hz * woz
-    fr = fresnel_dielectric(cos_ho, eta, True)[0]
+    fr = glass_fresnel(cos_ho, eta, True, lobe.fresnel_on)[0]
     r0, r1, r2 = fr * lobe.tint0, fr * lobe.tint1, fr * lobe.tint2
     t0, t1, t2 = (1.0 - fr) * lobe.tt0, (1.0 - fr) * lobe.tt1, (1.0 - fr) * lobe.tt2
     total = r0 + r1 + r2 + t0 + t1 + t2
@@ -758,7 +759,7 @@ def sample_rough_dielectric(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, u_lobe,
     side). Returns (w, weight (3 values), pdf, ok)."""
     hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
     cos_ho = hwx * wox + hwy * woy + hwz * woz
-    fr, cos_t = fresnel_dielectric(cos_ho, lobe.eta, True)
+    fr, cos_t = glass_fresnel(cos_ho, lobe.eta, True, lobe.fresnel_on)
     r = fr * (lobe.tint0 + lobe.tint1 + lobe.tint2)
     q = (1.0 - fr) * (lobe.tt0 + lobe.tt1 + lobe.tt2)
     if not r + q > 0.0:

@@ -39,3 +39,15 @@ def fresnel_dielectric(cos_i, eta, exact):
         c = cos_i if eta >= 1.0 else cos_t
         f = r0 + (1.0 - r0) * (1.0 - c) ** 5
     return min(max(f, 0.0), 1.0), cos_t
+
+
+@njit(**JIT)
+def glass_fresnel(cos_i, eta, exact, fresnel_on):
+    """What a glass interface reflects (fresnel_dielectric), or for Cycles' Refraction BSDF
+    (not fresnel_on), which has no Fresnel, nothing but under total internal reflection,
+    where it refracts nothing either (1: the whole of it is not transmitted). Returns
+    (F, cos_t)."""
+    f, cos_t = fresnel_dielectric(cos_i, eta, exact)
+    if fresnel_on:
+        return f, cos_t
+    return (0.0 if cos_t > 0.0 else 1.0), cos_t

@@ -108,12 +108,12 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
 # strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
-# component rows (k, 2), fac and scale (k,), and coats' IOR (k,) and tint (k, 3)
-# (scene.Materials).
+# component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
+# whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) (scene.Materials).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength absorption mix_components "
-                                            "mix_fac mix_scale coat_ior coat_tint")
+                                            "mix_fac mix_scale coat_ior coat_tint fresnel")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -477,7 +477,7 @@ def rough_lobe(x, k, c, sc, paths):
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers,
                                    mt.reflection_tint[x.mat], mt.transmission_tint[x.mat],
-                                   roughness)
+                                   roughness, mt.fresnel[x.mat])
     return bsdf.no_layer()
 
 
@@ -745,7 +745,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
-            mt.transmission_tint[x.mat], u, EXACT_FRESNEL)
+            mt.transmission_tint[x.mat], u, EXACT_FRESNEL, mt.fresnel[x.mat])
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:

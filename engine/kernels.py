@@ -229,7 +229,8 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.mix_fac if needs_mixes else None,
                               m.mix_scale if needs_mixes else None,
                               m.coat_ior if plan.coats or generic else None,
-                              m.coat_tint if plan.coats or generic else None)
+                              m.coat_tint if plan.coats or generic else None,
+                              m.fresnel)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

@@ -84,6 +84,9 @@ class Material:
           faces); reflection weighted by `reflection_tint` x F, transmission by
           `transmission_tint` x (1 - F). Glass BSDF: both tints = colour. Principled
           transmission: reflection untinted, transmission sqrt(base colour) per interface.
+          Without `fresnel`, Cycles' Refraction BSDF: no reflection, and transmission of
+          `colour` whole except under total internal reflection, where nothing is
+          (fresnel.glass_fresnel); rough, it is plain GGX (no energy compensation).
         - principled: Principled BSDF, dielectric: a Lambert base of `colour` under a GGX
           specular layer of index `ior` and `roughness` (alpha = roughness^2, Multiscatter
           GGX energy compensation); the base keeps 1 - the layer's albedo.
@@ -160,6 +163,7 @@ class Material:
     roughness_program: Program | None = field(default=None, compare=False)
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
+    fresnel: bool = True  # glass kinds: False is the Refraction BSDF (no Fresnel)
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -223,6 +227,15 @@ class Material:
         return cls(name, kind, c, ior, c, c, tuple(emission),
                    roughness=float(roughness), multiscatter=bool(multiscatter),
                    emission_program=emission_program,
+                   roughness_program=roughness_program if kind == "rough_glass" else None)
+
+    @classmethod
+    def refraction(cls, name, colour=(1, 1, 1), ior=1.45, roughness=0.0,
+                   roughness_program=None):
+        """Cycles' Refraction BSDF: refraction only, tinted by colour, without Fresnel."""
+        kind = _glass_kind(roughness, ior, roughness_program)
+        return cls(name, kind, tuple(colour), ior, (0.0, 0.0, 0.0), tuple(colour),
+                   roughness=float(roughness), multiscatter=False, fresnel=False,
                    roughness_program=roughness_program if kind == "rough_glass" else None)
 
     @classmethod
@@ -385,6 +398,7 @@ class Materials:
     # its tint (k, 3).
     coat_ior: np.ndarray | None = None
     coat_tint: np.ndarray | None = None
+    fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
 
@@ -469,7 +483,8 @@ class Materials:
                    np.array([bool(m.multiscatter) for m in materials]),
                    programs, emission_programs, normal_programs,
                    np.array([float(m.normal_strength) for m in materials]), absorption,
-                   fac_programs=fac_programs, roughness_programs=roughness_programs)
+                   fac_programs=fac_programs, roughness_programs=roughness_programs,
+                   fresnel=np.array([bool(m.fresnel) for m in materials]))
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,

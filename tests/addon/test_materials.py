@@ -66,7 +66,7 @@ def test_no_material_is_default_grey():
 
 @pytest.mark.parametrize("shader, expect_ctor", [
     ("ShaderNodeBsdfToon", "diffuse"),
-    ("ShaderNodeBsdfRefraction", "diffuse"),
+    ("ShaderNodeBsdfSheen", "diffuse"),
 ])
 def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     mat, node = node_material("Odd", shader)
@@ -78,6 +78,27 @@ def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     assert "material 'Odd'" in warnings[0] and f"node '{node.name}'" in warnings[0]
     expected = (0.1, 0.7, 0.3) if "Color" in node.inputs else (0.8, 0.8, 0.8)
     assert spec.kwargs["colour"] == pytest.approx(expected, abs=1e-6)
+
+
+def test_refraction_is_glass_without_fresnel(fresh, core):
+    """The Refraction BSDF: glass that refracts its colour whole and reflects nothing,
+    plain GGX when rough; Beckmann, its default, is rendered as GGX (warned)."""
+    mat, node = node_material("Refractive", "ShaderNodeBsdfRefraction", IOR=1.6, Roughness=0.3,
+                              Color=(0.6, 0.9, 0.8, 1.0))
+    node.distribution = "GGX"
+    spec, warnings = convert(mat)
+    assert (spec.ctor, warnings) == ("refraction", [])
+    m = spec.to_core(core)
+    assert (m.kind, m.fresnel, m.multiscatter) == ("rough_glass", False, False)
+    assert m.ior == pytest.approx(1.6) and m.roughness == pytest.approx(0.3)
+    assert m.reflection_tint == (0.0, 0.0, 0.0)
+    assert m.transmission_tint == pytest.approx((0.6, 0.9, 0.8))
+    node.distribution = "BECKMANN"
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and "BECKMANN" in warnings[0]
+    node.inputs["Roughness"].default_value = 0.0
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.to_core(core).kind == "glass"
 
 
 def test_rough_diffuse_warns_and_renders_lambert(fresh):

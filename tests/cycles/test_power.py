@@ -403,6 +403,14 @@ def _opaque_shadows():
 
 
 # error name -> (variant where it shows, scene/settings injection, integrator patch)
+def _refraction_with_fresnel(scene, settings):
+    """The Refraction BSDF's transmission weighted by 1 - F, as the Glass BSDF's (still
+    reflecting nothing)."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, fresnel=np.ones_like(m.fresnel))
+    return scene, settings
+
+
 def _coat_ior_plus_10_percent(scene, settings):
     """Every coat's IOR 10% higher, its lobe's with it."""
     m = scene.materials
@@ -496,6 +504,9 @@ INJECTIONS = {
     "helmet_roughness_as_its_mean": ("gltf_damaged_helmet", _roughness_as_its_mean, None),
     "textured_roughness_plus_10_percent": ("textured_roughness", None,
                                            _textured_roughness_plus_10_percent),
+    "refraction_with_fresnel": ("refraction", _refraction_with_fresnel, None),
+    "refraction_roughness_plus_10_percent": ("refraction", _roughness_plus_10_percent(
+        "ROUGH_GLASS"), None),
     "coat_ior_plus_10_percent": ("coat", _coat_ior_plus_10_percent, None),
     "coat_tint_ignored": ("coat", _coat_tint_ignored, None),
     "coat_weight_as_its_mean": ("coat", _mix_factors_as_their_means, None),

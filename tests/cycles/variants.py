@@ -941,6 +941,24 @@ def colour_attributes():
     ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
 
 
+def _refraction(name, colour, roughness, ior=1.45):
+    mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
+                      Roughness=roughness, IOR=ior)
+    next(n for n in mat.node_tree.nodes
+         if n.bl_idname == "ShaderNodeBsdfRefraction").distribution = "GGX"
+    return mat
+
+
+def refraction():
+    """The Refraction BSDF (issue 14, points 1 and 2): no reflection, refraction without
+    Fresnel; smooth and clear (IOR 1.45), rough (0.3) and tinted, and rough (0.6) at IOR
+    1.3, on the box's floor under its light."""
+    _box()
+    _balls([_refraction("Clear", (1.0, 1.0, 1.0), 0.0),
+            _refraction("Tinted", (0.6, 0.9, 0.8), 0.3),
+            _refraction("Frosted", (1.0, 1.0, 1.0), 0.6, ior=1.3)])
+
+
 def coat():
     """The Principled BSDF's coat (issue 14, point 1): a smooth clear coat over a red
     Principled, a tinted coat of IOR 1.8 and weight 0.7 over rough gold metal, and a coat
@@ -1535,6 +1553,7 @@ _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("translucency", translucency, max_bounces=8))
+_add(Variant("refraction", refraction, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("coat", coat, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),

@@ -23,7 +23,7 @@ def sample_dielectric(wo, eta, r_tint, t_tint, u, exact=True):
     ok (m,)."""
     r_tint, t_tint = np.asarray(r_tint, np.float64), np.asarray(t_tint, np.float64)
     out = np.vectorize(lambda uk: bsdf.sample_dielectric(*wo, *Z, eta, r_tint, t_tint, uk,
-                                                          exact))(np.atleast_1d(u))
+                                                          exact, True))(np.atleast_1d(u))
     return np.column_stack(out[:3]), np.column_stack(out[3:6]), out[6]
 
 

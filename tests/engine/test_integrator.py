@@ -75,10 +75,24 @@ def test_glass_sphere_in_uniform_environment_is_invisible(ior):
     assert np.abs(img - world).max() < 1e-6
 
 
-def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact):
+def test_a_refraction_sphere_passes_its_colour_twice():
+    """The Refraction BSDF reflects nothing and refracts all but under total internal
+    reflection, which a ray through a sphere does not meet: in a uniform environment the
+    sphere's middle is colour^2 x the world (two crossings). The Glass BSDF of that colour
+    (Fresnel-weighted) is not."""
+    world, colour = np.array([0.5, 0.7, 0.9]), np.array([0.9, 0.6, 0.8])
+    for kind in ("glass", "refraction"):
+        r = sphere_in_environment(getattr(Material, kind)("r", tuple(colour), ior=1.5), world)
+        middle = r.combined[10:20, 15:25, :3]  # within 8 px of the centre (radius 14.6 px)
+        error = np.abs(middle - colour ** 2 * world).max()
+        assert error < 1e-6 if kind == "refraction" else error > 0.01, (kind, error)
+
+
+def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact,
+                           fresnel_on):
     """bsdf.sample_dielectric with refracted radiance scaled by 1/eta^2."""
     wx, wy, wz, f0, f1, f2, ok = original_sample_dielectric(  # noqa: F821
-        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact)
+        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact, fresnel_on)
     if wx * nx + wy * ny + wz * nz < 0.0:  # transmitted
         k = 1.0 / (eta * eta)
         f0, f1, f2 = f0 * k, f1 * k, f2 * k
