@@ -289,6 +289,11 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                                                           else varying.uniform(0.1, 0.9), 3)}
         if mix and mix["shader"] == "diffuse" and varying.random() < 0.3:
             mix["shader"] = "translucent"
+    # Some Glass BSDFs are Refraction BSDFs (no Fresnel; GGX), from a stream of their own.
+    refractions = np.random.default_rng([seed, 0x4ef4])
+    for o in params["objects"]:
+        if o["material"]["kind"] == "glass" and refractions.random() < 0.3:
+            o["material"]["refraction"] = True
     # Some Principled surfaces coated (Coat Weight, Roughness, IOR, Tint), from a stream of
     # their own; not emitting ones (Specula does not dim an emission under a coat, warned).
     coats = np.random.default_rng([seed, 0xc0a7])
@@ -333,7 +338,8 @@ def features(params) -> list[str]:
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":alpha" if m.get("alpha") else "")
-                 + (":coat" if m.get("coat") else ""))
+                 + (":coat" if m.get("coat") else "")
+                 + (":refraction" if m.get("refraction") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
         if light.get("scale", [1, 1, 1]) != [1.0, 1.0, 1.0]:
@@ -405,6 +411,8 @@ def _simpler_material(m):
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
     if m.get("coat"):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
+    if m.get("refraction"):
+        out.append(("Glass, not Refraction", {k: v for k, v in m.items() if k != "refraction"}))
     if m.get("mix", {}).get("factor"):
         out.append(("constant mix factor", {**m, "mix": {k: v for k, v in m["mix"].items()
                                                          if k != "factor"}}))
@@ -591,6 +599,12 @@ def _bpy_surface_shader(name, m):
         return bs.material(name, "ShaderNodeBsdfDiffuse", Color=rgba, Roughness=0.0)
     if kind == "glossy":
         return bs.material(name, "ShaderNodeBsdfGlossy", Color=rgba, Roughness=m["roughness"])
+    if kind == "glass" and m.get("refraction"):
+        mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=rgba,
+                          Roughness=m.get("roughness", 0.0), IOR=m["ior"])
+        next(n for n in mat.node_tree.nodes
+             if n.bl_idname == "ShaderNodeBsdfRefraction").distribution = "GGX"
+        return mat
     if kind == "glass":
         return bs.material(name, "ShaderNodeBsdfGlass", Color=rgba,
                            Roughness=m.get("roughness", 0.0), IOR=m["ior"])

@@ -67,6 +67,7 @@ def _all_features(seeds, avoid_known=False):
         found.update("mixed shader" for o in p["objects"] if o["material"].get("mix"))
         found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
         found.update("coat" for o in p["objects"] if o["material"].get("coat"))
+        found.update("refraction" for o in p["objects"] if o["material"].get("refraction"))
         found.update("textured roughness" for o in p["objects"]
                      if o["material"].get("roughness_checker"))
         found.update(f"factor:{o['material']['mix']['factor']['kind']}" for o in p["objects"]
@@ -87,7 +88,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
-              "coat",
+              "coat", "refraction",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c"}
 
 
