@@ -770,12 +770,14 @@ class _Reader:
                                                  **self.roughness(node),
                                                  "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeBsdfGlass":
-            return MaterialSpec("glass", name, {"colour": self.colour(node, "Color"),
+            colour, program = self.textured_colour(node, "Color")
+            return MaterialSpec("glass", name, {"colour": colour, **_with(program),
                                                 "ior": self.ior(node), **self.roughness(node),
                                                 "multiscatter": self.multiscatter(node)})
         if kind == "ShaderNodeBsdfRefraction":
             self.multiscatter(node)  # Beckmann (its default) is rendered as GGX, warned
-            return MaterialSpec("refraction", name, {"colour": self.colour(node, "Color"),
+            colour, program = self.textured_colour(node, "Color")
+            return MaterialSpec("refraction", name, {"colour": colour, **_with(program),
                                                      "ior": self.ior(node),
                                                      **self.roughness(node)})
         if kind == "ShaderNodeEmission":
@@ -925,9 +927,10 @@ class _Reader:
                                                 **roughness, "multiscatter": multiscatter})
 
         def glass():
+            base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("principled_glass", name, {
-                "base_colour": self.colour(node, "Base Color"), "ior": self.ior(node),
-                **roughness, "multiscatter": multiscatter})
+                "base_colour": base, **_with(program), "ior": self.ior(node), **roughness,
+                "multiscatter": multiscatter})
 
         def either(first, second, fac, program):
             """first (1 - fac) and second (fac), or one alone where fac is 0 or 1."""

@@ -384,10 +384,12 @@ ROUGHNESS_WARP = 1.5
 # for a constant roughness, ROUGHNESS_GRID rows over roughness 0..1 for a textured one.
 # Per row: alpha; fms (n, 3) per channel; missing and albedo (n, m) over mu, the grid of
 # view cosines (m,) with its guided_interp guide; e_avg the lobe's average albedo (a
-# textured Glossy colour's Fms at each hit). Rough glass: fms and missing are its front
-# side's (entering, IOR), fms_back and missing_back its back side's (leaving, 1 / IOR).
+# textured Glossy colour's Fms at each hit). Rough glass: fms, missing and e_avg are its
+# front side's (entering, IOR), fms_back, missing_back and e_avg_back its back side's
+# (leaving, 1 / IOR).
 LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_guide alpha fms "
-                                        "missing albedo e_avg fms_back missing_back")
+                                        "missing albedo e_avg fms_back missing_back "
+                                        "e_avg_back")
 
 # One rough vertex's lobe: the diffuse weight dw and specular (reflection) tint (3 each),
 # alpha, eta, fresnel_on, the compensation per channel at mu_o (3), the chance of the
@@ -428,21 +430,21 @@ def layer_tables(materials, used) -> LayerTables:
             rows += [_lobe_row(materials, j, float(t ** ROUGHNESS_WARP))
                      for t in np.linspace(0.0, 1.0, ROUGHNESS_GRID)]
     mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
-    alpha, fms, missing, albedo, e_avg, fms_back, missing_back = \
+    alpha, fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back = \
         (np.array(column, np.float64) for column in zip(*rows))
     return LayerTables(base, tint, fresnel, first, count, mu, interp_guide(mu, 256), alpha,
-                       fms, missing, albedo, e_avg, fms_back, missing_back)
+                       fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back)
 
 
 def _lobe_row(materials, j, roughness, rough=True) -> tuple:
     """One row of LayerTables for material j's lobe at `roughness`: alpha, fms (3,),
-    missing (m,), albedo (m,), e_avg, fms_back (3,), missing_back (m,); zeros but for
-    alpha where not `rough`."""
+    missing (m,), albedo (m,), e_avg, fms_back (3,), missing_back (m,), e_avg_back; zeros
+    but for alpha where not `rough`."""
     alpha = max(roughness * roughness, MIN_ALPHA)
     m = ALBEDO_TABLE_SIZE
     zero3, zeros = np.zeros(3), np.zeros(m)
     if not rough:
-        return alpha, zero3, zeros, zeros, 0.0, zero3, zeros
+        return alpha, zero3, zeros, zeros, 0.0, zero3, zeros, 0.0
     kind, colour, ior = materials.kind[j], materials.colour[j], float(materials.ior[j])
     multiscatter = True if materials.multiscatter is None else bool(materials.multiscatter[j])
     if kind == ROUGH_GLASS:
@@ -451,19 +453,19 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
             e_avg, missing = _glass_albedo(alpha, eta)
             fss = glass_fss(materials.reflection_tint[j], materials.transmission_tint[j], eta)
             sides.append((np.vectorize(multiscatter_fresnel)(fss, e_avg),
-                          missing if multiscatter else zeros))
-        (fms, missing), (fms_back, missing_back) = sides
-        return alpha, fms, missing, zeros, 0.0, fms_back, missing_back
+                          missing if multiscatter else zeros, e_avg))
+        (fms, missing, e_avg), (fms_back, missing_back, e_avg_back) = sides
+        return alpha, fms, missing, zeros, e_avg, fms_back, missing_back, e_avg_back
     if kind == ROUGH_METAL:
         tables = microfacet_tables(alpha, "none", 1.5)
         fms = tables.multiscatter_fresnel([schlick_fss(c) for c in colour])
         return (alpha, fms, tables.missing_table if multiscatter else zeros, zeros,
-                tables.e_avg, zero3, zeros)
+                tables.e_avg, zero3, zeros, 0.0)
     principled = kind == PRINCIPLED
     tables = microfacet_tables(alpha, "dielectric" if principled else "none", ior)
     return (alpha, layer_fms(tables, principled, colour),
             tables.missing_table if multiscatter else zeros, tables.albedo_table,
-            tables.e_avg, zero3, zeros)
+            tables.e_avg, zero3, zeros, 0.0)
 
 
 @functools.lru_cache(maxsize=512)
@@ -585,19 +587,27 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness):
 
 
 @njit(**INLINE)
-def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_on):
+def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_on, textured):
     """The rough glass lobe of material `mat` at view cosine mu, on its front side (eta =
     IOR) or its back side (eta = 1 / IOR), from its LayerTables lt; roughness as
-    layer_at's; without fresnel_on, the Refraction BSDF's (glass_fresnel)."""
+    layer_at's; without fresnel_on, the Refraction BSDF's (glass_fresnel). With `textured`,
+    the tints are this point's: the compensation's Fss is its transmission tint (glass_fss;
+    a texel transmitting nothing gets no compensation)."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     if front:
         missing = table_at(mu, lt, lt.missing, r0, r1, w)
         f0, f1, f2 = fms_at(lt.fms, r0, r1, w)
+        e = lt.e_avg[r0] + w * (lt.e_avg[r1] - lt.e_avg[r0])
         eta = ior
     else:
         missing = table_at(mu, lt, lt.missing_back, r0, r1, w)
         f0, f1, f2 = fms_at(lt.fms_back, r0, r1, w)
+        e = lt.e_avg_back[r0] + w * (lt.e_avg_back[r1] - lt.e_avg_back[r0])
         eta = 1.0 / ior
+    if textured:
+        f0, f1, f2 = (multiscatter_fresnel(max(t_tint[0], 0.0), e),
+                      multiscatter_fresnel(max(t_tint[1], 0.0), e),
+                      multiscatter_fresnel(max(t_tint[2], 0.0), e))
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  t_tint[0], t_tint[1], t_tint[2])

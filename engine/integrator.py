@@ -50,7 +50,7 @@ from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_S
                        bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
                        sample_1d, sample_2d)
 from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
-                    ROUGH_METAL, TRANSLUCENT, TRANSPARENT)
+                    ROUGH_METAL, TRANSLUCENT, TRANSPARENT, glass_tints)
 
 # Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
 # scrambled by this (and the crossing's number), apart from the path's own choices.
@@ -109,11 +109,13 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
 # strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
 # component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
-# whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) (scene.Materials).
+# whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
+# tints it (k,) int (scene.Materials).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength absorption mix_components "
-                                            "mix_fac mix_scale coat_ior coat_tint fresnel")
+                                            "mix_fac mix_scale coat_ior coat_tint fresnel "
+                                            "glass_tints")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -475,10 +477,20 @@ def rough_lobe(x, k, c, sc, paths):
         return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2],
                                    roughness)
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
-        return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers,
-                                   mt.reflection_tint[x.mat], mt.transmission_tint[x.mat],
-                                   roughness, mt.fresnel[x.mat])
+        tints = glass_tints_at(x, c, textured, sc)
+        return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers, tints[:3],
+                                   tints[3:], roughness, mt.fresnel[x.mat], textured)
     return bsdf.no_layer()
+
+
+def glass_tints_at(x, c, textured, sc):
+    """The reflection and transmission tints (3 values each) of glass vertex x: from its
+    colour c here where that is textured (scene.glass_tints), else the table's."""
+    mt = sc.materials
+    if textured:
+        return glass_tints(mt.glass_tints[x.mat], c[0], c[1], c[2])
+    r, t = mt.reflection_tint[x.mat], mt.transmission_tint[x.mat]
+    return r[0], r[1], r[2], t[0], t[1], t[2]
 
 
 def handle_emission(i, row, depth, x, sc, paths, mis):
@@ -743,9 +755,10 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_GLASS and k == GLASS:
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
+        tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
-            x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
-            mt.transmission_tint[x.mat], u, EXACT_FRESNEL, mt.fresnel[x.mat])
+            x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:], u,
+            EXACT_FRESNEL, mt.fresnel[x.mat])
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:
@@ -1051,7 +1064,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     coat_layer,
     surface_interaction, shading_normal,
     mapped_normal,
-    surface_colour, rough_lobe, handle_emission, caustic_weight, russian_roulette, emitter_pmf,
+    surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
+    russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, caustic_state, medium_transmittance,
     absorb_along_ray, path_counts, write_passes, pass_through, spawn)}

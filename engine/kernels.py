@@ -230,7 +230,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.mix_scale if needs_mixes else None,
                               m.coat_ior if plan.coats or generic else None,
                               m.coat_tint if plan.coats or generic else None,
-                              m.fresnel)
+                              m.fresnel, m.glass_tints)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .jit import ALLOCATING, njit
+from .jit import ALLOCATING, JIT, njit
 from .shading import Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
@@ -34,8 +34,8 @@ DELTA_ROUGHNESS = 2e-10 ** 0.25
 DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
-TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal",
-                  "translucent")
+TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal", "glass",
+                  "rough_glass", "translucent")
 # The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes.
 ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass")
 FRESNEL_MODELS = ("exact", "schlick")
@@ -50,6 +50,24 @@ DEFAULT_REPLICATES = 2
 MAX_REPLICATES = 64
 SENSOR_FITS = ("AUTO", "HORIZONTAL", "VERTICAL")
 CAMERA_TYPES = ("PERSP", "ORTHO")
+
+
+# How a glass' colour tints its reflection and transmission (Material.glass_tints).
+GLASS_TINTS = ("colour", "principled", "refraction")
+
+
+@njit(**JIT)
+def glass_tints(model, c0, c1, c2):
+    """A glass' (reflection, transmission) tints, 3 values each, from its colour c by its
+    model (GLASS_TINTS' index): the Glass BSDF tints both by c; the Principled BSDF leaves
+    reflection untinted and tints transmission by sqrt(c) per interface (c clamped to
+    [0, 1], as Cycles' sqrt(clamped base colour)); the Refraction BSDF reflects nothing."""
+    if model == 1:
+        return (1.0, 1.0, 1.0, math.sqrt(min(max(c0, 0.0), 1.0)),
+                math.sqrt(min(max(c1, 0.0), 1.0)), math.sqrt(min(max(c2, 0.0), 1.0)))
+    if model == 2:
+        return 0.0, 0.0, 0.0, c0, c1, c2
+    return c0, c1, c2, c0, c1, c2
 
 
 def _colour(value, what: str) -> np.ndarray:
@@ -164,6 +182,9 @@ class Material:
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
     fresnel: bool = True  # glass kinds: False is the Refraction BSDF (no Fresnel)
+    # Glass kinds: how the colour (or its program's result) tints reflection and
+    # transmission, one of GLASS_TINTS (glass_tints).
+    glass_tints: str = "colour"
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -220,35 +241,38 @@ class Material:
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
-              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None):
+              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None,
+              colour_program=None):
         """Cycles' Glass BSDF: colour tints reflection and transmission alike."""
-        c = tuple(colour)
+        return cls._glass(name, "colour", colour, ior, roughness, roughness_program,
+                          emission=tuple(emission), emission_program=emission_program,
+                          multiscatter=bool(multiscatter), colour_program=colour_program)
+
+    @classmethod
+    def _glass(cls, name, tints, colour, ior, roughness, roughness_program, **kwargs):
+        """A glass kind whose tints its colour gives by the model `tints` (glass_tints)."""
+        c = np.asarray(colour, np.float64)
+        t = glass_tints(GLASS_TINTS.index(tints), c[0], c[1], c[2])
         kind = _glass_kind(roughness, ior, roughness_program)
-        return cls(name, kind, c, ior, c, c, tuple(emission),
-                   roughness=float(roughness), multiscatter=bool(multiscatter),
-                   emission_program=emission_program,
-                   roughness_program=roughness_program if kind == "rough_glass" else None)
+        return cls(name, kind, tuple(colour), ior, t[:3], t[3:], roughness=float(roughness),
+                   roughness_program=roughness_program if kind == "rough_glass" else None,
+                   glass_tints=tints, **kwargs)
 
     @classmethod
     def refraction(cls, name, colour=(1, 1, 1), ior=1.45, roughness=0.0,
-                   roughness_program=None):
+                   roughness_program=None, colour_program=None):
         """Cycles' Refraction BSDF: refraction only, tinted by colour, without Fresnel."""
-        kind = _glass_kind(roughness, ior, roughness_program)
-        return cls(name, kind, tuple(colour), ior, (0.0, 0.0, 0.0), tuple(colour),
-                   roughness=float(roughness), multiscatter=False, fresnel=False,
-                   roughness_program=roughness_program if kind == "rough_glass" else None)
+        return cls._glass(name, "refraction", colour, ior, roughness, roughness_program,
+                          multiscatter=False, fresnel=False, colour_program=colour_program)
 
     @classmethod
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
                          emission_program=None, roughness=0.0, multiscatter=True,
-                         roughness_program=None):
+                         roughness_program=None, colour_program=None):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
-        base = np.clip(np.asarray(base_colour, dtype=np.float64), 0.0, 1.0)
-        kind = _glass_kind(roughness, ior, roughness_program)
-        return cls(name, kind, tuple(base_colour), ior, (1.0, 1.0, 1.0),
-                   tuple(np.sqrt(base)), tuple(emission), roughness=float(roughness),
-                   multiscatter=bool(multiscatter), emission_program=emission_program,
-                   roughness_program=roughness_program if kind == "rough_glass" else None)
+        return cls._glass(name, "principled", base_colour, ior, roughness, roughness_program,
+                          emission=tuple(emission), emission_program=emission_program,
+                          multiscatter=bool(multiscatter), colour_program=colour_program)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
@@ -399,6 +423,7 @@ class Materials:
     coat_ior: np.ndarray | None = None
     coat_tint: np.ndarray | None = None
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
+    glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
 
@@ -484,7 +509,9 @@ class Materials:
                    programs, emission_programs, normal_programs,
                    np.array([float(m.normal_strength) for m in materials]), absorption,
                    fac_programs=fac_programs, roughness_programs=roughness_programs,
-                   fresnel=np.array([bool(m.fresnel) for m in materials]))
+                   fresnel=np.array([bool(m.fresnel) for m in materials]),
+                   glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
+                                        np.int64))
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,

@@ -180,6 +180,21 @@ def sun_caustic_scene(angle_degrees=30.0, strength=3.0):
     return b.build(cam, World((0, 0, 0)))
 
 
+def pane_under_glowing_ceiling(material, camera_z):
+    """A large quad at z = 0 wearing `material` under a larger emitter of radiance 1 at z = 1
+    (a black world), seen head-on by an orthographic camera at height camera_z looking at
+    it (from below where camera_z < 0): every camera ray meets the pane at normal
+    incidence."""
+    b = SceneBuilder()
+    v, t = quad((-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0))
+    b.add_mesh("pane", v, t, b.add_material(material))
+    v, t = quad((-500, -500, 1), (-500, 500, 1), (500, 500, 1), (500, -500, 1))
+    b.add_mesh("ceiling", v, t, b.add_material(Material.emission_only("sky", (1, 1, 1), 1.0)))
+    cam = Camera(type="ORTHO", ortho_scale=2.0,
+                 world_from_camera=look_at((0, 0, camera_z), (0, 0, 0), up=(0, 1, 0)))
+    return b.build(cam, World((0.0, 0.0, 0.0)))
+
+
 def settings(**kw):
     base = dict(width=96, height=72, samples=8, max_bounces=8, seed=1)
     base.update(kw)

@@ -101,6 +101,25 @@ def test_refraction_is_glass_without_fresnel(fresh, core):
     assert warnings == [] and spec.to_core(core).kind == "glass"
 
 
+@pytest.mark.parametrize("shader, socket, tints", [
+    ("ShaderNodeBsdfGlass", "Color", "colour"), ("ShaderNodeBsdfRefraction", "Color",
+                                                 "refraction"),
+    ("ShaderNodeBsdfPrincipled", "Base Color", "principled")])
+def test_a_glass_colour_may_vary(fresh, core, shader, socket, tints):
+    """A textured glass colour is a program (the glass' tints follow it at each hit by its
+    model), its mean the constant standing for it."""
+    mat, node = node_material("Stained", shader)
+    if shader == "ShaderNodeBsdfPrincipled":
+        node.inputs["Transmission Weight"].default_value = 1.0
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Color"], node.inputs[socket])
+    spec, warnings = convert(mat)
+    assert warnings == [] and "colour_program" in spec.kwargs
+    m = spec.to_core(core)
+    assert m.kind in ("glass", "rough_glass") and m.glass_tints == tints
+    assert m.colour_program is not None
+
+
 def test_rough_diffuse_warns_and_renders_lambert(fresh):
     mat, node = node_material("Rough", "ShaderNodeBsdfDiffuse", Roughness=0.4)
     spec, warnings = convert(mat)

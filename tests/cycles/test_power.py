@@ -411,6 +411,16 @@ def _refraction_with_fresnel(scene, settings):
     return scene, settings
 
 
+def _glass_colour_as_its_mean(scene, settings):
+    """The renderer before textured glass colours: a glass' textured colour its mean."""
+    sc = renderers.core().scene
+    glass = np.isin(scene.materials.kind, (sc.GLASS, sc.ROUGH_GLASS))
+    colour = scene.programs.colour.copy()
+    colour[glass] = -1
+    scene.programs = scene.programs._replace(colour=colour)
+    return scene, settings
+
+
 def _coat_ior_plus_10_percent(scene, settings):
     """Every coat's IOR 10% higher, its lobe's with it."""
     m = scene.materials
@@ -505,6 +515,7 @@ INJECTIONS = {
     "textured_roughness_plus_10_percent": ("textured_roughness", None,
                                            _textured_roughness_plus_10_percent),
     "refraction_with_fresnel": ("refraction", _refraction_with_fresnel, None),
+    "glass_colour_as_its_mean": ("textured_glass", _glass_colour_as_its_mean, None),
     "refraction_roughness_plus_10_percent": ("refraction", _roughness_plus_10_percent(
         "ROUGH_GLASS"), None),
     "coat_ior_plus_10_percent": ("coat", _coat_ior_plus_10_percent, None),

@@ -5,7 +5,7 @@ the coat (bsdf.coat_layering)."""
 import numpy as np
 import pytest
 
-from engine import Camera, Material, RenderSettings, SceneBuilder, World, render
+from engine import Material, RenderSettings, SceneBuilder, World, render
 from engine.fresnel import fresnel_dielectric
 from engine.plan import make_plan
 from tests import scenes
@@ -15,17 +15,8 @@ TINT = np.array([0.9, 0.5, 0.7])
 
 
 def _pane_under_a_glowing_ceiling(material, samples=16, seed=3):
-    """A large quad at z = 0 under a larger emitter of radiance 1 at z = 1 (a black world),
-    seen head-on from above by an orthographic camera at z = 0.5 looking straight down:
-    every camera ray meets the pane at normal incidence."""
-    b = SceneBuilder()
-    v, t = scenes.quad((-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0))
-    b.add_mesh("pane", v, t, b.add_material(material))
-    v, t = scenes.quad((-500, -500, 1), (-500, 500, 1), (500, 500, 1), (500, -500, 1))
-    b.add_mesh("ceiling", v, t, b.add_material(Material.emission_only("sky", (1, 1, 1), 1.0)))
-    cam = Camera(type="ORTHO", ortho_scale=2.0,
-                 world_from_camera=scenes.look_at((0, 0, 0.5), (0, 0, 0), up=(0, 1, 0)))
-    return render(b.build(cam, World((0.0, 0.0, 0.0))),
+    """scenes.pane_under_glowing_ceiling seen head-on from above (z = 0.5)."""
+    return render(scenes.pane_under_glowing_ceiling(material, 0.5),
                   RenderSettings(width=16, height=16, samples=samples, max_bounces=2,
                                  seed=seed))
 

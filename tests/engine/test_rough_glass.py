@@ -6,9 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from engine import Material, bsdf
+from engine import Material, World, bsdf, render
 from engine.jit import njit
 from engine.scene import Materials
+from tests import scenes
 from tests.stats import SIGNIFICANCE, chi2_test, expected_2d, histogram_2d, sidak
 
 N = 200_000
@@ -144,3 +145,29 @@ def test_rough_glass_kinds():
     assert Material.glass("g", roughness=0.001).kind == "glass"  # Cycles' delta threshold
     assert Material.glass("g", ior=1.0, roughness=0.3).kind == "glass"  # straight through
     assert Material.principled_glass("p", roughness=0.3).kind == "rough_glass"
+
+
+@pytest.mark.parametrize("make, roughness", [
+    ("glass", 0.0), ("glass", 0.4), ("principled_glass", 0.0), ("principled_glass", 0.4),
+    ("refraction", 0.3)])
+def test_a_textured_glass_colour_tints_as_the_constant_does(make, roughness):
+    """A glass whose colour is a program (a 1 x 1 image of c, its constant standing for it
+    grey) renders as the glass of colour c, sample for sample: the tints
+    (scene.glass_tints: the Glass BSDF's c and c, the Principled BSDF's 1 and sqrt(c), the
+    Refraction BSDF's 0 and c) and, rough, the energy compensation's Fss come from the
+    colour at the hit, not from the constant."""
+    c = (0.9, 0.5, 0.7)
+    texel = np.array([[[*c, 1.0]]], np.float32)
+    kwargs = {"roughness": roughness, "ior": 1.5}
+    images = []
+    for colour, program in ((c, None), ((0.5, 0.5, 0.5), scenes.image_program(texel))):
+        b = scenes.cornell_box(spheres=False)
+        ball = getattr(Material, make)("ball", colour, colour_program=program, **kwargs)
+        v, t, n = scenes.uv_sphere((0.0, 0.0, 0.4), 0.4)
+        b.add_mesh("ball", v, t, b.add_material(ball), corner_normals=n,
+                   uv_maps={"": np.zeros((len(t), 3, 2))})
+        r = render(b.build(scenes.cornell_camera(), World((0, 0, 0))),
+                   scenes.settings(width=32, height=24, samples=4, light_tracing=False))
+        assert r.plan.textures == (program is not None)
+        images.append(r.combined[..., :3])
+    np.testing.assert_allclose(images[1], images[0], rtol=1e-6, atol=1e-7)

@@ -233,8 +233,8 @@ def test_textures_validate_their_input():
     nan = Texture("nan", np.full((1, 1, 4), np.nan))
     assert np.all(nan.texels == 0)
     b = SceneBuilder()
-    b.add_material(Material("glass", "glass", colour_program=Program()))
-    with pytest.raises(ValueError, match="'glass'.*cannot vary"):
+    b.add_material(Material("clear", "transparent", colour_program=Program()))
+    with pytest.raises(ValueError, match="'clear'.*cannot vary"):
         b.build(scenes.cornell_camera())
 
 

@@ -8,16 +8,8 @@ from tests import scenes
 
 
 def _pane_under_a_glowing_ceiling(material, samples, seed):
-    """A large quad at z = 0 under a larger emitter of radiance 1 at z = 1 (a black world),
-    seen from below by an orthographic camera looking up at it."""
-    b = SceneBuilder()
-    v, t = scenes.quad((-50, -50, 0), (50, -50, 0), (50, 50, 0), (-50, 50, 0))
-    b.add_mesh("pane", v, t, b.add_material(material))
-    v, t = scenes.quad((-500, -500, 1), (-500, 500, 1), (500, 500, 1), (500, -500, 1))
-    b.add_mesh("ceiling", v, t, b.add_material(Material.emission_only("sky", (1, 1, 1), 1.0)))
-    cam = Camera(type="ORTHO", ortho_scale=2.0,
-                 world_from_camera=scenes.look_at((0, 0, -1), (0, 0, 0), up=(0, 1, 0)))
-    return render(b.build(cam, World((0.0, 0.0, 0.0))),
+    """scenes.pane_under_glowing_ceiling seen from below."""
+    return render(scenes.pane_under_glowing_ceiling(material, -1.0),
                   RenderSettings(width=16, height=16, samples=samples, max_bounces=2,
                                  seed=seed))
 
