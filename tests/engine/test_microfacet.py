@@ -214,7 +214,7 @@ def _lobe(m, lt, row, mu, front, roughness):
     kind = m.kind[row]
     if kind == bsdf.ROUGH_GLASS:
         layer = bsdf.glass_layer_at(row, mu, front, m.ior[row], lt, m.reflection_tint[row],
-                                    m.transmission_tint[row], roughness, True)
+                                    m.transmission_tint[row], roughness, True, False)
     elif kind == bsdf.ROUGH_METAL:
         layer = bsdf.metal_layer_at(row, mu, lt, False, 0.0, 0.0, 0.0, roughness)
     else:
