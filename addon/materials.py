@@ -110,8 +110,8 @@ class MaterialSpec:
             return dataclasses.replace(m, **extra) if extra else m
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
-        normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength", "absorption")
-                  if k in kwargs}
+        normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength",
+                                             "height_program", "absorption") if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
         return dataclasses.replace(m, **normal) if normal else m
 
@@ -119,7 +119,7 @@ class MaterialSpec:
 # The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
 # with one reads UV maps.
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
-                "roughness_program")
+                "roughness_program", "height_program")
 
 
 def default_material():
@@ -649,11 +649,14 @@ class _Reader:
 
     def normal_map_of(self, node, socket_name):
         """A normal input (Normal, Coat Normal): a tangent-space Normal Map node is compiled
-        (its colour as a program, its strength and UV map, as MaterialSpec keywords);
-        anything else there is warned and the mesh's normals are used (None)."""
+        (its colour as a program, its strength and UV map, as MaterialSpec keywords), a
+        Bump node too (bump_of); anything else there is warned and the mesh's normals are
+        used (None)."""
         sock = enabled_input(node, socket_name)
         link = None if sock is None else live_link(sock)
         src = None if link is None else link.from_node
+        if src is not None and src.bl_idname == "ShaderNodeBump":
+            return self.bump_of(src)
         if src is not None and src.bl_idname == "ShaderNodeNormalMap" and \
                 src.space == "TANGENT":
             colour, program = self.textured_colour(src, "Color", (0.5, 0.5, 1.0))
@@ -669,9 +672,24 @@ class _Reader:
             self.warn(f"node '{src.name}' space {src.space} is not supported (only Tangent "
                       f"Space); rendered with the mesh's normals")
             return None
-        self.ignored(node, socket_name, None,
-                     "bump maps are not supported: rendered with the mesh's normals")
+        self.ignored(node, socket_name, None, "rendered with the mesh's normals")
         return None
+
+    def bump_of(self, node):
+        """A Bump node as MaterialSpec keywords: its height program (shader_nodes.
+        compile_bump) over its Normal input's normal map, or over the mesh's normals. A
+        height that does not vary leaves the normal as it is, as in Cycles; one that does
+        not compile is warned and left out, as is a Bump under this one."""
+        below = self.normal_map_of(node, "Normal") or {"normal_program": None}
+        if below.pop("height_program", None) is not None:
+            inner = live_link(enabled_input(node, "Normal")).from_node
+            self.warn(f"node '{inner.name}' (Bump) on the Normal of node '{node.name}' (Bump) "
+                      f"is not supported; only '{node.name}' is rendered")
+        program, why = shader_nodes.compile_bump(node, self.constants.image_cache)
+        if program is None and why:
+            self.warn(f"node '{node.name}' (Bump) input 'Height' varies through {why}, which "
+                      f"Specula does not evaluate per point yet; rendered without the bump")
+        return below if program is None else {**below, "height_program": program}
 
     def viewport_fallback(self, why):
         self.warn(f"{why}; rendered as diffuse of its viewport colour")

@@ -654,6 +654,33 @@ def compile_product(colour, strength, texture_cache):
         return None, f"{type(exc).__name__}: {exc}"
 
 
+def compile_bump(node, texture_cache):
+    """(program or None, why not): a Bump node's program, whose result is (Distance x
+    Height, negated by Invert; Strength) at a point (the kernel differentiates its first
+    channel over the surface, shading.bump_normal); (None, "") when its Height does not
+    vary (a constant height tilts nothing). A chain through a node without an instruction
+    is refused even where it might be constant: a Noise Texture varies."""
+    height = enabled_input(node, "Height")
+    if height is None or live_link(height) is None:
+        return None, ""
+    try:
+        c = Compiler(texture_cache)
+        p, multiply = c.program, c.sh.MATHS.index("MULTIPLY")
+        distance = c.input(enabled_input(node, "Distance"), "VALUE")
+        if node.invert:
+            negative = p.const([-1.0])
+            distance = p.emit(c.sh.OP_MATH, 1, a=distance, b=negative, c=negative, d=multiply)
+        dh = p.emit(c.sh.OP_MATH, 1, a=c.input(height, "VALUE"), b=distance, c=distance,
+                    d=multiply)
+        strength = c.input(enabled_input(node, "Strength"), "VALUE")
+        p.out = p.emit(c.sh.OP_COMBINE, 3, a=dh, b=strength, c=strength)
+        return (p, "") if varies(height) else (None, "")
+    except Unsupported as exc:
+        return None, str(exc)
+    except (ValueError, ArithmeticError) as exc:
+        return None, f"{type(exc).__name__}: {exc}"
+
+
 def compile_colour(socket, texture_cache, view_dependent=True):
     """(program or None, why not): the program for colour input `socket` when its chain
     varies over the surface and every node in it compiles (with `view_dependent`, nodes

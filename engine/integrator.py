@@ -350,8 +350,8 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
     sign = 1.0 if dx * nx + dy * ny + dz * nz < 0.0 else -1.0
     sx, sy, sz = shading_normal(f, u_b, v_b, sign, sc)
-    if HAS_NORMAL_MAPS and mt.programs.normal[coat, 0] >= 0:  # the Coat Normal
-        sx, sy, sz = mapped_normal(f, u_b, v_b, sign, sx, sy, sz, coat, sc, paths)
+    if HAS_NORMAL_MAPS and shading.perturbs_normal(mt.programs, coat):  # the Coat Normal
+        sx, sy, sz = perturbed_normal(f, u_b, v_b, sign, sx, sy, sz, coat, sc, paths)
     mx, my, mz = bsdf.valid_specular_normal(nx * sign, ny * sign, nz * sign, -dx, -dy, -dz,
                                             sx, sy, sz)
     fr, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), mt.coat_ior[mat],
@@ -385,8 +385,8 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     bx, by, bz = sx, sy, sz
     if HAS_TEXTURES:
         shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
-    if HAS_NORMAL_MAPS and sc.materials.programs.normal[mat, 0] >= 0:
-        sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    if HAS_NORMAL_MAPS and shading.perturbs_normal(sc.materials.programs, mat):
+        sx, sy, sz = perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
     if sc.materials.kind[mat] != DIFFUSE and sc.materials.kind[mat] != TRANSLUCENT:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
@@ -411,6 +411,41 @@ def shading_normal(f, u, v, sign, sc):
         if length > 1e-12:
             return ax / length, ay / length, az / length
     return nx, ny, nz
+
+
+def perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths):
+    """The shading normal s after material mat's Normal Map node, then its Bump node
+    (whose Normal input is the map's result, or s), each where it has one."""
+    pt = sc.materials.programs
+    if pt.normal[mat, 0] >= 0:
+        sx, sy, sz = mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    if pt.height[mat, 0] >= 0:
+        sx, sy, sz = bumped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    return sx, sy, sz
+
+
+def bumped_normal(f, u, v, sign, nx, ny, nz, mat, sc, paths):
+    """The normal n (on the incoming side `sign`) after material mat's Bump node at the
+    hit: its height program run at the hit and a small step along each of the triangle's
+    edges from corner 0 (shading.BUMP_STEP), as Cycles runs the height's nodes at the hit
+    and at offsets along the ray differentials: every coordinate a program reads is
+    interpolated over the triangle, so a step in barycentrics is a step in position and
+    in every coordinate. The bump is taken on the front side and turned to the incoming
+    one: seen from inside, a bumped glass is the same surface (Cycles renders it so; the
+    node's formula on the turned normal would tilt it the other way, and a bumped glass
+    ball's caustic disagreed with Cycles' by |z| 28 that way)."""
+    g = sc.geometry
+    pt = sc.materials.programs
+    vt = g.vertices
+    h, strength = shading.height_at(mat, f, u, v, pt, g.uv, paths.svm)
+    step = shading.BUMP_STEP
+    h_e, _ = shading.height_at(mat, f, u + step, v, pt, g.uv, paths.svm)
+    h_f, _ = shading.height_at(mat, f, u, v + step, pt, g.uv, paths.svm)
+    bx, by, bz = shading.bump_normal(
+        nx * sign, ny * sign, nz * sign, vt[f, 1, 0] - vt[f, 0, 0], vt[f, 1, 1] - vt[f, 0, 1],
+        vt[f, 1, 2] - vt[f, 0, 2], vt[f, 2, 0] - vt[f, 0, 0], vt[f, 2, 1] - vt[f, 0, 1],
+        vt[f, 2, 2] - vt[f, 0, 2], (h_e - h) / step, (h_f - h) / step, strength)
+    return bx * sign, by * sign, bz * sign
 
 
 def mapped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths):
@@ -759,6 +794,10 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:], u,
             EXACT_FRESNEL, mt.fresnel[x.mat])
+        # A tilted normal (smooth, mapped or bumped) can refract a direction back above the
+        # geometric surface: Cycles' bsdf_microfacet_sample drops it (as the rough lobe).
+        below_m = wx * x.mx + wy * x.my + wz * x.mz < 0.0
+        ok = ok and below_m == (wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:
@@ -1063,7 +1102,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
     coat_layer,
     surface_interaction, shading_normal,
-    mapped_normal,
+    perturbed_normal, mapped_normal, bumped_normal,
     surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,

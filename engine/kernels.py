@@ -209,7 +209,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     tangents = None
     if scene.tangents is not None and (plan.normal_maps or generic):
         tangents = scene.tangents
-    elif generic:
+    elif generic or plan.normal_maps:  # bump maps alone: no Normal Map reads tangents
         tangents = np.zeros((1, 3, 4), F32)
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
                         normals, smooth, obj, offset, uv, tangents)

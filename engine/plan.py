@@ -185,7 +185,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     cam = scene.camera
     dof = cam.aperture_radius > 0
     specular = bool(kinds & {MIRROR, METAL, GLASS})
-    normal_maps = scene.programs is not None and bool(np.any(scene.programs.normal[used, 0] >= 0))
+    normal_maps = scene.programs is not None and bool(np.any(
+        (scene.programs.normal[used, 0] >= 0) | (scene.programs.height[used, 0] >= 0)))
     # Only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
     # medium is its own row's, entered through any transmitting component.
     m = scene.materials

@@ -142,6 +142,9 @@ class Material:
         approximated by where a constant is needed (its mean).
     normal_program, normal_strength : a tangent-space normal map (Cycles' Normal Map node)
         over the shading normal, for any kind.
+    height_program : a Bump node over that normal: a Program whose result's first channel
+        is Distance x Height (negated by Invert) and second the node's Strength; the kernel
+        takes its gradient over the surface (shading.bump_normal), for any kind.
     roughness_program : a Program whose first channel replaces `roughness` at each hit
         (clamped to [0, 1]) for the GGX kinds; `roughness` then stands for its mean, and the
         kind stays rough (a microfacet lobe) even where that mean is 0.
@@ -171,6 +174,7 @@ class Material:
     # (SceneBuilder.add_mesh).
     normal_program: Program | None = field(default=None, compare=False)
     normal_strength: float = 1.0
+    height_program: Program | None = field(default=None, compare=False)  # a Bump node
     absorption: tuple = (0.0, 0.0, 0.0)
     components: tuple = ()  # mix: the two Materials mixed
     fac: float = 0.0  # mix: the weight of components[1] (a constant standing for fac_program)
@@ -426,6 +430,7 @@ class Materials:
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
+    height_programs: list | None = None  # per row a Bump node's height Program or None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -498,10 +503,11 @@ class Materials:
                 raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
                                  f"vary (textured roughness: {', '.join(ROUGH_KINDS)})")
         lists = (programs, emission_programs, normal_programs,
-                 [m.fac_program for m in materials], [m.roughness_program for m in materials])
+                 [m.fac_program for m in materials], [m.roughness_program for m in materials],
+                 [m.height_program for m in materials])
         textured = any(p is not None for progs in lists for p in progs)
-        programs, emission_programs, normal_programs, fac_programs, roughness_programs = \
-            lists if textured else (None,) * len(lists)
+        (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
+         height_programs) = lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -509,15 +515,16 @@ class Materials:
                    programs, emission_programs, normal_programs,
                    np.array([float(m.normal_strength) for m in materials]), absorption,
                    fac_programs=fac_programs, roughness_programs=roughness_programs,
+                   height_programs=height_programs,
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64))
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness), each a list with one Program or None per row."""
+        roughness, height), each a list with one Program or None per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
-                self.fac_programs, self.roughness_programs)
+                self.fac_programs, self.roughness_programs, self.height_programs)
 
     def __len__(self):
         return len(self.kind)
@@ -1018,8 +1025,8 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        colour, emission, normal, fac, roughness = materials.program_lists()
-        return uv, pack(colour, emission, names.index, normal, fac, roughness)
+        colour, emission, normal, fac, roughness, height = materials.program_lists()
+        return uv, pack(colour, emission, names.index, normal, fac, roughness, height)
 
 
 def _corner_coordinates(m, t) -> np.ndarray:

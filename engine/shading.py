@@ -183,21 +183,22 @@ class Program:
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
-#   colour, emission, normal, fac, roughness (k, 3) int64 per material: that input's
-#   program as first instruction (-1: none), end, result register.
-SLOTS = ("colour", "emission", "normal", "fac", "roughness")
+#   colour, emission, normal, fac, roughness, height (k, 3) int64 per material: that
+#   input's program as first instruction (-1: none), end, result register.
+SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
 def pack(colour_programs: list, emission_programs: list | None, uv_index,
          normal_programs: list | None = None, fac_programs: list | None = None,
-         roughness_programs: list | None = None) -> ProgramTable:
-    """Pack the materials' colour, emission, normal-map, mix-factor and roughness programs
-    (one per material, or None) into a ProgramTable; each program's UV map names become
-    scene-wide map indices through `uv_index(name)`."""
+         roughness_programs: list | None = None,
+         height_programs: list | None = None) -> ProgramTable:
+    """Pack the materials' colour, emission, normal-map, mix-factor, roughness and bump
+    height programs (one per material, or None) into a ProgramTable; each program's UV map
+    names become scene-wide map indices through `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
-                                       fac_programs, roughness_programs)]
+                                       fac_programs, roughness_programs, height_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -758,6 +759,60 @@ def normal_map(cx, cy, cz, tx, ty, tz, sign, nx, ny, nz):
         length = math.sqrt(nx * nx + ny * ny + nz * nz)
         return nx / length, ny / length, nz / length
     return x / length, y / length, z / length
+
+
+@njit(**INLINE)
+def perturbs_normal(pt, mat):
+    """Whether material mat tilts its shading normal: a Normal Map node's colour or a Bump
+    node's height program."""
+    return pt.normal[mat, 0] >= 0 or pt.height[mat, 0] >= 0
+
+
+# The barycentric step over which a Bump node's height is differentiated. Cycles steps a
+# tenth of the pixel footprint (the node's Filter Width); in the limit both are the height's
+# surface gradient, which a step this small reaches for any smooth height (1e-5 of an edge
+# is a hundredth of a texel of a 1024-texel image on a two-triangle plane) while float64
+# keeps the difference quotient's rounding near 1e-11.
+BUMP_STEP = 1e-5
+
+
+@njit(**INLINE)
+def height_at(mat, f, u, v, pt, uv, reg):
+    """Material mat's bump program at barycentrics (u, v) of triangle f: (Distance x
+    Height, Strength), unclamped (a height may be negative); non-finite values are 0."""
+    first = pt.height[mat, 0]
+    run(first, pt.height[mat, 1], pt, uv, f, u, v, reg)
+    o = pt.height[mat, 2]
+    h, strength = reg[o], reg[o + 1]
+    return (h if math.isfinite(h) else 0.0), (strength if math.isfinite(strength) else 0.0)
+
+
+@njit(**JIT)
+def bump_normal(nx, ny, nz, ex, ey, ez, fx, fy, fz, dh_e, dh_f, strength):
+    """Cycles' Bump node (svm_node_set_bump; Mikkelsen 2010, "Bump Mapping Unparameterized
+    Surfaces on the GPU"): the unit normal n tilted by the surface gradient of a height
+    whose derivatives along the surface vectors e and f are dh_e and dh_f (Distance
+    included, negated by Invert), blended toward n by the strength (>= 0); n itself where
+    the tilted normal degenerates. The result does not depend on which e, f span the
+    surface: surfgrad / det is the gradient."""
+    rx, ry, rz = fy * nz - fz * ny, fz * nx - fx * nz, fx * ny - fy * nx  # f x n
+    qx, qy, qz = ny * ez - nz * ey, nz * ex - nx * ez, nx * ey - ny * ex  # n x e
+    det = ex * rx + ey * ry + ez * rz
+    s = 1.0 if det > 0.0 else (-1.0 if det < 0.0 else 0.0)
+    ax = abs(det) * nx - s * (dh_e * rx + dh_f * qx)
+    ay = abs(det) * ny - s * (dh_e * ry + dh_f * qy)
+    az = abs(det) * nz - s * (dh_e * rz + dh_f * qz)
+    length = math.sqrt(ax * ax + ay * ay + az * az)
+    if not (length > 0.0 and math.isfinite(length)):
+        return nx, ny, nz
+    strength = max(strength, 0.0)
+    ax = strength * ax / length + (1.0 - strength) * nx
+    ay = strength * ay / length + (1.0 - strength) * ny
+    az = strength * az / length + (1.0 - strength) * nz
+    length = math.sqrt(ax * ax + ay * ay + az * az)
+    if not (length > 0.0 and math.isfinite(length)):
+        return nx, ny, nz
+    return ax / length, ay / length, az / length
 
 
 @njit(**INLINE)

@@ -273,9 +273,10 @@ def normal_map_texels(n=8, tilt=0.6):
     return texels.astype(np.float32)
 
 
-def normal_mapped_box(kind="diffuse", strength=1.0, texels=None):
+def normal_mapped_box(kind="diffuse", strength=1.0, texels=None, height=None):
     """The Cornell box (no spheres) whose floor carries a striped normal map on its UVs
-    (tangent +x, bitangent sign +1), in a diffuse or a rough Principled material."""
+    (tangent +x, bitangent sign +1), in a diffuse or a rough Principled material; with a
+    `height` program, that bump map in place of the normal map."""
     b = cornell_box(spheres=False)
     prog = image_program(normal_map_texels() if texels is None else texels, "Linear")
     if kind == "diffuse":
@@ -283,7 +284,9 @@ def normal_mapped_box(kind="diffuse", strength=1.0, texels=None):
     else:
         mat = Material.principled("bumpy", (0.7, 0.7, 0.7), roughness=0.3)
     from dataclasses import replace
-    m = b.add_material(replace(mat, normal_program=prog, normal_strength=strength))
+    tilt = {"height_program": height} if height is not None else \
+        {"normal_program": prog, "normal_strength": strength}
+    m = b.add_material(replace(mat, **tilt))
     v, t = quad((-1, -1, 0.001), (1, -1, 0.001), (1, 1, 0.001), (-1, 1, 0.001))
     tangents = np.zeros((2, 3, 4))
     tangents[..., 0], tangents[..., 3] = 1.0, 1.0

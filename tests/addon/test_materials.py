@@ -771,15 +771,12 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "bump"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
+    ("Normal", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
     ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")
-    if value == "bump":
-        bump = mat.node_tree.nodes.new("ShaderNodeBump")
-        mat.node_tree.links.new(bump.outputs[0], node.inputs[socket])
-    elif value == "link":
+    if value == "link":
         link_value(mat, node, socket)
     else:
         node.inputs[socket].default_value = value
@@ -872,6 +869,65 @@ def test_tangent_space_normal_maps_are_compiled(fresh, core, shader):
     spec, warnings = convert(mat)
     assert "normal_program" not in spec.kwargs
     assert len(warnings) == 1 and "OBJECT" in warnings[0] and nmap.name in warnings[0]
+
+
+def add_bump(mat, node, socket="Normal"):
+    """A Bump node on `socket` whose Height is the UV's u times 2 (Separate XYZ, Math)."""
+    tree = mat.node_tree
+    bump = tree.nodes.new("ShaderNodeBump")
+    tree.links.new(bump.outputs[0], node.inputs[socket])
+    coords, xyz, times = (tree.nodes.new(t) for t in (
+        "ShaderNodeTexCoord", "ShaderNodeSeparateXYZ", "ShaderNodeMath"))
+    times.operation = "MULTIPLY"
+    times.inputs[1].default_value = 2.0
+    tree.links.new(coords.outputs["UV"], xyz.inputs[0])
+    tree.links.new(xyz.outputs["X"], times.inputs[0])
+    tree.links.new(times.outputs[0], bump.inputs["Height"])
+    return bump
+
+
+@pytest.mark.parametrize("shader", ["ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass",
+                                    "ShaderNodeBsdfPrincipled"])
+def test_bump_nodes_are_compiled(fresh, core, shader):
+    """A Bump node on a shader's Normal: its program yields Distance x Height (negated by
+    Invert) and Strength at a point, over the normal map on its own Normal input. A
+    constant Height tilts nothing (no program, no warning); a Bump under a Bump and a
+    Height that cannot be evaluated are warned and left out."""
+    from engine import shading
+    mat, node = node_material("Embossed", shader)
+    bump = add_bump(mat, node)
+    bump.inputs["Distance"].default_value = 0.3
+    bump.inputs["Strength"].default_value = 0.8
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.kwargs["normal_program"] is None
+    program = spec.kwargs["height_program"]
+    reg = shading.evaluate(program, uv=(0.25, 0.5))
+    assert reg[program.out:program.out + 2] == pytest.approx((0.3 * 2 * 0.25, 0.8))
+    assert spec.to_core(core).height_program is program
+    bump.invert = True
+    nmap = add_normal_map(mat, bump)
+    nmap.inputs["Color"].default_value = (0.8, 0.5, 0.9, 1.0)
+    spec, warnings = convert(mat)
+    assert warnings == []
+    program = spec.kwargs["height_program"]
+    reg = shading.evaluate(program, uv=(0.25, 0.5))
+    assert reg[program.out] == pytest.approx(-0.3 * 2 * 0.25)
+    assert spec.kwargs["normal_program"] is not None and spec.kwargs["normal_uv"] == ""
+    inner = add_bump(mat, bump)
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and inner.name in warnings[0] and bump.name in warnings[0]
+    assert spec.kwargs["height_program"] is not None
+    mat.node_tree.nodes.remove(inner)
+    mat.node_tree.links.remove(bump.inputs["Height"].links[0])
+    spec, warnings = convert(mat)
+    assert warnings == [] and "height_program" not in spec.kwargs
+    noise = mat.node_tree.nodes.new("ShaderNodeTexNoise")
+    mat.node_tree.links.new(noise.outputs["Fac"], bump.inputs["Height"])
+    spec, warnings = convert(mat)
+    assert "height_program" not in spec.kwargs
+    assert any(bump.name in w and noise.name in w and "without the bump" in w
+               for w in warnings), warnings
 
 
 def test_linked_displacement_warns(fresh):

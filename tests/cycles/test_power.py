@@ -464,6 +464,50 @@ def _coat_normal_as_the_normal():
         yield
 
 
+def _bumps_ignored(scene, settings):
+    pt = scene.programs
+    scene.programs = pt._replace(height=np.full_like(pt.height, -1))
+    return scene, settings
+
+
+@contextmanager
+def _bump_distance_plus_10_percent():
+    """Every Bump node's Distance 10% larger (its program's first channel scaled)."""
+    from addon import shader_nodes
+
+    compile_bump = shader_nodes.compile_bump
+
+    def farther(node, texture_cache):
+        p, why = compile_bump(node, texture_cache)
+        if p is not None:
+            sh = renderers.core().shading
+            k = p.const([1.1])
+            dh = p.emit(sh.OP_MATH, 1, a=p.out, b=k, c=k, d=sh.MATHS.index("MULTIPLY"))
+            p.out = p.emit(sh.OP_COMBINE, 3, a=dh, b=p.out + 1, c=p.out + 1)
+        return p, why
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shader_nodes, "compile_bump", farther)
+        yield
+
+
+def bump_on_the_turned_normal(f, u, v, sign, nx, ny, nz, mat, sc, paths):
+    """integrator.bumped_normal taken about the normal as turned to the incoming side."""
+    return original_bumped_normal(f, u, v, 1.0, nx, ny, nz, mat, sc, paths)  # noqa: F821
+
+
+@contextmanager
+def _bump_on_the_turned_normal():
+    """The Bump node's formula read literally on a back face, about the normal turned to
+    the incoming side: a bumped glass' inside tilts the other way (a one-off kernel)."""
+    from tests.patching import one_off_kernels
+
+    with pytest.MonkeyPatch.context() as mp:
+        one_off_kernels(mp, bumped_normal=bump_on_the_turned_normal,
+                        original_bumped_normal=renderers.core().integrator.bumped_normal)
+        yield
+
+
 INJECTIONS = {
     "ior_plus_3_percent": ("glass_chart_145", _ior_plus_3_percent, None),
     "schlick_fresnel": ("glass_sheet_fresnel", _schlick, None),
@@ -523,6 +567,9 @@ INJECTIONS = {
     "coat_weight_as_its_mean": ("coat", _mix_factors_as_their_means, None),
     "coats_ignored": ("gltf_clear_coat", None, _coats_ignored),
     "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
+    "bumps_ignored": ("bump", _bumps_ignored, None),
+    "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
+    "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }
 
 

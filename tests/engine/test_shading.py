@@ -293,3 +293,61 @@ def test_normal_mapped_floor_leans_toward_its_map():
     (flat_l, flat_r), (lean_l, lean_r) = halves
     assert abs(flat_l / flat_r - 1.0) < 0.05, halves
     assert lean_l / lean_r > 1.3, halves
+
+
+def _plane_gradient_case(rng):
+    """A unit normal n, two vectors e, f spanning its plane and a gradient g in it."""
+    n = rng.normal(size=3)
+    n /= np.linalg.norm(n)
+    e, f, g = (np.cross(n, rng.normal(size=3)) for _ in range(3))
+    return n, e, f, g
+
+
+def test_bump_tilts_the_normal_by_the_height_gradient_whatever_the_surface_vectors(rng):
+    """Cycles' Bump node in the limit: the normal n - grad h (Distance included), normalised,
+    from the height's derivatives along any two vectors spanning the surface, on either
+    side; strength s blends toward n; a degenerate frame keeps n."""
+    for _ in range(20):
+        n, e, f, g = _plane_gradient_case(rng)
+        expect = (n - g) / np.linalg.norm(n - g)
+        for a, b in ((e, f), (f, e)):
+            assert shading.bump_normal(*n, *a, *b, g @ a, g @ b, 1.0) == pytest.approx(expect)
+        flipped = shading.bump_normal(*-n, *e, *f, g @ e, g @ f, 1.0)
+        assert flipped == pytest.approx((-n - g) / np.linalg.norm(n + g))
+        s = rng.uniform(0.1, 0.9)
+        half = s * expect + (1 - s) * n
+        assert shading.bump_normal(*n, *e, *f, g @ e, g @ f, s) == pytest.approx(
+            half / np.linalg.norm(half))
+        assert shading.bump_normal(*n, *e, *f, g @ e, g @ f, 0.0) == pytest.approx(n)
+        assert shading.bump_normal(*n, *e, *e, g @ e, g @ e, 1.0) == pytest.approx(n)
+
+
+def _slope_program(slope, strength=1.0):
+    """A Bump node's program: Distance x Height = slope x u on the default UV map."""
+    p = Program()
+    u = p.uv("")
+    k = p.const([slope])
+    dh = p.emit(OP_MATH, 1, a=u, b=k, c=k, d=shading.MATHS.index("MULTIPLY"))
+    s = p.const([strength])
+    p.out = p.emit(shading.OP_COMBINE, 3, a=dh, b=s, c=s)
+    return p
+
+
+def test_a_sloped_bump_shades_as_the_normal_map_of_its_slope():
+    """A floor bumped by the height 1.2 u (u = (x + 1) / 2: the gradient (0.6, 0, 0)) has
+    the normal (-0.6, 0, 1) normalised everywhere; the floor whose normal map holds that
+    normal renders the same, sample for sample. The unbumped floor does not."""
+    from engine import render
+    n = np.array([-0.6, 0.0, 1.0]) / np.hypot(0.6, 1.0)
+    colour = np.float32(np.append((n + 1) / 2, 1.0))
+    st = scenes.settings(samples=8, max_bounces=1)
+    mapped = render(scenes.normal_mapped_box(texels=np.broadcast_to(colour, (2, 2, 4)).copy()),
+                    st).combined
+    bumped = render(scenes.normal_mapped_box(height=_slope_program(1.2)), st).combined
+    flat = render(scenes.normal_mapped_box(strength=0.0), st).combined
+    assert np.all(np.isfinite(bumped))
+    # The map's colour is float32: its normal is 1e-7 off, which turns a few paths.
+    assert np.isclose(bumped, mapped, rtol=1e-5, atol=1e-6).mean() > 0.999
+    assert bumped.mean() == pytest.approx(mapped.mean(), rel=1e-4)
+    floor = np.s_[1:8, :, :]
+    assert abs(bumped[floor].mean() / flat[floor].mean() - 1.0) > 0.05
