@@ -21,8 +21,9 @@ Fallbacks:
     and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
     (a mix of shaders where two or more weigh > 0), and Alpha < 1 (or textured) mixes in
     transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes.
-    Inputs Specula does not render (Sheen, Subsurface, Anisotropic, Specular Tint, Thin
-    Film, Diffuse Roughness) warn when used.
+    Specular Tint bends the metal's F82 Fresnel (the dielectric and glass reflections stay
+    untinted, warned). Inputs Specula does not render (Sheen, Subsurface, Anisotropic,
+    Thin Film, Diffuse Roughness) warn when used.
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
   * any other shader node (Toon, Sheen, ...): diffuse of its 'Color' / 'Base Color'
@@ -61,7 +62,6 @@ PRINCIPLED_IGNORED = (
     ("Sheen Weight", 0.0, "rendered without sheen"),
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
     ("Anisotropic", 0.0, "rendered isotropic"),
-    ("Specular Tint", (1.0, 1.0, 1.0), "rendered white"),
     ("Thin Film Thickness", 0.0, "rendered without thin film"),
     ("Diffuse Roughness", 0.0, "rendered Lambert"),
 )
@@ -905,10 +905,23 @@ class _Reader:
     def principled_ignored(self, node):
         self.normal(node)
         for socket_name, neutral, rendered in PRINCIPLED_IGNORED:
-            if socket_name == "Specular Tint" and socket_name in node.inputs \
-                    and node.inputs[socket_name].type != "RGBA":
-                continue  # a float before 4.0, where 0 meant untinted
             self.ignored(node, socket_name, neutral, rendered)
+
+    def specular_tint(self, node, dielectric):
+        """The Principled BSDF's Specular Tint as the metal's F82 edge tint (its mean where
+        it varies, warned); on the dielectric and glass lobes (`dielectric`: some are
+        there) it is not rendered, warned. White before 4.0, where it was a float."""
+        sock = enabled_input(node, "Specular Tint")
+        if sock is None or sock.type != "RGBA":
+            return (1.0, 1.0, 1.0)
+        tint, program = self.textured_colour(node, "Specular Tint", (1.0, 1.0, 1.0))
+        if program is not None:
+            self.warn(f"node '{node.name}' input 'Specular Tint' varies over the surface; "
+                      f"rendered as its mean {_fmt(tint)}")
+        if dielectric and (program is not None or max(abs(t - 1.0) for t in tint) > 1e-6):
+            self.warn(f"node '{node.name}' input 'Specular Tint' {_fmt(tint)} is rendered on "
+                      f"its metal only; the dielectric and glass reflections are untinted")
+        return tint
 
     def principled(self, node):
         """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x
@@ -938,11 +951,13 @@ class _Reader:
             self.warn(f"node '{node.name}' emission under its coat is rendered undimmed by "
                       f"the coat (Cycles dims it by the coat's reflectance and tint)")
         multiscatter = self.multiscatter(node)
+        tint = self.specular_tint(node, metal_program is not None or metallic < 1.0)
 
         def metal():
             base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("metal", name, {"base_colour": base, **_with(program),
-                                                **roughness, "multiscatter": multiscatter})
+                                                **roughness, "multiscatter": multiscatter,
+                                                "specular_tint": tint})
 
         def glass():
             base, program = self.textured_colour(node, "Base Color")

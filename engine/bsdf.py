@@ -33,12 +33,33 @@ DELTA_PDF = np.inf
 
 # ----------------------------------------------------------------- Fresnel
 @njit(**JIT)
-def fresnel_schlick_conductor(cos_theta, f0):
-    """Principled metallic at roughness 0 with white specular tint (F82-tint, b = 0):
-    F = F0 + (1 - F0)(1 - cos)^5 for one channel."""
-    c = (1.0 - min(max(abs(cos_theta), 0.0), 1.0)) ** 5
+def fresnel_f82(cos_theta, f0, b):
+    """The Principled BSDF's metallic Fresnel, one channel (Cycles' fresnel_f82; Hoffman's
+    F82 model): Schlick's F0 + (1 - F0)(1 - cos)^5 less b cos (1 - cos)^6, in [0, 1]. b
+    (f82_tint_b) bends the curve toward the Specular Tint near grazing; b = 0 is Schlick."""
+    mu = min(max(abs(cos_theta), 0.0), 1.0)
+    s = 1.0 - mu
+    s5 = s ** 5
     g = min(max(f0, 0.0), 1.0)
-    return min(max(g + (1.0 - g) * c, 0.0), 1.0)
+    return min(max(g + (1.0 - g) * s5 - b * mu * s5 * s, 0.0), 1.0)
+
+
+@njit(**JIT)
+def f82_tint_b(f0, tint):
+    """The F82 model's b for one channel of base colour F0 and Specular Tint (at most 1):
+    the curve at cos = 1/7 (about 82 degrees) is Schlick's there times the tint (Cycles'
+    fresnel_f82tint_B)."""
+    f = 6.0 / 7.0
+    f5 = f ** 5
+    g = min(max(f0, 0.0), 1.0)
+    return (g + (1.0 - g) * f5) * (7.0 / (f5 * f)) * (1.0 - min(max(tint, 0.0), 1.0))
+
+
+@njit(**JIT)
+def fresnel_schlick_conductor(cos_theta, f0):
+    """Principled metallic with white Specular Tint: fresnel_f82 with b = 0, Schlick's
+    F = F0 + (1 - F0)(1 - cos)^5 for one channel."""
+    return fresnel_f82(cos_theta, f0, 0.0)
 
 
 # ----------------------------------------------------------------- specular normals
@@ -393,16 +414,17 @@ LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_gui
 
 # One rough vertex's lobe: the diffuse weight dw and specular (reflection) tint (3 each),
 # alpha, eta, fresnel_on, the compensation per channel at mu_o (3), the chance of the
-# specular lobe and the transmission tint (3; rough glass, else 0).
+# specular lobe, the transmission tint (3; rough glass, else 0) and the F82 model's b
+# (3; rough metal, fresnel_f82, else 0).
 Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
-                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2")
+                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2")
 
 
 @njit(**INLINE)
 def no_layer():
     """The Layer of a vertex without a rough lobe."""
     return Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0)
+                 0.0, 0.0, 0.0, 0.0)
 
 
 def layer_tables(materials, used) -> LayerTables:
@@ -458,7 +480,8 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
         return alpha, fms, missing, zeros, e_avg, fms_back, missing_back, e_avg_back
     if kind == ROUGH_METAL:
         tables = microfacet_tables(alpha, "none", 1.5)
-        fms = tables.multiscatter_fresnel([schlick_fss(c) for c in colour])
+        fms = tables.multiscatter_fresnel([
+            f82_fss(c, f82_tint_b(c, t)) for c, t in zip(colour, materials.reflection_tint[j])])
         return (alpha, fms, tables.missing_table if multiscatter else zeros, zeros,
                 tables.e_avg, zero3, zeros, 0.0)
     principled = kind == PRINCIPLED
@@ -555,35 +578,44 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness):
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, alpha, eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
-                 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@njit(**JIT)
+def f82_fss(f0, b):
+    """The hemispherical average 2 int F mu dmu of fresnel_f82 (Cycles' fresnel_f82_Fss):
+    F0 + (1 - F0) / 21 - b / 126, in [0, 1]."""
+    g = min(max(f0, 0.0), 1.0)
+    return min(max(g + (1.0 - g) / 21.0 - b / 126.0, 0.0), 1.0)
 
 
 @njit(**JIT)
 def schlick_fss(f0):
-    """The hemispherical average 2 int F mu dmu of Schlick's F = F0 + (1 - F0)(1 - mu)^5
-    (Cycles' fresnel_f82_Fss with a white tint): F0 + (1 - F0) / 21."""
-    g = min(max(f0, 0.0), 1.0)
-    return g + (1.0 - g) / 21.0
+    """f82_fss with b = 0: Schlick's average F0 + (1 - F0) / 21."""
+    return f82_fss(f0, 0.0)
 
 
 @njit(**INLINE)
-def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness):
+def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness, edge):
     """The rough metal lobe of material `mat` at view cosine mu from its LayerTables lt:
-    tint is the Fresnel's F0 (the base colour, or c where it is textured); roughness as
-    layer_at's."""
+    tint is the Fresnel's F0 (the base colour, or c where it is textured), `edge` (3,) the
+    Specular Tint its F82 curve bends toward (fresnel_f82); roughness as layer_at's."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
     f0, f1, f2 = fms_at(lt.fms, r0, r1, w)
     tint0, tint1, tint2 = lt.tint[mat, 0], lt.tint[mat, 1], lt.tint[mat, 2]
     if textured:
         tint0, tint1, tint2 = c0, c1, c2
+    b0, b1, b2 = (f82_tint_b(tint0, edge[0]), f82_tint_b(tint1, edge[1]),
+                  f82_tint_b(tint2, edge[2]))
+    if textured:
         e = lt.e_avg[r0] + w * (lt.e_avg[r1] - lt.e_avg[r0])
-        f0, f1, f2 = (multiscatter_fresnel(schlick_fss(c0), e),
-                      multiscatter_fresnel(schlick_fss(c1), e),
-                      multiscatter_fresnel(schlick_fss(c2), e))
+        f0, f1, f2 = (multiscatter_fresnel(f82_fss(c0, b0), e),
+                      multiscatter_fresnel(f82_fss(c1, b1), e),
+                      multiscatter_fresnel(f82_fss(c2, b2), e))
     return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, alpha, 1.0, False,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, b0, b1, b2)
 
 
 @njit(**INLINE)
@@ -610,7 +642,7 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
                       multiscatter_fresnel(max(t_tint[2], 0.0), e))
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 t_tint[0], t_tint[1], t_tint[2])
+                 t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0)
 
 
 @njit(**JIT)
@@ -812,9 +844,9 @@ def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, l
                          False)
     if not wix * nx + wiy * ny + wiz * nz > 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    return (spec * fresnel_schlick_conductor(cos_hv, lobe.tint0) * lobe.comp0,
-            spec * fresnel_schlick_conductor(cos_hv, lobe.tint1) * lobe.comp1,
-            spec * fresnel_schlick_conductor(cos_hv, lobe.tint2) * lobe.comp2, pdf)
+    return (spec * fresnel_f82(cos_hv, lobe.tint0, lobe.b0) * lobe.comp0,
+            spec * fresnel_f82(cos_hv, lobe.tint1, lobe.b1) * lobe.comp1,
+            spec * fresnel_f82(cos_hv, lobe.tint2, lobe.b2) * lobe.comp2, pdf)
 
 
 @njit(**JIT)

@@ -510,7 +510,7 @@ def rough_lobe(x, k, c, sc, paths):
                              roughness)
     if HAS_ROUGH_METAL and k == ROUGH_METAL:
         return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2],
-                                   roughness)
+                                   roughness, mt.reflection_tint[x.mat])
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         tints = glass_tints_at(x, c, textured, sc)
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers, tints[:3],
@@ -800,10 +800,11 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         ok = ok and below_m == (wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
-    if HAS_METAL and k == METAL:
-        return (wx, wy, wz, bsdf.fresnel_schlick_conductor(cos_o, c[0]),
-                bsdf.fresnel_schlick_conductor(cos_o, c[1]),
-                bsdf.fresnel_schlick_conductor(cos_o, c[2]), DELTA_PDF, True)
+    if HAS_METAL and k == METAL:  # the reflection tint is its Specular Tint (F82)
+        edge = mt.reflection_tint[x.mat]
+        return (wx, wy, wz, bsdf.fresnel_f82(cos_o, c[0], bsdf.f82_tint_b(c[0], edge[0])),
+                bsdf.fresnel_f82(cos_o, c[1], bsdf.f82_tint_b(c[1], edge[1])),
+                bsdf.fresnel_f82(cos_o, c[2], bsdf.f82_tint_b(c[2], edge[2])), DELTA_PDF, True)
     if HAS_MIRROR and k == MIRROR:
         return wx, wy, wz, c[0], c[1], c[2], DELTA_PDF, True
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False

@@ -96,8 +96,9 @@ class Material:
     kind : one of KIND_NAMES' values.
         - diffuse: Lambert, f = colour / pi (per-bounce weight = colour).
         - mirror: Glossy BSDF at roughness 0: reflectance = colour at every angle.
-        - metal: Principled metallic at roughness 0: F82-tint with white tint, i.e.
-          Schlick's reflectance with F0 = colour.
+        - metal: Principled metallic at roughness 0: Cycles' F82-tint reflectance with
+          F0 = colour and the Specular Tint `reflection_tint` (bsdf.fresnel_f82; white:
+          Schlick's). rough_metal: the same Fresnel on a GGX lobe.
         - glass: smooth dielectric of index `ior` (outside medium 1, flipped on back
           faces); reflection weighted by `reflection_tint` x F, transmission by
           `transmission_tint` x (1 - F). Glass BSDF: both tints = colour. Principled
@@ -235,11 +236,14 @@ class Material:
 
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
-              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None):
-        """Principled metallic: smooth at Cycles' delta roughness, else rough."""
+              emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None,
+              specular_tint=(1.0, 1.0, 1.0)):
+        """Principled metallic: smooth at Cycles' delta roughness, else rough; its Specular
+        Tint above 1 is 1, as Cycles takes it."""
         rough = roughness > DELTA_ROUGHNESS or roughness_program is not None
+        edge = tuple(min(float(t), 1.0) for t in specular_tint)
         return cls(name, "rough_metal" if rough else "metal", tuple(base_colour),
-                   emission=tuple(emission), roughness=float(roughness),
+                   reflection_tint=edge, emission=tuple(emission), roughness=float(roughness),
                    multiscatter=bool(multiscatter), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program)
 

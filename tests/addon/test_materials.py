@@ -930,6 +930,21 @@ def test_bump_nodes_are_compiled(fresh, core, shader):
                for w in warnings), warnings
 
 
+def test_specular_tint_bends_the_metal_only(fresh, core):
+    """Specular Tint is the metal's F82 edge tint (above 1 taken as 1, as Cycles); where
+    the Principled also has a dielectric part it is untinted there, warned."""
+    mat, node = node_material("Tinted", "ShaderNodeBsdfPrincipled", Metallic=1.0, **{
+        "Base Color": (0.9, 0.8, 0.7, 1.0), "Specular Tint": (0.2, 1.5, 0.6, 1.0)})
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.ctor == "metal"
+    assert spec.to_core(core).reflection_tint == pytest.approx((0.2, 1.0, 0.6))
+    node.inputs["Metallic"].default_value = 0.5
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and "Specular Tint" in warnings[0] and node.name in warnings[0]
+    metal = next(leaf for leaf in spec.leaves() if leaf.ctor == "metal")
+    assert metal.kwargs["specular_tint"] == pytest.approx((0.2, 1.5, 0.6))
+
+
 def test_linked_displacement_warns(fresh):
     mat, _ = node_material("Displaced", "ShaderNodeBsdfDiffuse")
     tree = mat.node_tree

@@ -54,7 +54,15 @@ KNOWN = {
     "b": "spot light with radius > 0: Specula's cone edge is too sharp",
     "c": "smooth-shaded mesh: Cycles' Shadow Terminator Geometry Offset (0.1) lightens the "
          "terminator",
+    "d": "a GGX lobe of roughness 0.004-0.02 (above Cycles' delta threshold, alpha^2 < 4e-8): "
+         "Cycles' float32 GGX is inexact there (a coat over smooth metal reflected a uniform "
+         "world 16% differently at roughness 0.006 than at 0 or 0.03 in Cycles; in Specula "
+         "not at all)",
+    "e": "an emission inside a mix whose factor is view-dependent (Fresnel, Layer Weight): "
+         "Specula mixes it by the factor's mean (warned)",
 }
+# Roughness between Cycles' delta threshold and this is known difference (d).
+TINY_ROUGHNESS = 0.02
 
 MATERIAL_KINDS = ("diffuse", "glossy", "glass", "principled", "metal", "principled_glass",
                   "emission")
@@ -305,6 +313,24 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                 "ior": _r(coats.uniform(1.3, 2.0), 3),
                 "tint": [_r(c) for c in coats.uniform(0.4, 1.0, 3)]
                 if coats.random() < 0.5 else [1.0, 1.0, 1.0]}
+    # Some metals' Fresnel bent by a Specular Tint (F82), from a stream of their own.
+    tints = np.random.default_rng([seed, 0xf82])
+    for o in params["objects"]:
+        if o["material"]["kind"] == "metal" and tints.random() < 0.4:
+            o["material"]["specular_tint"] = [_r(c) for c in tints.uniform(0.0, 1.2, 3)]
+    # Some surfaces bumped (a Bump node on ripples of a Generated coordinate), from a
+    # stream of their own; not emitters (their emission does not see the normal).
+    bumps = np.random.default_rng([seed, 0xb0b0])
+    for o in params["objects"]:
+        if o["material"]["kind"] != "emission" and bumps.random() < 0.25:
+            o["material"]["bump"] = {
+                "axis": str(bumps.choice(["X", "Y", "Z"])),
+                "frequency": _r(bumps.uniform(5.0, 30.0), 2),
+                "distance": _r(bumps.uniform(0.002, 0.02), 4),
+                "strength": _r(bumps.uniform(0.3, 1.0), 3) if bumps.random() < 0.5 else 1.0,
+                "invert": bool(bumps.random() < 0.3)}
+    if avoid_known:
+        params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -339,6 +365,8 @@ def features(params) -> list[str]:
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":alpha" if m.get("alpha") else "")
                  + (":coat" if m.get("coat") else "")
+                 + (":bump" if m.get("bump") else "")
+                 + (":specular_tint" if m.get("specular_tint") else "")
                  + (":refraction" if m.get("refraction") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
@@ -364,13 +392,31 @@ def known_issue_features(params) -> list[str]:
         keys.append("b")
     if any(o["smooth"] and o.get("terminator_offset", 0.1) > 0 for o in params["objects"]):
         keys.append("c")
+    if any(_tiny_roughness(o["material"]) for o in params["objects"]):
+        keys.append("d")
+    if any(_emission_under_varying_mix(o["material"]) for o in params["objects"]):
+        keys.append("e")
     return keys
+
+
+def _emission_under_varying_mix(m) -> bool:
+    """Whether material m is known difference (e)."""
+    return bool(m.get("mix", {}).get("factor") and m.get("emission_strength"))
+
+
+def _tiny_roughness(m) -> list[dict]:
+    """The parts of material m (itself, its coat) whose roughness is known difference (d)."""
+    delta = 2e-10 ** 0.25  # engine.scene.DELTA_ROUGHNESS (no engine import here)
+    return [part for part in (m, m.get("coat") or {}) if m["kind"] in
+            ("principled", "metal", "principled_glass", "glossy", "glass")
+            and delta < part.get("roughness", 0.0) < TINY_ROUGHNESS]
 
 
 def without_known(params, keys=tuple(KNOWN)) -> dict:
     """The scene with the features of the known differences `keys` neutralised as
     `avoid_known` would have drawn them: rough Glossy white (a), spot radius 0 (b), Cycles'
-    terminator offset 0 (c)."""
+    terminator offset 0 (c), a tiny roughness 0 (d), a constant mix factor under an
+    emission (e)."""
     p = copy.deepcopy(params)
     for o in p["objects"]:
         m = o["material"]
@@ -378,6 +424,11 @@ def without_known(params, keys=tuple(KNOWN)) -> dict:
             m["colour"] = [1.0, 1.0, 1.0]
         if "c" in keys and o["smooth"]:
             o["terminator_offset"] = 0.0
+        if "d" in keys:
+            for part in _tiny_roughness(m):
+                part["roughness"] = 0.0
+        if "e" in keys and _emission_under_varying_mix(m):
+            del m["mix"]["factor"]
     for light in p["lights"]:
         if "b" in keys and light["type"] == "SPOT":
             light["radius"] = 0.0
@@ -411,6 +462,11 @@ def _simpler_material(m):
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
     if m.get("coat"):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
+    if m.get("bump"):
+        out.append(("no bump", {k: v for k, v in m.items() if k != "bump"}))
+    if m.get("specular_tint"):
+        out.append(("white specular tint",
+                    {k: v for k, v in m.items() if k != "specular_tint"}))
     if m.get("refraction"):
         out.append(("Glass, not Refraction", {k: v for k, v in m.items() if k != "refraction"}))
     if m.get("mix", {}).get("factor"):
@@ -588,6 +644,10 @@ def _bpy_surface(name, m):
     mat = _bpy_surface_shader(name, m)
     if m.get("roughness_checker"):
         _roughness_checker(mat, m["roughness_checker"])
+    if m.get("bump"):
+        b = m["bump"]
+        from tests.cycles.variants import _bumped
+        _bumped(mat, b["axis"], b["frequency"], b["distance"], b["strength"], b["invert"])
     return mat
 
 
@@ -615,6 +675,8 @@ def _bpy_surface_shader(name, m):
         inputs.update({"IOR": m["ior"], "Specular IOR Level": m["specular_ior_level"]})
     elif kind == "metal":
         inputs["Metallic"] = 1.0
+        if m.get("specular_tint"):
+            inputs["Specular Tint"] = (*m["specular_tint"], 1.0)
     elif kind == "principled_glass":
         inputs.update({"IOR": m["ior"], "Transmission Weight": 1.0})
     if m.get("alpha"):

@@ -67,6 +67,9 @@ def _all_features(seeds, avoid_known=False):
         found.update("mixed shader" for o in p["objects"] if o["material"].get("mix"))
         found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
         found.update("coat" for o in p["objects"] if o["material"].get("coat"))
+        found.update("bump" for o in p["objects"] if o["material"].get("bump"))
+        found.update("specular tint" for o in p["objects"]
+                     if o["material"].get("specular_tint"))
         found.update("refraction" for o in p["objects"] if o["material"].get("refraction"))
         found.update("textured roughness" for o in p["objects"]
                      if o["material"].get("roughness_checker"))
@@ -88,8 +91,9 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
-              "coat", "refraction",
-              "bounces:0", "bounces:12", "known:a", "known:b", "known:c"}
+              "coat", "refraction", "bump", "specular tint",
+              "bounces:0", "bounces:12", "known:a", "known:b", "known:c", "known:d",
+              "known:e"}
 
 
 def test_generator_covers_every_supported_feature():

@@ -464,6 +464,16 @@ def _coat_normal_as_the_normal():
         yield
 
 
+def _specular_tint_white(scene, settings):
+    """Metals' Specular Tint white (Schlick's Fresnel, as before the F82 tint)."""
+    m = scene.materials
+    kinds = renderers.core().scene
+    metal = np.isin(m.kind, (kinds.METAL, kinds.ROUGH_METAL))
+    tint = np.where(metal[:, None], 1.0, m.reflection_tint)
+    scene.materials = dataclasses.replace(m, reflection_tint=tint)
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -568,6 +578,7 @@ INJECTIONS = {
     "coats_ignored": ("gltf_clear_coat", None, _coats_ignored),
     "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
     "bumps_ignored": ("bump", _bumps_ignored, None),
+    "specular_tint_white": ("specular_tint", _specular_tint_white, None),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

@@ -645,6 +645,21 @@ def rough_metal():
                                  "Roughness": 0.5}), grey])
 
 
+def specular_tint():
+    """The Principled BSDF's Specular Tint on metal (Cycles' F82-tint Fresnel; issue 14,
+    point 1): a smooth silver ball tinted blue toward grazing, a rough (0.3) gold tinted
+    red and a rough (0.6) copper whose tint is above 1 in green (taken as 1)."""
+    _box()
+    _balls([
+        _principled("TintedSilver", **{"Base Color": (0.9, 0.9, 0.9, 1.0), "Metallic": 1.0,
+                                       "Roughness": 0.0, "Specular Tint": (0.2, 0.5, 1.0, 1.0)}),
+        _principled("TintedGold", **{"Base Color": (1.0, 0.75, 0.35, 1.0), "Metallic": 1.0,
+                                     "Roughness": 0.3, "Specular Tint": (1.0, 0.3, 0.2, 1.0)}),
+        _principled("TintedCopper", **{"Base Color": (0.95, 0.64, 0.54, 1.0), "Metallic": 1.0,
+                                       "Roughness": 0.6,
+                                       "Specular Tint": (0.3, 1.5, 0.6, 1.0)})])
+
+
 def _with_volume(mat, shader, **inputs):
     """`mat` with a `shader` volume node on its Material Output's Volume."""
     tree = mat.node_tree
@@ -1611,6 +1626,7 @@ _add(Variant("normal_maps", normal_maps, max_bounces=8))
 # Distance +20% showed at |z| 3.6 at 512 / 1024 samples with slopes near 0.2 (measured):
 # steeper ripples and four times the samples.
 _add(Variant("bump", bump, max_bounces=8, samples=2048, cycles_samples=4096))
+_add(Variant("specular_tint", specular_tint, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))

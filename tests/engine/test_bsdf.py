@@ -148,6 +148,23 @@ def test_metal_is_schlick_with_base_colour_at_normal_incidence():
     assert np.allclose(metal_weight(direction(np.arccos(c))), base + (1 - base) * (1 - c) ** 5)
 
 
+# (A tint near 0 on a dark F0 drives the curve below 0 near grazing, where it is clamped;
+# Cycles' Fss is the unclamped curve's average, as f82_fss.)
+@pytest.mark.parametrize("f0, tint", [(0.9, 0.2), (0.5, 1.0), (0.95, 0.6), (0.1, 0.5)])
+def test_f82_tint_scales_schlick_at_82_degrees_and_averages_as_cycles_says(f0, tint):
+    """The F82-tint Fresnel (Cycles' metallic Principled): F0 head-on, Schlick's value times
+    the Specular Tint at cos = 1/7, Schlick's itself with a white tint; its cosine-weighted
+    average is f82_fss (the energy compensation's Fss), by quadrature."""
+    b = bsdf.f82_tint_b(f0, tint)
+    assert bsdf.fresnel_f82(1.0, f0, b) == pytest.approx(f0)
+    schlick = bsdf.fresnel_schlick_conductor(1.0 / 7.0, f0)
+    assert bsdf.fresnel_f82(1.0 / 7.0, f0, b) == pytest.approx(schlick * tint)
+    mu = (np.arange(4000) + 0.5) / 4000  # midpoints
+    average = np.mean([2.0 * m * bsdf.fresnel_f82(m, f0, b) for m in mu])
+    assert bsdf.f82_fss(f0, b) == pytest.approx(average, abs=1e-6)
+    assert bsdf.f82_tint_b(f0, 1.0) == 0.0
+
+
 def test_lambert_weight_and_pdf(rng):
     n = 50_000
     u = rng.random((n, 2))

@@ -384,7 +384,7 @@ def _fresh_kernel(scene, constants):
 MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_ROUGH_GLASS": "rough_dielectric", "HAS_ROUGH_METAL": "rough_conductor",
            "HAS_NORMAL_MAPS": "normal_map",
-           "HAS_METAL": "fresnel_schlick_conductor", "HAS_DOF": "thin_lens_ray",
+           "HAS_METAL": "fresnel_f82", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
            "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_IMPORTANCE": "importance_pmf",
