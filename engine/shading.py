@@ -780,11 +780,8 @@ BUMP_STEP = 1e-5
 def height_at(mat, f, u, v, pt, uv, reg):
     """Material mat's bump program at barycentrics (u, v) of triangle f: (Distance x
     Height, Strength), unclamped (a height may be negative); non-finite values are 0."""
-    first = pt.height[mat, 0]
-    run(first, pt.height[mat, 1], pt, uv, f, u, v, reg)
-    o = pt.height[mat, 2]
-    h, strength = reg[o], reg[o + 1]
-    return (h if math.isfinite(h) else 0.0), (strength if math.isfinite(strength) else 0.0)
+    h, strength, _ = raw_result_at(pt.height, mat, f, u, v, pt, uv, reg)
+    return h, strength
 
 
 @njit(**JIT)
@@ -816,19 +813,25 @@ def bump_normal(nx, ny, nz, ex, ey, ez, fx, fy, fz, dh_e, dh_f, strength):
 
 
 @njit(**INLINE)
+def raw_result_at(rows, mat, f, u, v, pt, uv, reg):
+    """The three result registers of program rows[mat] (which must exist) run at the hit
+    (triangle f, barycentrics u, v); non-finite channels are 0, negative ones kept."""
+    run(rows[mat, 0], rows[mat, 1], pt, uv, f, u, v, reg)
+    o = rows[mat, 2]
+    r0, r1, r2 = reg[o], reg[o + 1], reg[o + 2]
+    return (r0 if math.isfinite(r0) else 0.0, r1 if math.isfinite(r1) else 0.0,
+            r2 if math.isfinite(r2) else 0.0)
+
+
+@njit(**INLINE)
 def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
     """The result of program rows[mat] (pt.colour, .emission or .normal) at the hit (triangle f,
     barycentrics u, v; negative or non-finite channels are 0, as Cycles clamps closure
     weights), or the constant c0, c1, c2 where the material has no such program."""
-    first = rows[mat, 0]
-    if first < 0:
+    if rows[mat, 0] < 0:
         return c0, c1, c2
-    run(first, rows[mat, 1], pt, uv, f, u, v, reg)
-    o = rows[mat, 2]
-    r0, r1, r2 = reg[o], reg[o + 1], reg[o + 2]
-    return (r0 if r0 > 0.0 and math.isfinite(r0) else 0.0,
-            r1 if r1 > 0.0 and math.isfinite(r1) else 0.0,
-            r2 if r2 > 0.0 and math.isfinite(r2) else 0.0)
+    r0, r1, r2 = raw_result_at(rows, mat, f, u, v, pt, uv, reg)
+    return (r0 if r0 > 0.0 else 0.0, r1 if r1 > 0.0 else 0.0, r2 if r2 > 0.0 else 0.0)
 
 
 def evaluate(program: Program, uv=(0.0, 0.0), normal=(0.0, 0.0, 1.0), incoming=(0.0, 0.0, 1.0),
