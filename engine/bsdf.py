@@ -173,7 +173,8 @@ def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact, 
 # the colour is its constant Fresnel, so a darker colour gets less of the missing energy
 # back, not the same share scaled afterwards).
 # The Principled BSDF layers this specular over its diffuse base, which keeps the weight
-# 1 - albedo_spec(mu_o) (Cycles' closure_layering_weight).
+# 1 - A(mu_o) (Cycles' closure_layering_weight), A Cycles' estimate of the layer's albedo
+# (MicrofacetTables.estimate_table and layering_table), not the albedo itself.
 
 ALBEDO_TABLE_SIZE = 64
 MIN_ALPHA = 1e-4
@@ -250,10 +251,14 @@ def sample_visible_normal(wox, woy, woz, mx, my, mz, alpha, ua, ub):
 @njit(**ALLOCATING)
 def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
     """White-furnace integrands of the GGX lobe at view cosine mu for the stratified
-    samples u (k, 2): f cos / pdf with F = 1, and with the lobe's Fresnel."""
+    samples u (k, 2): f cos / pdf with F = 1, and with the lobe's Fresnel; and the
+    Fresnel's place between F0 and 1, (F - F0) / (1 - F0), where the sample reflects above
+    the surface, else 0 (the integrand of Cycles' ggx_gen_schlick_ior_s table)."""
     a2 = alpha * alpha
     w = np.zeros(len(u))
     wf = np.zeros(len(u))
+    s = np.zeros(len(u))
+    f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
     v0 = math.sqrt(max(0.0, 1 - mu * mu))
     lo = ggx_lambda(mu, a2)
     for k in range(len(u)):
@@ -261,9 +266,11 @@ def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
         cos_hv = max(hx * v0 + hz * mu, 0.0)
         cos_i = 2.0 * cos_hv * hz - mu
         if cos_i > 0:
+            f = fresnel_dielectric(cos_hv, eta, True)[0] if fresnel_on else 1.0
             w[k] = (1.0 / (1.0 + lo + ggx_lambda(cos_i, a2))) / (1.0 / (1.0 + lo))
-            wf[k] = w[k] * (fresnel_dielectric(cos_hv, eta, True)[0] if fresnel_on else 1.0)
-    return w, wf
+            wf[k] = w[k] * f
+            s[k] = min(max((f - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
+    return w, wf, s
 
 
 @njit(**ALLOCATING)
@@ -314,7 +321,17 @@ class MicrofacetTables:
     missing_table : (1 - E) / E, the energy the single-scatter lobe misses;
     compensation_table : the Kulla-Conty factor 1 + Fms (1 - E) / E for the lobe's own Fss;
     albedo_table : directional albedo of the compensated lobe with its Fresnel (what the
-        Principled base loses to the specular layer).
+        Principled base loses to the specular layer);
+    estimate_table : Cycles' estimate of the plain lobe's albedo with a dielectric Fresnel
+        (bsdf_microfacet_estimate_albedo), which a Principled layer or coat dims what is
+        below by: F0 + (1 - F0) s, s the mean over visible normals of the Fresnel's place
+        between F0 and 1 where the reflection lies above the surface (0 where not), as
+        its ggx_gen_schlick_ior_s table is made. Not weighted by the masking, so not the
+        albedo itself: the smooth Fresnel for a smooth lobe, less at grazing views as
+        the lobe roughens;
+    layering_table : the same estimate for the compensated lobe, times Cycles' darkening
+        (1 + Fms (1 - E) / E) E (microfacet_ggx_preserve_energy scales the closure's
+        weight by it, and the estimate includes the weight).
     Integrals use a fixed low-discrepancy set of visible-normal samples: deterministic
     tables.
     """
@@ -327,9 +344,10 @@ class MicrofacetTables:
         fresnel_on = fresnel != "none"
         e_white = np.zeros(n_mu)
         e_fresnel = np.zeros(n_mu)
+        schlick_s = np.zeros(n_mu)
         for i, mu in enumerate(self.mu):
-            w, wf = _lobe_integrands(self.alpha, fresnel_on, float(eta), float(mu), u)
-            e_white[i], e_fresnel[i] = w.mean(), wf.mean()
+            w, wf, s = _lobe_integrands(self.alpha, fresnel_on, float(eta), float(mu), u)
+            e_white[i], e_fresnel[i], schlick_s[i] = w.mean(), wf.mean(), s.mean()
         e_white = np.clip(e_white, 1e-6, 1.0)
         self.e_avg = float(2.0 * trapezoid(e_white * self.mu, self.mu))
         if fresnel_on:
@@ -341,6 +359,9 @@ class MicrofacetTables:
         self.fms = float(self.multiscatter_fresnel(fss))
         self.compensation_table = 1.0 + self.fms * self.missing_table
         self.albedo_table = np.clip(e_fresnel * self.compensation_table, 0.0, 1.0)
+        f0 = ((float(eta) - 1.0) / (float(eta) + 1.0)) ** 2 if fresnel_on else 1.0
+        self.estimate_table = f0 + (1.0 - f0) * schlick_s
+        self.layering_table = self.estimate_table * self.compensation_table * e_white
         self.fresnel, self.eta = fresnel, float(eta)
 
     def multiscatter_fresnel(self, fss):
@@ -403,7 +424,8 @@ ROUGHNESS_WARP = 1.5
 # the Glossy colour); fresnel (k,) bool: dielectric Fresnel (Principled) or none; first and
 # count (k,): its rows in the tables below, its own row (first = the material, count 1)
 # for a constant roughness, ROUGHNESS_GRID rows over roughness 0..1 for a textured one.
-# Per row: alpha; fms (n, 3) per channel; missing and albedo (n, m) over mu, the grid of
+# Per row: alpha; fms (n, 3) per channel; missing and albedo (n, m) over mu (albedo: what
+# the lobe takes from the layers below it, MicrofacetTables.layering_table), the grid of
 # view cosines (m,) with its guided_interp guide; e_avg the lobe's average albedo (a
 # textured Glossy colour's Fms at each hit). Rough glass: fms, missing and e_avg are its
 # front side's (entering, IOR), fms_back, missing_back and e_avg_back its back side's
@@ -486,8 +508,10 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
                 tables.e_avg, zero3, zeros, 0.0)
     principled = kind == PRINCIPLED
     tables = microfacet_tables(alpha, "dielectric" if principled else "none", ior)
-    return (alpha, layer_fms(tables, principled, colour),
-            tables.missing_table if multiscatter else zeros, tables.albedo_table,
+    if multiscatter:
+        return (alpha, layer_fms(tables, principled, colour), tables.missing_table,
+                tables.layering_table, tables.e_avg, zero3, zeros, 0.0)
+    return (alpha, layer_fms(tables, principled, colour), zeros, tables.estimate_table,
             tables.e_avg, zero3, zeros, 0.0)
 
 
@@ -645,17 +669,22 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
                  t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0)
 
 
-@njit(**JIT)
-def coat_layering(cos_o, ior, weight, tint):
-    """Cycles' Principled coat of IOR `ior` and Coat Weight `weight` seen at cosine cos_o
-    to its normal: (F, the tint's attenuation (3 values)). Its lobe reflects F of the
-    light at the view, the smooth dielectric's Fresnel (Cycles' albedo estimate for a
-    dielectric Fresnel), so what lies below keeps 1 - weight x F; the tint is the colour
-    kept through the coat head-on, so along the view refracted into it, at cosine cos_t,
-    it is tint^(1 / cos_t), applied by weight (Cycles: mix(1, tint^(1 / cos_t), weight))."""
-    fr, cos_t = fresnel_dielectric(cos_o, ior, True)
+@njit(**INLINE)
+def coat_layering(cos_o, coat, lt, roughness, ior, weight, tint):
+    """Cycles' Principled coat of IOR `ior` and Coat Weight `weight` whose lobe is material
+    `coat` (LayerTables lt; roughness as layer_at's), seen at cosine cos_o to its normal:
+    (A, the tint's attenuation (3 values)). A is the lobe's albedo as Cycles estimates it
+    for the layering (the coat row's albedo column, MicrofacetTables.layering_table: the
+    smooth dielectric's Fresnel for a smooth coat, less at grazing views as it roughens),
+    so what lies below keeps 1 - weight x A; the tint is the colour kept through the coat
+    head-on, so along the view refracted into it, at cosine cos_t, it is tint^(1 / cos_t),
+    applied by weight (Cycles: mix(1, tint^(1 / cos_t), weight))."""
+    mu = min(max(cos_o, 0.0), 1.0)
+    r0, r1, w, _ = lobe_rows(coat, lt, roughness)
+    albedo = table_at(mu, lt, lt.albedo, r0, r1, w)
+    cos_t = math.sqrt(max(1.0 - (1.0 - mu * mu) / (ior * ior), 0.0))
     depth = 1.0 / max(cos_t, 1e-12)
-    return (fr, 1.0 - weight + weight * tint[0] ** depth,
+    return (albedo, 1.0 - weight + weight * tint[0] ** depth,
             1.0 - weight + weight * tint[1] ** depth, 1.0 - weight + weight * tint[2] ** depth)
 
 

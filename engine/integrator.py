@@ -304,7 +304,7 @@ def handle_escaped(i, row, sc, paths, mis):
 def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
     """Down a mix of shaders to one component, the second with probability fac (its
     program's value at the hit of a ray along d where it is textured; a coat's lobe with
-    probability its weight x its Fresnel, coat_layer; one sample u in [0, 1) serves every
+    probability its weight x its albedo, coat_layer; one sample u in [0, 1) serves every
     level: its remainder is reused): (material, the weight (3,) the choices carry: the
     mixes' scales, a coat's)."""
     mt = sc.materials
@@ -338,11 +338,10 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
 def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     """Cycles' Principled coat `mat` of Coat Weight `weight` at a hit along d. Its lobe
     (the mix's second component) weighs `weight`; what is below (the first) weighs
-    1 - weight x F, F the coat's Fresnel at the view about its normal (Cycles'
-    closure_layering_weight with the smooth-surface albedo it takes for a dielectric
-    Fresnel) times the tint's (bsdf.coat_layering). The lobe is chosen with probability
-    weight x F, which leaves what is below the tint's weight alone. Returns (component,
-    u's remainder, its weight (3))."""
+    1 - weight x A, A the coat lobe's albedo at the view about its normal as Cycles
+    estimates it (closure_layering_weight), times the tint's (bsdf.coat_layering). The
+    lobe is chosen with probability weight x A, which leaves what is below the tint's
+    weight alone. Returns (component, u's remainder, its weight (3))."""
     mt = sc.materials
     g = sc.geometry
     coat = mt.mix_components[mat, 1]
@@ -354,11 +353,16 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
         sx, sy, sz = perturbed_normal(f, u_b, v_b, sign, sx, sy, sz, coat, sc, paths)
     mx, my, mz = bsdf.valid_specular_normal(nx * sign, ny * sign, nz * sign, -dx, -dy, -dz,
                                             sx, sy, sz)
-    fr, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), mt.coat_ior[mat],
-                                        weight, mt.coat_tint[mat])
-    p = weight * fr
+    roughness = -1.0  # the table's own
+    if HAS_TEXTURES:
+        roughness = shading.roughness_at(coat, f, u_b, v_b, mt.programs, g.uv, paths.svm,
+                                         roughness)
+    albedo, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), coat, mt.layers,
+                                            roughness, mt.coat_ior[mat], weight,
+                                            mt.coat_tint[mat])
+    p = weight * albedo
     if u < p:
-        return coat, u / p, 1.0 / fr, 1.0 / fr, 1.0 / fr
+        return coat, u / p, 1.0 / albedo, 1.0 / albedo, 1.0 / albedo
     return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
 
 

@@ -133,8 +133,9 @@ class Material:
           A mix with coat_ior > 0 is instead Cycles' Principled coat layer
           (Material.coated): components[1] is the coat's lobe (GGX with a dielectric
           Fresnel of index coat_ior, no energy compensation) of weight fac (the Coat
-          Weight), and components[0] what lies below, dimmed by the coat's reflectance at
-          the view, 1 - fac x F(cos_o), and by its tint, mix(1, coat_tint^(1 / cos_t), fac),
+          Weight), and components[0] what lies below, dimmed by the coat's albedo at the
+          view as Cycles estimates it, 1 - fac x A(cos_o) (bsdf.coat_layering), and by its
+          tint, mix(1, coat_tint^(1 / cos_t), fac),
           cos_t the view's cosine refracted into the coat. Emission below a coat is taken
           undimmed (Cycles dims it the same way; the exporter warns).
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
@@ -206,7 +207,9 @@ class Material:
                weight_program=None, roughness_program=None):
         """Cycles' Principled coat (Coat Weight, Roughness, IOR, Tint) over `base`: a mix
         whose second component is the coat's own lobe, a Principled specular layer over
-        black with plain GGX (Cycles' coat is not energy compensated)."""
+        black, energy compensated (Cycles' bsdf_microfacet_setup_fresnel_dielectric
+        compensates it with the dielectric's Fss, whichever the Principled's
+        distribution)."""
         ior = float(ior)
         if not (math.isfinite(ior) and ior >= 1.0):
             raise ValueError(f"material '{name}': a coat's IOR must be >= 1, got {ior!r}")
@@ -217,10 +220,9 @@ class Material:
     @classmethod
     def coat_lobe(cls, name, roughness=0.03, ior=1.5, roughness_program=None):
         """The lobe of Cycles' Principled coat: GGX reflection with the dielectric Fresnel of
-        `ior` and no energy compensation, i.e. a Principled specular layer over black with
-        plain GGX."""
+        `ior`, energy compensated, i.e. a Principled specular layer over black."""
         return cls.principled(name, (0.0, 0.0, 0.0), roughness, ior,
-                              roughness_program=roughness_program, multiscatter=False)
+                              roughness_program=roughness_program, multiscatter=True)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,

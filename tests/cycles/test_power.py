@@ -464,6 +464,37 @@ def _coat_normal_as_the_normal():
         yield
 
 
+def _coat_uncompensated(scene, settings):
+    """Coats' lobes plain GGX, as Cycles 4 made them (and Specula before Cycles 5)."""
+    m = scene.materials
+    multiscatter = m.multiscatter.copy()
+    multiscatter[m.mix_components[m.coat_ior > 0, 1]] = False
+    scene.materials = dataclasses.replace(m, multiscatter=multiscatter)
+    return scene, settings
+
+
+@contextmanager
+def _coat_dims_by_the_smooth_fresnel():
+    """What is below a coat dimmed by the smooth dielectric's Fresnel at the view, not by
+    Cycles' estimate of the rough coat's albedo (bsdf._lobe_row builds the kernel's
+    tables, in Python; a coat's lobe is the only Principled over black here)."""
+    bsdf = renderers.core().bsdf
+    lobe_row = bsdf._lobe_row
+
+    def smooth(materials, j, roughness, rough=True):
+        row = lobe_row(materials, j, roughness, rough)
+        if not rough or materials.kind[j] != renderers.core().scene.PRINCIPLED or \
+                materials.colour[j].any():
+            return row
+        mu = np.linspace(1e-3, 1.0, bsdf.ALBEDO_TABLE_SIZE)
+        fresnel = [bsdf.fresnel_dielectric(x, float(materials.ior[j]), True)[0] for x in mu]
+        return (*row[:3], np.array(fresnel), *row[4:])
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(bsdf, "_lobe_row", smooth)
+        yield
+
+
 def _specular_tint_white(scene, settings):
     """Metals' Specular Tint white (Schlick's Fresnel, as before the F82 tint)."""
     m = scene.materials
@@ -575,6 +606,8 @@ INJECTIONS = {
     "coat_ior_plus_10_percent": ("coat", _coat_ior_plus_10_percent, None),
     "coat_tint_ignored": ("coat", _coat_tint_ignored, None),
     "coat_weight_as_its_mean": ("coat", _mix_factors_as_their_means, None),
+    "coat_uncompensated": ("coat_furnace", _coat_uncompensated, None),
+    "coat_dims_by_the_smooth_fresnel": ("coat_rough", None, _coat_dims_by_the_smooth_fresnel),
     "coats_ignored": ("gltf_clear_coat", None, _coats_ignored),
     "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
     "bumps_ignored": ("bump", _bumps_ignored, None),

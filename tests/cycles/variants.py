@@ -1020,6 +1020,47 @@ def coat():
     _balls([red, gold, blue])
 
 
+def coat_rough():
+    """Rough coats (issue 14, point 1), where Cycles 5 compensates the coat's energy and
+    dims what is below by its estimate of the coat's albedo, not the smooth Fresnel: a
+    clear coat of roughness 0.6 over smooth pale metal, a coat of roughness 0.8 (weight
+    0.8, IOR 1.6) over a red Principled, and a tinted coat of roughness 0.45 (weight 0.7)
+    over smooth gold."""
+    _box()
+    mirror = _principled("RoughCoatMirror", **{
+        "Base Color": (0.95, 0.93, 0.88, 1.0), "Metallic": 1.0, "Roughness": 0.0,
+        "Coat Weight": 1.0, "Coat Roughness": 0.6})
+    red = _principled("SatinRed", **{"Base Color": (0.7, 0.08, 0.05, 1.0), "Roughness": 0.5,
+                                     "Coat Weight": 0.8, "Coat Roughness": 0.8,
+                                     "Coat IOR": 1.6})
+    gold = _principled("TintedRoughCoatGold", **{
+        "Base Color": (1.0, 0.75, 0.35, 1.0), "Metallic": 1.0, "Roughness": 0.0,
+        "Coat Weight": 0.7, "Coat Roughness": 0.45, "Coat Tint": (0.6, 0.85, 1.0, 1.0)})
+    _balls([mirror, red, gold])
+
+
+def coat_furnace():
+    """Rough coats in a white furnace (a world of radiance 1 and nothing else), quiet enough
+    to show the coat lobe's energy compensation (Cycles 5 compensates coats; 1-3% of the
+    lobe at these roughnesses): a coat of roughness 0.8 over a black Principled without a
+    specular layer (all its light is the coat's) and a coat of roughness 0.6 over smooth
+    white metal (what the coat leaves of the mirror, 1 - A, plus the coat's albedo)."""
+    scene = bs.new_scene()
+    bs.camera(scene, "Camera", (0.0, -3.0, 0.75), bs.CBSPHERES_LENS, (64, 48))
+    bs.black_world(scene)
+    background = next(n for n in scene.world.node_tree.nodes
+                      if n.bl_idname == "ShaderNodeBackground")
+    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    black = _principled("CoatOverBlack", **{
+        "Base Color": (0.0, 0.0, 0.0, 1.0), "Specular IOR Level": 0.0, "Coat Weight": 1.0,
+        "Coat Roughness": 0.8})
+    mirror = _principled("CoatOverMirror", **{
+        "Base Color": (1.0, 1.0, 1.0, 1.0), "Metallic": 1.0, "Roughness": 0.0,
+        "Coat Weight": 1.0, "Coat Roughness": 0.6})
+    _sphere(black, (-0.45, 0.0, 0.75), 0.4, "Ball0")
+    _sphere(mirror, (0.45, 0.0, 0.75), 0.4, "Ball1")
+
+
 def translucency():
     """The Translucent BSDF (issue 14, point 1): a greenish translucent card under the
     ceiling light, lighting the floor below it through itself and seen from below, and a
@@ -1635,6 +1676,8 @@ _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))
 _add(Variant("refraction", refraction, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("coat", coat, max_bounces=8, samples=2048, cycles_samples=4096))
+_add(Variant("coat_rough", coat_rough, max_bounces=8, samples=1024, cycles_samples=2048))
+_add(Variant("coat_furnace", coat_furnace, max_bounces=8, samples=256, cycles_samples=512))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),

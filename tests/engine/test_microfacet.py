@@ -7,6 +7,7 @@ import pytest
 
 from engine import Camera, Material, RenderSettings, SceneBuilder, World, bsdf, render
 from engine.scene import Materials
+from engine.fresnel import fresnel_dielectric
 from engine.jit import njit
 from tests.scenes import look_at, uv_sphere
 from tests.stats import SIGNIFICANCE, chi2_test, expected_2d, histogram_2d, sidak
@@ -88,6 +89,24 @@ def test_single_scatter_albedo_agrees_with_brute_force(rng):
     f, _ = eval_ggx_about_z(wo, wi, alpha, 1.5, True)
     brute = np.mean(f) * 2 * np.pi * np.interp(mu, t.mu, t.compensation_table)
     assert np.interp(mu, t.mu, t.albedo_table) == pytest.approx(brute, rel=0.01)
+
+
+def test_cycles_albedo_estimate_is_the_smooth_fresnel_for_a_smooth_lobe():
+    """Cycles' estimate of a dielectric lobe's albedo (the ggx_gen_schlick_ior_s table:
+    the mean over visible normals of the Fresnel's place between F0 and 1) tends to the
+    smooth Fresnel as the lobe sharpens, and falls below it at grazing views as it
+    roughens; compensated, it is darkened by (1 + Fms (1 - E) / E) E."""
+    mu = np.linspace(0.05, 1.0, 20)
+    smooth = np.array([fresnel_dielectric(m, 1.5, True)[0] for m in mu])
+    sharp = bsdf.MicrofacetTables(1e-4, "dielectric", 1.5)
+    np.testing.assert_allclose(np.interp(mu, sharp.mu, sharp.estimate_table), smooth,
+                               atol=2e-3)
+    rough = bsdf.MicrofacetTables(0.49, "dielectric", 1.5)
+    estimate = np.interp(mu, rough.mu, rough.estimate_table)
+    assert np.all(estimate[:4] < 0.5 * smooth[:4])
+    e = 1.0 / (1.0 + rough.missing_table)
+    np.testing.assert_allclose(rough.layering_table,
+                               rough.estimate_table * (1.0 + rough.fms * rough.missing_table) * e)
 
 
 def sphere_in_white_world(material, samples=16):
