@@ -20,13 +20,15 @@ Fallbacks:
   * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
     and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
     (a mix of shaders where two or more weigh > 0), and Alpha < 1 (or textured) mixes in
-    transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes.
+    transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes,
+    and a Sheen Weight > 0 (or textured) Cycles' microfiber sheen over that.
     Specular Tint bends the metal's F82 Fresnel (the dielectric and glass reflections stay
-    untinted, warned). Inputs Specula does not render (Sheen, Subsurface, Anisotropic,
-    Thin Film, Diffuse Roughness) warn when used.
+    untinted, warned). Inputs Specula does not render (Subsurface, Anisotropic, Thin Film,
+    Diffuse Roughness) warn when used.
+  * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
-  * any other shader node (Toon, Sheen, ...): diffuse of its 'Color' / 'Base Color'
+  * any other shader node (Toon, Hair, ...): diffuse of its 'Color' / 'Base Color'
     input, or grey 0.8.
   * an input driven by other nodes (textures): the constant the chain reduces to (see
     `_Constants`: an image's mean colour in scene-linear space, RGB / Value / Math / Mix /
@@ -59,7 +61,6 @@ MEAN_SIDE = 512
 # The Principled BSDF's inputs Specula does not render yet: (input, the value at which it has
 # no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
 PRINCIPLED_IGNORED = (
-    ("Sheen Weight", 0.0, "rendered without sheen"),
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
     ("Anisotropic", 0.0, "rendered isotropic"),
     ("Thin Film Thickness", 0.0, "rendered without thin film"),
@@ -105,6 +106,8 @@ class MaterialSpec:
                      if key in k}
             if "coat_ior" in k:
                 extra["coat_ior"] = float(k["coat_ior"])
+            if k.get("sheen_layer"):
+                extra["sheen_layer"] = True
             if "emission_program" in k:
                 extra["emission_program"] = k["emission_program"]
             return dataclasses.replace(m, **extra) if extra else m
@@ -810,6 +813,17 @@ class _Reader:
             return self.with_alpha(node, self.principled(node))
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
+        if kind == "ShaderNodeBsdfSheen":
+            if getattr(node, "distribution", "MICROFIBER") != "MICROFIBER":
+                self.warn(f"node '{node.name}' distribution {node.distribution} is not "
+                          f"supported; rendered as Microfiber")
+            self.normal(node)
+            colour, program = self.textured_colour(node, "Color")
+            if program is not None:
+                self.warn(f"node '{node.name}' input 'Color' varies over the surface; "
+                          f"rendered as its mean {_fmt(colour)}")
+            return MaterialSpec("sheen", name, {"colour": colour,
+                                                "roughness": self.unit(node, "Roughness", 0.5)})
         if kind == "ShaderNodeBsdfTranslucent":
             self.normal(node)
             colour, program = self.textured_colour(node, "Color")
@@ -976,7 +990,8 @@ class _Reader:
         def non_metal():
             return either(lambda: self.dielectric(node), glass, transmission, glass_program)
 
-        spec = self.coat(node, either(non_metal, metal, metallic, metal_program))
+        spec = self.sheen(node, self.coat(node, either(non_metal, metal, metallic,
+                                                       metal_program)))
         if spec.ctor != "mix":
             spec.kwargs.update(kwargs)
             return spec
@@ -1017,6 +1032,34 @@ class _Reader:
             lobe.kwargs.pop("normal_uv")
         mix = self.mixed(spec, lobe, weight, 1.0, weight_program)
         mix.kwargs.update(coat_ior=ior, coat_tint=tint)
+        return mix
+
+    def sheen(self, node, spec):
+        """The Principled BSDF's sheen over `spec` (Cycles' first layer: over the coat):
+        Sheen Weight (which may vary; above 1 it scales the tint, the same closure), Sheen
+        Roughness and Sheen Tint (their means where they vary, warned)."""
+        if "Sheen Weight" not in node.inputs:
+            return spec
+        weight, weight_program = self.textured_colour(node, "Sheen Weight", (0.0,) * 3)
+        weight = max(weight[0], 0.0)
+        if weight_program is None and weight <= 0.0:
+            return spec
+        tint, tint_program = self.textured_colour(node, "Sheen Tint", (1.0, 1.0, 1.0))
+        roughness, roughness_program = self.textured_unit(node, "Sheen Roughness", 0.5)
+        for socket, program, mean in (("Sheen Tint", tint_program, _fmt(tint)),
+                                      ("Sheen Roughness", roughness_program,
+                                       f"{roughness:.3g}")):
+            if program is not None:
+                self.warn(f"node '{node.name}' input '{socket}' varies over the surface; "
+                          f"rendered as its mean {mean}")
+        if weight_program is not None:
+            weight = min(weight, 1.0)
+        elif weight > 1.0:
+            tint, weight = tuple(c * weight for c in tint), 1.0
+        lobe = MaterialSpec("sheen", self.material.name, {"colour": tint,
+                                                           "roughness": roughness})
+        mix = self.mixed(spec, lobe, weight, 1.0, weight_program)
+        mix.kwargs.update(sheen_layer=True)
         return mix
 
     def with_alpha(self, node, spec):

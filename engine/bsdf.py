@@ -25,8 +25,10 @@ import numpy as np
 
 from .fresnel import fresnel_dielectric, glass_fresnel
 from .jit import ALLOCATING, INLINE, JIT, njit
-from .sampling import build_frame, cosine_hemisphere, guided_interp, interp_guide
+from .sampling import (build_frame, concentric_disk, cosine_hemisphere, guided_interp,
+                       interp_guide)
 from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL
+from .sheen_table import A as _SHEEN_A, ALBEDO as _SHEEN_ALBEDO, B as _SHEEN_B
 
 DELTA_PDF = np.inf
 
@@ -889,3 +891,94 @@ def sample_rough_conductor(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, ua, ub):
     if pdf > 0 and max(g0, max(g1, g2)) > 0:
         return wx, wy, wz, g0 / pdf, g1 / pdf, g2 / pdf, pdf, True
     return wx, wy, wz, 0.0, 0.0, 0.0, pdf, False
+
+
+# ----------------------------------------------------------------- microfiber sheen
+# Cycles' sheen (the Principled BSDF's Sheen layer and the Sheen BSDF's Microfiber): the
+# linearly transformed cosine of Zeltner, Burley and Chiang (2022) about the normal, in
+# the frame whose x axis is the view's tangent direction. Its transform (A, B) and albedo
+# come from their fitted table over view cosine and roughness (sheen_table.py).
+SHEEN_TABLE_SIZE = 32
+
+
+def sheen_table() -> np.ndarray:
+    """(3, 32, 32) float64: A, B and the albedo, each over roughness (rows) and view cosine
+    (columns), both 0..1."""
+    return np.array([_SHEEN_A, _SHEEN_B, _SHEEN_ALBEDO], np.float64).reshape(
+        3, SHEEN_TABLE_SIZE, SHEEN_TABLE_SIZE)
+
+
+@njit(**JIT)
+def _table_read(table, plane, x, y):
+    """Cycles' lookup_table_read_2D: bilinear in plane `plane` at x (columns) and y
+    (rows), each clamped to [0, 1]."""
+    n = table.shape[2]
+    fy = min(max(y, 0.0), 1.0) * (n - 1)
+    iy = min(int(fy), n - 1)
+    ty = fy - iy
+    fx = min(max(x, 0.0), 1.0) * (n - 1)
+    ix = min(int(fx), n - 1)
+    tx = fx - ix
+    jx, jy = min(ix + 1, n - 1), min(iy + 1, n - 1)
+    r0 = (1.0 - tx) * table[plane, iy, ix] + tx * table[plane, iy, jx]
+    r1 = (1.0 - tx) * table[plane, jy, ix] + tx * table[plane, jy, jx]
+    return (1.0 - ty) * r0 + ty * r1
+
+
+@njit(**JIT)
+def sheen_ltc(table, cos_o, roughness):
+    """(A, B, albedo) of the sheen of `roughness` (clamped to [1e-3, 1], as Cycles) seen at
+    cosine cos_o; albedo 0 where the fit has no valid transform (Cycles drops the lobe)."""
+    r = min(max(roughness, 1e-3), 1.0)
+    a = _table_read(table, 0, cos_o, r)
+    b = _table_read(table, 1, cos_o, r)
+    albedo = _table_read(table, 2, cos_o, r)
+    if abs(a) < 1e-5 or albedo < 1e-5:
+        return a, b, 0.0
+    return a, b, albedo
+
+
+@njit(**JIT)
+def _sheen_frame(nx, ny, nz, wox, woy, woz):
+    """The sheen's tangent frame: t the view's direction along the surface, s = n x t
+    (Cycles' make_orthonormals_safe_tangent; any frame where the view is along n)."""
+    bx, by, bz = ny * woz - nz * woy, nz * wox - nx * woz, nx * woy - ny * wox
+    length = math.sqrt(bx * bx + by * by + bz * bz)
+    if length < 0.995 * 1e-3:  # the view along n: any frame will do
+        s, t = build_frame(nx, ny, nz)
+        return s[0], s[1], s[2], t[0], t[1], t[2]
+    bx, by, bz = bx / length, by / length, bz / length
+    return by * nz - bz * ny, bz * nx - bx * nz, bx * ny - by * nx, bx, by, bz
+
+
+@njit(**JIT)
+def eval_sheen(wox, woy, woz, wix, wiy, wiz, nx, ny, nz, a, b):
+    """The sheen lobe's value (f cos_i, per unit albedo) toward wi, which is also its pdf:
+    the cosine distribution under the transform (A, B)."""
+    tx, ty, tz, ux, uy, uz = _sheen_frame(nx, ny, nz, wox, woy, woz)
+    x = wix * tx + wiy * ty + wiz * tz
+    y = wix * ux + wiy * uy + wiz * uz
+    z = wix * nx + wiy * ny + wiz * nz
+    if z <= 0.0:
+        return 0.0
+    q = (a * x + b * z) ** 2 + (a * y) ** 2 + z * z
+    return z * (a / q) ** 2 / np.pi
+
+
+@njit(**JIT)
+def sample_sheen(wox, woy, woz, nx, ny, nz, gx, gy, gz, a, b, ua, ub):
+    """A direction from the sheen lobe: (w, pdf, ok); the sample's weight is the albedo
+    (its value equals its pdf). Below the geometric surface g it is dropped, as Cycles."""
+    tx, ty, tz, ux, uy, uz = _sheen_frame(nx, ny, nz, wox, woy, woz)
+    dx, dy = concentric_disk(ua, ub)
+    dz = math.sqrt(max(1.0 - dx * dx - dy * dy, 0.0))
+    lx, ly, lz = dx - dz * b, dy, dz * a
+    length = math.sqrt(lx * lx + ly * ly + lz * lz)
+    lx, ly, lz = lx / length, ly / length, lz / length
+    wx = lx * tx + ly * ux + lz * nx
+    wy = lx * ty + ly * uy + lz * ny
+    wz = lx * tz + ly * uz + lz * nz
+    if wx * gx + wy * gy + wz * gz <= 0.0 or lz <= 0.0:
+        return wx, wy, wz, 0.0, False
+    q = (a * lx + b * lz) ** 2 + (a * ly) ** 2 + lz * lz
+    return wx, wy, wz, lz * (a / q) ** 2 / np.pi, True

@@ -50,7 +50,7 @@ from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_S
                        bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
                        sample_1d, sample_2d)
 from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
-                    ROUGH_METAL, TRANSLUCENT, TRANSPARENT, glass_tints)
+                    ROUGH_METAL, SHEEN, TRANSLUCENT, TRANSPARENT, glass_tints)
 
 # Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
 # scrambled by this (and the crossing's number), apart from the path's own choices.
@@ -73,6 +73,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY", "HAS_TRANSLUCENT",
+                   "HAS_SHEEN",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
@@ -88,6 +89,7 @@ HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one compo
 HAS_COATS = True  # Principled coats (scene.Material.coated): layers over mixed components
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
 HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
+HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen layers)
 EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
@@ -110,12 +112,13 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
 # component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
 # whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
-# tints it (k,) int (scene.Materials).
+# tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool
+# and bsdf.sheen_table (3, 32, 32).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength absorption mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
-                                            "glass_tints")
+                                            "glass_tints roughness sheen_layer sheen_ltc")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -324,6 +327,10 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
             mat, u, c0, c1, c2 = coat_layer(u, f, bu, bv, dx, dy, dz, mat, fac, sc, paths)
             w0, w1, w2 = w0 * c0, w1 * c1, w2 * c2
             continue
+        if HAS_SHEEN and mt.sheen_layer[mat]:
+            mat, u, c = sheen_layer(u, f, bu, bv, dx, dy, dz, mat, fac, sc)
+            w0, w1, w2 = w0 * c, w1 * c, w2 * c
+            continue
         s = mt.mix_scale[mat]
         w0, w1, w2 = w0 * s, w1 * s, w2 * s
         if u < fac:
@@ -366,6 +373,28 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
 
 
+def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc):
+    """Cycles' Principled sheen `mat` of Sheen Weight `weight` at a hit along d: its lobe
+    (the mix's second component, bsdf.eval_sheen, which carries its tint and albedo)
+    weighs `weight`; what is below keeps 1 - A, A = weight x the largest channel of tint
+    x albedo at the view (closure_layering_weight). The lobe is chosen with probability
+    A, which leaves what is below its weight. Returns (component, u's remainder, the
+    choice's weight)."""
+    mt = sc.materials
+    g = sc.geometry
+    lobe = mt.mix_components[mat, 1]
+    nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
+    sign = 1.0 if dx * nx + dy * ny + dz * nz < 0.0 else -1.0
+    sx, sy, sz = shading_normal(f, np.float64(bu), np.float64(bv), sign, sc)
+    _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz),
+                                  mt.roughness[lobe])
+    tint = max(mt.colour[lobe, 0], max(mt.colour[lobe, 1], mt.colour[lobe, 2]))
+    p = min(weight * tint * albedo, 1.0)
+    if u < p:
+        return lobe, u / p, weight / p
+    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), 1.0
+
+
 def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     """The hit point from the barycentrics in float64 (embree works in float32), the
     geometric normal and the shading normal flipped to the incoming side (the shading
@@ -392,7 +421,8 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     if HAS_NORMAL_MAPS and shading.perturbs_normal(sc.materials.programs, mat):
         sx, sy, sz = perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
-    if sc.materials.kind[mat] != DIFFUSE and sc.materials.kind[mat] != TRANSLUCENT:
+    k = sc.materials.kind[mat]
+    if k != DIFFUSE and k != TRANSLUCENT and k != SHEEN:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
     scale = offset_scale(g, f, px, py, pz)
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
@@ -710,6 +740,10 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     elif HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normal
         pdf_b = bsdf.eval_lambert(wx, wy, wz, -x.sx, -x.sy, -x.sz)
         g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
+    elif HAS_SHEEN and k == SHEEN:
+        a, b, albedo = sheen_at(x, sc)
+        pdf_b = bsdf.eval_sheen(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz, a, b)
+        g0, g1, g2 = c[0] * albedo * pdf_b, c[1] * albedo * pdf_b, c[2] * albedo * pdf_b
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
         shadowing = pdf_b
@@ -786,6 +820,12 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
             shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
                                             True, False)
         return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
+    if HAS_SHEEN and k == SHEEN:
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
+        a, b, albedo = sheen_at(x, sc)
+        wx, wy, wz, pdf, ok = bsdf.sample_sheen(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.nx,
+                                                x.ny, x.nz, a, b, ua, ub)
+        return wx, wy, wz, c[0] * albedo, c[1] * albedo, c[2] * albedo, pdf, ok
     if HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normals
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(-x.sx, -x.sy, -x.sz, -x.nx, -x.ny, -x.nz,
@@ -812,6 +852,12 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_MIRROR and k == MIRROR:
         return wx, wy, wz, c[0], c[1], c[2], DELTA_PDF, True
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
+
+
+def sheen_at(x, sc):
+    """The sheen lobe of vertex x: (A, B, albedo) at its view (bsdf.sheen_ltc)."""
+    cos_o = x.sx * x.wox + x.sy * x.woy + x.sz * x.woz
+    return bsdf.sheen_ltc(sc.materials.sheen_ltc, cos_o, sc.materials.roughness[x.mat])
 
 
 def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
@@ -1009,7 +1055,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             c_light = _cycles()
         if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
                                    or k == ROUGH_GLASS or k == ROUGH_METAL
-                                   or k == TRANSLUCENT):
+                                   or k == TRANSLUCENT or k == SHEEN):
             n_shadow = sample_light(i, row, vertex, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
         if PROFILE:
@@ -1105,13 +1151,13 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
-    coat_layer,
+    coat_layer, sheen_layer,
     surface_interaction, shading_normal,
     perturbed_normal, mapped_normal, bumped_normal,
     surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
-    shadow_origin, sample_light, sample_bsdf, caustic_state, medium_transmittance,
+    shadow_origin, sample_light, sample_bsdf, sheen_at, caustic_state, medium_transmittance,
     absorb_along_ray, path_counts, write_passes, pass_through, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, cross_transparent, all_finite)})

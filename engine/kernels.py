@@ -21,7 +21,7 @@ import types
 import numpy as np
 
 from . import integrator, light_tracing, specialise
-from .bsdf import layer_tables
+from .bsdf import layer_tables, sheen_table
 from .caustics import caustic_data, no_caustic_data
 from .camera import CameraModel
 from .film import BACKGROUND_DEPTH, PixelFilter
@@ -230,7 +230,9 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.mix_scale if needs_mixes else None,
                               m.coat_ior if plan.coats or generic else None,
                               m.coat_tint if plan.coats or generic else None,
-                              m.fresnel, m.glass_tints)
+                              m.fresnel, m.glass_tints, m.roughness,
+                              m.sheen_layer if plan.sheen or generic else None,
+                              sheen_table() if plan.sheen or generic else None)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

@@ -24,6 +24,7 @@ from .scene import (
     PRINCIPLED,
     ROUGH_GLASS,
     ROUGH_METAL,
+    SHEEN,
     TRANSLUCENT,
     TRANSPARENT,
     RenderSettings,
@@ -83,12 +84,15 @@ class Plan:
     transparency: bool = False
     # Some material used is (or mixes in) a Translucent BSDF (Lambertian transmission).
     translucent: bool = False
+    # Some material used is (or mixes in) a microfiber sheen (Sheen BSDF, Principled sheen).
+    sheen: bool = False
 
     @property
     def light_sampling(self) -> bool:
         """Next-event estimation runs only where a non-delta surface can see an emitter."""
         return self.emitters and (self.diffuse or self.principled or self.glossy
-                                  or self.rough_glass or self.rough_metal or self.translucent)
+                                  or self.rough_glass or self.rough_metal or self.translucent
+                                  or self.sheen)
 
     def stages(self) -> list[str]:
         s = ["generate camera rays"]
@@ -122,7 +126,8 @@ class Plan:
                                 ("metal", self.metal), ("glass", self.glass),
                                 ("rough glass", self.rough_glass),
                                 ("rough metal", self.rough_metal),
-                                ("translucent", self.translucent)) if f]
+                                ("translucent", self.translucent),
+                                ("sheen", self.sheen)) if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
         if self.light_tracing:
@@ -150,6 +155,7 @@ class Plan:
             HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
+            HAS_SHEEN=self.sheen,
             EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -213,7 +219,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
             bool(np.any(getattr(scene.programs, slot)[used, 0] >= 0)) for slot in SLOTS),
         normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
-        translucent=TRANSLUCENT in kinds,
+        translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
@@ -227,6 +233,6 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
                            and not volumes and not mixes and not transparency
-                           and TRANSLUCENT not in kinds
+                           and TRANSLUCENT not in kinds and SHEEN not in kinds
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

@@ -23,11 +23,11 @@ from .shading import Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
- TRANSPARENT, TRANSLUCENT) = range(12)
+ TRANSPARENT, TRANSLUCENT, SHEEN) = range(13)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
               ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent",
-              TRANSLUCENT: "translucent"}
+              TRANSLUCENT: "translucent", SHEEN: "sheen"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
@@ -132,12 +132,17 @@ class Material:
           is the components' emission mixed the same way (plus the mix's own).
           A mix with coat_ior > 0 is instead Cycles' Principled coat layer
           (Material.coated): components[1] is the coat's lobe (GGX with a dielectric
-          Fresnel of index coat_ior, no energy compensation) of weight fac (the Coat
-          Weight), and components[0] what lies below, dimmed by the coat's albedo at the
-          view as Cycles estimates it, 1 - fac x A(cos_o) (bsdf.coat_layering), and by its
-          tint, mix(1, coat_tint^(1 / cos_t), fac),
-          cos_t the view's cosine refracted into the coat. Emission below a coat is taken
-          undimmed (Cycles dims it the same way; the exporter warns).
+          Fresnel of index coat_ior, energy compensated) of weight fac (the Coat Weight),
+          and components[0] what lies below, dimmed by the coat's albedo at the view as
+          Cycles estimates it, 1 - fac x A(cos_o) (bsdf.coat_layering), and by its tint,
+          mix(1, coat_tint^(1 / cos_t), fac), cos_t the view's cosine refracted into the
+          coat. Emission below a coat is taken undimmed (Cycles dims it the same way; the
+          exporter warns). A mix with sheen_layer is Cycles' Principled sheen
+          (Material.sheened): components[1] is a sheen lobe of weight fac (the Sheen
+          Weight) and what lies below keeps 1 - max(fac x colour x albedo(cos_o)) of it.
+        - sheen: Cycles' microfiber sheen (the Sheen BSDF, and the Principled BSDF's sheen
+          lobe): `colour` x its albedo at the view x a linearly transformed cosine of
+          `roughness` (bsdf.eval_sheen, Zeltner et al. 2022).
     emission : (3,) radiance L = strength x colour, two-sided, no division by pi.
     colour_program : a shading.Program whose result replaces `colour` at each hit (an image
         texture on the colour), or None. `colour` is then what the program's result is
@@ -187,6 +192,7 @@ class Material:
     roughness_program: Program | None = field(default=None, compare=False)
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
+    sheen_layer: bool = False  # mix: Cycles' Principled sheen over components[0] (see above)
     fresnel: bool = True  # glass kinds: False is the Refraction BSDF (no Fresnel)
     # Glass kinds: how the colour (or its program's result) tints reflection and
     # transmission, one of GLASS_TINTS (glass_tints).
@@ -223,6 +229,21 @@ class Material:
         `ior`, energy compensated, i.e. a Principled specular layer over black."""
         return cls.principled(name, (0.0, 0.0, 0.0), roughness, ior,
                               roughness_program=roughness_program, multiscatter=True)
+
+    @classmethod
+    def sheened(cls, name, base, weight, roughness=0.5, tint=(1.0, 1.0, 1.0),
+                weight_program=None):
+        """Cycles' Principled sheen (Sheen Weight, Roughness, Tint) over `base`: a mix whose
+        second component is the sheen lobe (Material.sheen of colour `tint`)."""
+        m = cls.mix(name, base, cls.sheen(name, tint, roughness), weight, 1.0, weight_program)
+        return dataclasses.replace(m, sheen_layer=True)
+
+    @classmethod
+    def sheen(cls, name, colour=(1.0, 1.0, 1.0), roughness=0.5):
+        """Cycles' microfiber sheen (the Sheen BSDF, the Principled BSDF's sheen lobe):
+        reflection by the linearly transformed cosine of roughness `roughness`, weighted by
+        its albedo at the view and `colour` (bsdf.eval_sheen)."""
+        return cls(name, "sheen", tuple(colour), roughness=float(roughness))
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -367,8 +388,8 @@ def _mixed_emission(m: Material) -> np.ndarray:
     if m.kind != "mix":
         return own
     a, b = (_mixed_emission(c) for c in m.components)
-    if m.coat_ior > 0:  # the coat's lobe emits nothing; what is below is taken undimmed
-        return own + a
+    if m.coat_ior > 0 or m.sheen_layer:  # the layer's lobe emits nothing; what is below
+        return own + a  # is taken undimmed
     return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
 
 
@@ -432,6 +453,7 @@ class Materials:
     # its tint (k, 3).
     coat_ior: np.ndarray | None = None
     coat_tint: np.ndarray | None = None
+    sheen_layer: np.ndarray | None = None  # (k,) bool, Material.sheen_layer
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
@@ -451,9 +473,10 @@ class Materials:
                              f"{bad.coat_ior!r}")
         tint = np.array([_colour(x.coat_tint, f"material '{x.name}' coat tint")
                          for x in materials]).reshape(-1, 3)
+        sheen = np.array([x.kind == "mix" and bool(x.sheen_layer) for x in materials], bool)
         return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
                                    mix_fac=fac, mix_scale=scale, coat_ior=coat_ior,
-                                   coat_tint=tint)
+                                   coat_tint=tint, sheen_layer=sheen)
 
     def reachable(self, rows) -> np.ndarray:
         """`rows` and every mix component below them (the materials a hit can shade with)."""

@@ -67,7 +67,7 @@ def test_no_material_is_default_grey():
 
 @pytest.mark.parametrize("shader, expect_ctor", [
     ("ShaderNodeBsdfToon", "diffuse"),
-    ("ShaderNodeBsdfSheen", "diffuse"),
+    ("ShaderNodeBsdfHairPrincipled", "diffuse"),
 ])
 def test_unsupported_node_warns_and_falls_back(fresh, shader, expect_ctor):
     mat, node = node_material("Odd", shader)
@@ -772,7 +772,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "link"), ("Sheen Weight", 0.5), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
+    ("Normal", "link"), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
     ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
@@ -813,7 +813,7 @@ def test_principled_coat_is_a_layer_over_its_lobes(fresh, core):
     m = spec.to_core(core)
     assert m.kind == "mix" and m.coat_ior == pytest.approx(1.7)
     assert m.coat_tint == pytest.approx((0.9, 0.7, 0.5))
-    assert m.components[1].kind == "principled" and not m.components[1].multiscatter
+    assert m.components[1].kind == "principled" and m.components[1].multiscatter
     assert m.components[1].normal_strength == pytest.approx(0.5)
     mat.node_tree.nodes.remove(coat_map)
     node.inputs["Coat IOR"].default_value = 0.8
@@ -825,6 +825,43 @@ def test_principled_coat_is_a_layer_over_its_lobes(fresh, core):
     assert len(warnings) == 2, warnings
     assert "undimmed" in warnings[0] and "Coat IOR" in warnings[1]
     assert spec.to_core(core).emission == pytest.approx((2.0, 2.0, 2.0))
+
+
+def test_principled_sheen_is_a_layer_over_the_coat(fresh, core):
+    """Sheen Weight, Roughness and Tint make a sheen layer over the coat (Cycles' first
+    layer); a weight above 1 scales the tint (the same closure); a textured tint is its
+    mean, warned. The Sheen BSDF is the same lobe alone (Ashikhmin warned)."""
+    mat, node = node_material("Velvet", "ShaderNodeBsdfPrincipled", **{
+        "Sheen Weight": 0.7, "Sheen Roughness": 0.3, "Sheen Tint": (1.0, 0.8, 0.6, 1.0),
+        "Coat Weight": 0.5})
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["sheen_layer"]
+    assert spec.kwargs["fac"] == pytest.approx(0.7)
+    lobe, below = spec.kwargs["second"], spec.kwargs["first"]
+    assert lobe.ctor == "sheen" and below.kwargs["coat_ior"] == pytest.approx(1.5)
+    assert lobe.kwargs["colour"] == pytest.approx((1.0, 0.8, 0.6))
+    assert lobe.kwargs["roughness"] == pytest.approx(0.3)
+    m = spec.to_core(core)
+    assert m.sheen_layer and m.components[1].kind == "sheen"
+    assert m.components[1].roughness == pytest.approx(0.3)
+    node.inputs["Sheen Weight"].default_value = 2.0
+    spec, _ = convert(mat)
+    assert spec.kwargs["fac"] == 1.0
+    assert spec.kwargs["second"].kwargs["colour"] == pytest.approx((2.0, 1.6, 1.2))
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Sheen Tint"])
+    _, warnings = convert(mat)
+    assert len(warnings) == 1 and "'Sheen Tint'" in warnings[0], warnings
+    dust, dust_node = node_material("Dust", "ShaderNodeBsdfSheen", Roughness=0.4,
+                                    Color=(0.5, 0.6, 0.7, 1.0))
+    spec, warnings = convert(dust)
+    assert (spec.ctor, warnings) == ("sheen", [])
+    assert spec.kwargs["colour"] == pytest.approx((0.5, 0.6, 0.7))
+    assert spec.kwargs["roughness"] == pytest.approx(0.4)
+    dust_node.distribution = "ASHIKHMIN"
+    spec, warnings = convert(dust)
+    assert spec.ctor == "sheen" and len(warnings) == 1 and "ASHIKHMIN" in warnings[0]
 
 
 def test_a_textured_coat_weight_is_the_coat_factor(fresh, core):

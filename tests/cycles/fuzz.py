@@ -318,6 +318,17 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
     for o in params["objects"]:
         if o["material"]["kind"] == "metal" and tints.random() < 0.4:
             o["material"]["specular_tint"] = [_r(c) for c in tints.uniform(0.0, 1.2, 3)]
+    # Some Principled surfaces under a microfiber sheen (Sheen Weight, Roughness, Tint),
+    # from a stream of their own; not emitting ones (the sheen would dim the emission).
+    sheens = np.random.default_rng([seed, 0x5ee])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("principled", "metal", "principled_glass") and \
+                sheens.random() < 0.3 and not o["material"].get("emission_strength"):
+            o["material"]["sheen"] = {
+                "weight": _r(sheens.uniform(0.3, 1.5)),
+                "roughness": _r(sheens.uniform(0.05, 1.0), 3),
+                "tint": [_r(c) for c in sheens.uniform(0.3, 1.0, 3)]
+                if sheens.random() < 0.5 else [1.0, 1.0, 1.0]}
     # Some surfaces bumped (a Bump node on ripples of a Generated coordinate), from a
     # stream of their own; not emitters (their emission does not see the normal).
     bumps = np.random.default_rng([seed, 0xb0b0])
@@ -365,6 +376,7 @@ def features(params) -> list[str]:
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":alpha" if m.get("alpha") else "")
                  + (":coat" if m.get("coat") else "")
+                 + (":sheen" if m.get("sheen") else "")
                  + (":bump" if m.get("bump") else "")
                  + (":specular_tint" if m.get("specular_tint") else "")
                  + (":refraction" if m.get("refraction") else ""))
@@ -464,6 +476,8 @@ def _simpler_material(m):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("bump"):
         out.append(("no bump", {k: v for k, v in m.items() if k != "bump"}))
+    if m.get("sheen"):
+        out.append(("no sheen", {k: v for k, v in m.items() if k != "sheen"}))
     if m.get("specular_tint"):
         out.append(("white specular tint",
                     {k: v for k, v in m.items() if k != "specular_tint"}))
@@ -685,6 +699,10 @@ def _bpy_surface_shader(name, m):
         c = m["coat"]
         inputs.update({"Coat Weight": c["weight"], "Coat Roughness": c["roughness"],
                        "Coat IOR": c["ior"], "Coat Tint": (*c["tint"], 1.0)})
+    if m.get("sheen"):
+        c = m["sheen"]
+        inputs.update({"Sheen Weight": c["weight"], "Sheen Roughness": c["roughness"],
+                       "Sheen Tint": (*c["tint"], 1.0)})
     if m.get("emission_strength"):
         inputs.update({"Emission Color": (*m["emission_colour"], 1.0),
                        "Emission Strength": m["emission_strength"]})

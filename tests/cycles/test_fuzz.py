@@ -68,6 +68,7 @@ def _all_features(seeds, avoid_known=False):
         found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
         found.update("coat" for o in p["objects"] if o["material"].get("coat"))
         found.update("bump" for o in p["objects"] if o["material"].get("bump"))
+        found.update("sheen" for o in p["objects"] if o["material"].get("sheen"))
         found.update("specular tint" for o in p["objects"]
                      if o["material"].get("specular_tint"))
         found.update("refraction" for o in p["objects"] if o["material"].get("refraction"))
@@ -91,7 +92,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
-              "coat", "refraction", "bump", "specular tint",
+              "coat", "refraction", "bump", "specular tint", "sheen",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c", "known:d",
               "known:e"}
 

@@ -495,6 +495,25 @@ def _coat_dims_by_the_smooth_fresnel():
         yield
 
 
+@contextmanager
+def _sheens_ignored():
+    """The exporter before sheen: a Principled BSDF's sheen is left out."""
+    from addon import materials
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(materials._Reader, "sheen", lambda self, node, spec: spec)
+        yield
+
+
+def _sheen_roughness_plus_20_percent(scene, settings):
+    m = scene.materials
+    roughness = m.roughness.copy()
+    sheen = m.kind == renderers.core().scene.SHEEN
+    roughness[sheen] = np.minimum(roughness[sheen] * 1.2, 1.0)
+    scene.materials = dataclasses.replace(m, roughness=roughness)
+    return scene, settings
+
+
 def _specular_tint_white(scene, settings):
     """Metals' Specular Tint white (Schlick's Fresnel, as before the F82 tint)."""
     m = scene.materials
@@ -608,6 +627,8 @@ INJECTIONS = {
     "coat_weight_as_its_mean": ("coat", _mix_factors_as_their_means, None),
     "coat_uncompensated": ("coat_furnace", _coat_uncompensated, None),
     "coat_dims_by_the_smooth_fresnel": ("coat_rough", None, _coat_dims_by_the_smooth_fresnel),
+    "sheens_ignored": ("sheen", None, _sheens_ignored),
+    "sheen_roughness_plus_20_percent": ("sheen", _sheen_roughness_plus_20_percent, None),
     "coats_ignored": ("gltf_clear_coat", None, _coats_ignored),
     "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
     "bumps_ignored": ("bump", _bumps_ignored, None),

@@ -1061,6 +1061,23 @@ def coat_furnace():
     _sphere(mirror, (0.45, 0.0, 0.75), 0.4, "Ball1")
 
 
+def sheen():
+    """Microfiber sheen (issue 14, point 1): a Principled sheen (roughness 0.3) over a dark
+    red base, a tinted sheen (0.8 weight, roughness 0.8) over a coat over dark blue, and a
+    Sheen BSDF alone (roughness 0.5), on the box's floor under its light: the velvet rims
+    the sheen's grazing lobe makes."""
+    _box()
+    red = _principled("Velvet", **{"Base Color": (0.25, 0.02, 0.03, 1.0), "Roughness": 0.8,
+                                   "Sheen Weight": 1.0, "Sheen Roughness": 0.3})
+    blue = _principled("SheenOverCoat", **{
+        "Base Color": (0.02, 0.03, 0.15, 1.0), "Roughness": 0.6, "Sheen Weight": 0.8,
+        "Sheen Roughness": 0.8, "Sheen Tint": (1.0, 0.8, 0.6, 1.0), "Coat Weight": 0.5,
+        "Coat Roughness": 0.2})
+    dust = bs.material("Dust", "ShaderNodeBsdfSheen", Color=(0.9, 0.9, 0.9, 1.0),
+                       Roughness=0.5)
+    _balls([red, blue, dust])
+
+
 def translucency():
     """The Translucent BSDF (issue 14, point 1): a greenish translucent card under the
     ceiling light, lighting the floor below it through itself and seen from below, and a
@@ -1678,6 +1695,7 @@ _add(Variant("refraction", refraction, max_bounces=8, samples=2048, cycles_sampl
 _add(Variant("coat", coat, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("coat_rough", coat_rough, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("coat_furnace", coat_furnace, max_bounces=8, samples=256, cycles_samples=512))
+_add(Variant("sheen", sheen, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
