@@ -328,7 +328,7 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
             w0, w1, w2 = w0 * c0, w1 * c1, w2 * c2
             continue
         if HAS_SHEEN and mt.sheen_layer[mat]:
-            mat, u, c = sheen_layer(u, f, bu, bv, dx, dy, dz, mat, fac, sc)
+            mat, u, c = sheen_layer(u, f, bu, bv, dx, dy, dz, mat, fac, sc, paths)
             w0, w1, w2 = w0 * c, w1 * c, w2 * c
             continue
         s = mt.mix_scale[mat]
@@ -373,7 +373,7 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
 
 
-def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc):
+def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     """Cycles' Principled sheen `mat` of Sheen Weight `weight` at a hit along d: its lobe
     (the mix's second component, bsdf.eval_sheen, which carries its tint and albedo)
     weighs `weight`; what is below keeps 1 - A, A = weight x the largest channel of tint
@@ -385,7 +385,10 @@ def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc):
     lobe = mt.mix_components[mat, 1]
     nx, ny, nz = g.tri_normal[f, 0], g.tri_normal[f, 1], g.tri_normal[f, 2]
     sign = 1.0 if dx * nx + dy * ny + dz * nz < 0.0 else -1.0
-    sx, sy, sz = shading_normal(f, np.float64(bu), np.float64(bv), sign, sc)
+    u_b, v_b = np.float64(bu), np.float64(bv)
+    sx, sy, sz = shading_normal(f, u_b, v_b, sign, sc)
+    if HAS_NORMAL_MAPS and shading.perturbs_normal(mt.programs, lobe):  # the Normal's
+        sx, sy, sz = perturbed_normal(f, u_b, v_b, sign, sx, sy, sz, lobe, sc, paths)
     _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz),
                                   mt.roughness[lobe])
     tint = max(mt.colour[lobe, 0], max(mt.colour[lobe, 1], mt.colour[lobe, 2]))

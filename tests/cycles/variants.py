@@ -1599,6 +1599,13 @@ def gltf_damaged_helmet():
     _gltf("DamagedHelmet", direction=(0.3, -1.0, 0.2), distance=2.0, ext=".gltf")
 
 
+def gltf_sheen_chair():
+    """Khronos SheenChair (KHR_materials_sheen, through the importer): a fabric seat with a
+    sheen of roughness 0.8 over a textured base colour and a normal map, on textured wood
+    and metal legs, seen from the front and above."""
+    _gltf("SheenChair", direction=(0.4, -1.0, 0.6), distance=3.2, ext=".gltf")
+
+
 def gltf_clear_coat():
     """Khronos ClearCoatTest: each row a base, the base coated and the coat alone; a coat
     weight and a coat roughness from textures, and normal maps on the base, on the coat
@@ -1711,6 +1718,12 @@ _add(Variant("gltf_transmission", gltf_transmission, max_bounces=8, samples=512,
 _add(Variant("gltf_clear_coat", gltf_clear_coat, resolution=(64, 96), max_bounces=8,
              samples=512, cycles_samples=1024,
              files=(os.path.join(GLTF_DIR, "ClearCoatTest", "ClearCoatTest.glb"),)))
+_add(Variant("gltf_sheen_chair", gltf_sheen_chair, max_bounces=8,
+             files=tuple(os.path.join(GLTF_DIR, "SheenChair", f) for f in (
+                 "SheenChair.gltf", "SheenChair.bin", "chair_fabric_albedo.png",
+                 "chair_fabric_normal.png", "chair_label.png", "chair_occlusion.png",
+                 "chair_wood_albedo.png", "chair_woodblack_roughnessmetallic.png",
+                 "chair_woodbrown_roughnessmetallic.png"))))
 _add(Variant("gltf_damaged_helmet", gltf_damaged_helmet, max_bounces=8,
              files=tuple(os.path.join(GLTF_DIR, "DamagedHelmet", f) for f in (
                  "DamagedHelmet.gltf", "DamagedHelmet.bin", "Default_albedo.jpg",
