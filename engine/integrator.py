@@ -112,13 +112,14 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
 # component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
 # whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
-# tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool
-# and bsdf.sheen_table (3, 32, 32).
+# tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool,
+# each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength absorption mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
-                                            "glass_tints roughness sheen_layer sheen_ltc")
+                                            "glass_tints roughness sheen_layer sheen_parent "
+                                            "sheen_ltc")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -387,8 +388,7 @@ def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     sign = 1.0 if dx * nx + dy * ny + dz * nz < 0.0 else -1.0
     u_b, v_b = np.float64(bu), np.float64(bv)
     sx, sy, sz = shading_normal(f, u_b, v_b, sign, sc)
-    if HAS_NORMAL_MAPS and shading.perturbs_normal(mt.programs, lobe):  # the Normal's
-        sx, sy, sz = perturbed_normal(f, u_b, v_b, sign, sx, sy, sz, lobe, sc, paths)
+    sx, sy, sz = sheen_normal(f, u_b, v_b, sign, sx, sy, sz, lobe, sc, paths)
     _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz),
                                   mt.roughness[lobe])
     tint = max(mt.colour[lobe, 0], max(mt.colour[lobe, 1], mt.colour[lobe, 2]))
@@ -396,6 +396,34 @@ def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     if u < p:
         return lobe, u / p, weight / p
     return mt.mix_components[mat, 0], (u - p) / (1.0 - p), 1.0
+
+
+def sheen_normal(f, u, v, sign, sx, sy, sz, lobe, sc, paths):
+    """The normal of sheen lobe `lobe` at a hit whose mesh normal is s: its own (the
+    Principled's Normal) mixed with the coat's by the Coat Weight where its layer lies over
+    a coat (Cycles: safe_normalize(mix(N, coat_normal, coat_weight)))."""
+    mt = sc.materials
+    nx, ny, nz = sx, sy, sz
+    if HAS_NORMAL_MAPS and shading.perturbs_normal(mt.programs, lobe):
+        nx, ny, nz = perturbed_normal(f, u, v, sign, sx, sy, sz, lobe, sc, paths)
+    if not HAS_COATS or mt.sheen_parent[lobe] < 0:
+        return nx, ny, nz
+    below = mt.mix_components[mt.sheen_parent[lobe], 0]
+    if mt.kind[below] != MIX or not mt.coat_ior[below] > 0.0:
+        return nx, ny, nz
+    weight = mt.mix_fac[below]
+    if HAS_TEXTURES:
+        weight = shading.fac_at(below, f, u, v, mt.programs, sc.geometry.uv, paths.svm,
+                                weight)
+    coat = mt.mix_components[below, 1]
+    cx, cy, cz = sx, sy, sz
+    if HAS_NORMAL_MAPS and shading.perturbs_normal(mt.programs, coat):
+        cx, cy, cz = perturbed_normal(f, u, v, sign, sx, sy, sz, coat, sc, paths)
+    mx, my, mz = nx + weight * (cx - nx), ny + weight * (cy - ny), nz + weight * (cz - nz)
+    length = math.sqrt(mx * mx + my * my + mz * mz)
+    if not length > 1e-12:
+        return nx, ny, nz
+    return mx / length, my / length, mz / length
 
 
 def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
@@ -421,10 +449,12 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
     bx, by, bz = sx, sy, sz
     if HAS_TEXTURES:
         shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
-    if HAS_NORMAL_MAPS and shading.perturbs_normal(sc.materials.programs, mat):
+    k = sc.materials.kind[mat]
+    if HAS_SHEEN and k == SHEEN:
+        sx, sy, sz = sheen_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    elif HAS_NORMAL_MAPS and shading.perturbs_normal(sc.materials.programs, mat):
         sx, sy, sz = perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     mx, my, mz = sx, sy, sz
-    k = sc.materials.kind[mat]
     if k != DIFFUSE and k != TRANSLUCENT and k != SHEEN:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
     scale = offset_scale(g, f, px, py, pz)
@@ -1154,7 +1184,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
-    coat_layer, sheen_layer,
+    coat_layer, sheen_layer, sheen_normal,
     surface_interaction, shading_normal,
     perturbed_normal, mapped_normal, bumped_normal,
     surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,

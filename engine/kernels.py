@@ -232,6 +232,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.coat_tint if plan.coats or generic else None,
                               m.fresnel, m.glass_tints, m.roughness,
                               m.sheen_layer if plan.sheen or generic else None,
+                              m.sheen_parent if plan.sheen or generic else None,
                               sheen_table() if plan.sheen or generic else None)
     em = emitters.data() if emitters is not None else None
     if generic:

@@ -454,6 +454,7 @@ class Materials:
     coat_ior: np.ndarray | None = None
     coat_tint: np.ndarray | None = None
     sheen_layer: np.ndarray | None = None  # (k,) bool, Material.sheen_layer
+    sheen_parent: np.ndarray | None = None  # (k,) int: a sheen lobe's layer row, else -1
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
@@ -474,9 +475,12 @@ class Materials:
         tint = np.array([_colour(x.coat_tint, f"material '{x.name}' coat tint")
                          for x in materials]).reshape(-1, 3)
         sheen = np.array([x.kind == "mix" and bool(x.sheen_layer) for x in materials], bool)
-        return dataclasses.replace(m, mix_components=np.array(components, np.int64).reshape(-1, 2),
-                                   mix_fac=fac, mix_scale=scale, coat_ior=coat_ior,
-                                   coat_tint=tint, sheen_layer=sheen)
+        components = np.array(components, np.int64).reshape(-1, 2)
+        parent = np.full(len(materials), -1, np.int64)
+        parent[components[sheen, 1]] = np.flatnonzero(sheen)
+        return dataclasses.replace(m, mix_components=components, mix_fac=fac, mix_scale=scale,
+                                   coat_ior=coat_ior, coat_tint=tint, sheen_layer=sheen,
+                                   sheen_parent=parent)
 
     def reachable(self, rows) -> np.ndarray:
         """`rows` and every mix component below them (the materials a hit can shade with)."""

@@ -82,3 +82,21 @@ def test_sheen_plans_only_where_used():
     plan = make_plan(b.build(scenes.cornell_camera(), World((0, 0, 0))), scenes.settings())
     assert plan.sheen and plan.kernel_constants(False)["HAS_SHEEN"]
     assert "sheen" in plan.stages()[-1] and not plan.mixes
+
+
+def test_a_sheen_lobe_knows_its_layer_for_the_coat_normal():
+    """A sheen over a coat mixes its normal with the coat's by the Coat Weight (Cycles'
+    safe_normalize(mix(N, coat_normal, coat_weight))): each sheen lobe row names its layer
+    (Materials.sheen_parent), a Sheen BSDF alone none."""
+    from engine.scene import Materials
+
+    coated = Material.coated("c", Material.diffuse("d", (0.5, 0.5, 0.5)), 0.7)
+    m = Materials.from_list([Material.sheened("velvet", coated, 0.8, 0.4),
+                             Material.sheen("dust", (0.9, 0.9, 0.9), 0.5)])
+    top = m.names.index("velvet")
+    lobe = m.mix_components[top, 1]
+    assert m.sheen_layer[top] and m.sheen_parent[lobe] == top
+    below = m.mix_components[top, 0]
+    assert m.coat_ior[below] > 0 and m.mix_fac[below] == 0.7
+    assert m.sheen_parent[m.names.index("dust")] == -1
+    assert np.count_nonzero(m.sheen_parent >= 0) == 1
