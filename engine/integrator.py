@@ -772,17 +772,16 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
                                                        x.my, x.mz, lobe)
     elif HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normal
         pdf_b = bsdf.eval_lambert(wx, wy, wz, -x.sx, -x.sy, -x.sz)
-        g0, g1, g2 = c[0] * pdf_b, c[1] * pdf_b, c[2] * pdf_b
+        shadowing = pdf_b * diffuse_shadowing(x, -1.0, wx, wy, wz, True)
+        g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
     elif HAS_SHEEN and k == SHEEN:
         a, b, albedo = sheen_at(x, sc)
         pdf_b = bsdf.eval_sheen(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz, a, b)
-        g0, g1, g2 = c[0] * albedo * pdf_b, c[1] * albedo * pdf_b, c[2] * albedo * pdf_b
+        shadowing = albedo * pdf_b * diffuse_shadowing(x, 1.0, wx, wy, wz, True)
+        g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
     elif HAS_DIFFUSE:
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
-        shadowing = pdf_b
-        if HAS_NORMAL_MAPS:
-            shadowing *= bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
-                                             True, True)
+        shadowing = pdf_b * diffuse_shadowing(x, 1.0, wx, wy, wz, True)
         g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
     if HAS_NORMAL_MAPS and (k == ROUGH_GLASS or k == ROUGH_METAL):
         shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz, False,
@@ -848,22 +847,21 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_DIFFUSE and k == DIFFUSE:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
-        shadowing = 1.0
-        if HAS_NORMAL_MAPS:
-            shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz,
-                                            True, False)
+        shadowing = diffuse_shadowing(x, 1.0, wx, wy, wz, False)
         return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
     if HAS_SHEEN and k == SHEEN:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         a, b, albedo = sheen_at(x, sc)
         wx, wy, wz, pdf, ok = bsdf.sample_sheen(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.nx,
                                                 x.ny, x.nz, a, b, ua, ub)
+        albedo *= diffuse_shadowing(x, 1.0, wx, wy, wz, False)
         return wx, wy, wz, c[0] * albedo, c[1] * albedo, c[2] * albedo, pdf, ok
     if HAS_TRANSLUCENT and k == TRANSLUCENT:  # Lambert about the other side's normals
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(-x.sx, -x.sy, -x.sz, -x.nx, -x.ny, -x.nz,
                                                   ua, ub)
-        return wx, wy, wz, c[0], c[1], c[2], pdf, ok
+        shadowing = diffuse_shadowing(x, -1.0, wx, wy, wz, False)
+        return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
     if HAS_GLASS and k == GLASS:
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
@@ -885,6 +883,17 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_MIRROR and k == MIRROR:
         return wx, wy, wz, c[0], c[1], c[2], DELTA_PDF, True
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
+
+
+def diffuse_shadowing(x, side, wx, wy, wz, evaluated):
+    """Cycles' bump shadowing (bsdf.bump_shadowing) of a diffuse-type closure at vertex x
+    toward w: the Diffuse, Sheen and Translucent BSDFs (CLOSURE_IS_BSDF_DIFFUSE), about the
+    shading normal turned by `side` (-1: the Translucent's closure normal is the other
+    side's). 1 where nothing tilts the normal."""
+    if not HAS_NORMAL_MAPS:
+        return 1.0
+    return bsdf.bump_shadowing(x.bx, x.by, x.bz, side * x.sx, side * x.sy, side * x.sz, wx, wy,
+                               wz, True, evaluated)
 
 
 def sheen_at(x, sc):
@@ -1190,7 +1199,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
-    shadow_origin, sample_light, sample_bsdf, sheen_at, caustic_state, medium_transmittance,
+    shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,
+    medium_transmittance,
     absorb_along_ray, path_counts, write_passes, pass_through, spawn)}
 STAGES.update({f.__name__: (f, JIT) for f in (
     generate_camera_rays, shade, accumulate_unoccluded, cross_transparent, all_finite)})

@@ -1511,6 +1511,26 @@ def bump():
             _bumped(_glass("RippledGlass", (1.0, 1.0, 1.0), 0.0), "Y", 10.0, 0.012, 0.6)])
 
 
+def sheen_bumped():
+    """Sheen under Bump nodes: the microfiber lobe is a diffuse-type closure to Cycles, so its
+    light is shadowed by the bumped normal's tilt off the surface (bump_shadowing_term), as a
+    Diffuse BSDF's. A rippled Sheen BSDF floor, a banded Principled velvet (sheen 1.0,
+    roughness 0.5), the same under a coat, and a rippled Sheen BSDF ball."""
+    _box()
+    floor = bpy.data.objects["Floor"]
+    floor.data.materials[0] = _bumped(bs.material(
+        "RippledSheen", "ShaderNodeBsdfSheen", Color=(0.8, 0.8, 0.8, 1.0), Roughness=0.4),
+        "X", 30.0, 0.03)
+    velvet = {"Base Color": (0.3, 0.03, 0.05, 1.0), "Roughness": 0.7, "Sheen Weight": 1.0,
+              "Sheen Roughness": 0.5}
+    _balls([_bumped(_principled("BandedVelvet", **velvet), "Z", 25.0, 0.015),
+            _bumped(_principled("CoatedVelvet", **velvet, **{"Coat Weight": 0.7,
+                                                             "Coat Roughness": 0.15}),
+                    "X", 25.0, 0.015),
+            _bumped(bs.material("SheenBall", "ShaderNodeBsdfSheen", Color=(0.9, 0.9, 0.6, 1.0),
+                                Roughness=0.3), "Y", 20.0, 0.02)])
+
+
 def textured_emitter():
     """The Cornell box lit by its ceiling quad whose Emission colour is the 8 x 8 image
     (Closest): a textured light seen directly, sampled by next-event estimation and starting
@@ -1703,6 +1723,7 @@ _add(Variant("coat", coat, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("coat_rough", coat_rough, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("coat_furnace", coat_furnace, max_bounces=8, samples=256, cycles_samples=512))
 _add(Variant("sheen", sheen, max_bounces=8, samples=1024, cycles_samples=2048))
+_add(Variant("sheen_bumped", sheen_bumped, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
