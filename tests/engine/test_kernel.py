@@ -383,7 +383,7 @@ def _fresh_kernel(scene, constants):
 # A formula only a feature uses (compiled on its own, so its name is in the kernel's IR).
 MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_ROUGH_GLASS": "rough_dielectric", "HAS_ROUGH_METAL": "rough_conductor",
-           "HAS_NORMAL_MAPS": "normal_map",
+           "HAS_NORMAL_MAPS": "perturbed_normal",
            "HAS_METAL": "fresnel_f82", "HAS_DOF": "thin_lens_ray",
            "HAS_POLYGON_APERTURE": "regular_polygon", "HAS_LIGHT_OBJECTS": "spread_attenuation",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
