@@ -11,9 +11,11 @@ becomes an opaque wall).
 Fallbacks:
   * no node tree / no Cycles output / nothing linked to Surface: diffuse of the
     material's viewport colour (`diffuse_color`); but nothing on Surface and something on
-    Volume: an invisible boundary (glass of IOR 1, white) around the volume's medium.
-  * Volume: its absorption fills the mesh (Volume Absorption; a Principled Volume's
-    absorption, its scattering and emission warned); other volume shaders warned, ignored.
+    Volume: an invisible boundary (crossed by paths and shadow rays, counted as Cycles
+    counts volume bounds) around the volume's medium.
+  * Volume: its medium fills the mesh (absorption, Henyey-Greenstein scattering and
+    emission of Volume Absorption, Volume Scatter, Principled Volume, Volume
+    Coefficients and Emission, added and mixed); other volume shaders warned, ignored.
   * Displacement linked beside a Surface: ignored, warned.
   * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
@@ -102,8 +104,8 @@ class MaterialSpec:
             m = core.Material.mix(self.name, k["first"].to_core(core),
                                   k["second"].to_core(core), k["fac"], k["scale"],
                                   k.get("fac_program"))
-            extra = {key: tuple(k[key]) for key in ("absorption", "emission", "coat_tint")
-                     if key in k}
+            extra = {key: tuple(k[key]) for key in ("emission", "coat_tint") if key in k}
+            extra.update({key: k[key] for key in MEDIUM_KEYS if key in k})
             if "coat_ior" in k:
                 extra["coat_ior"] = float(k["coat_ior"])
             if k.get("sheen_layer"):
@@ -114,9 +116,22 @@ class MaterialSpec:
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
         normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength",
-                                             "height_program", "absorption") if k in kwargs}
+                                             "height_program", *MEDIUM_KEYS) if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
         return dataclasses.replace(m, **normal) if normal else m
+
+
+# The MaterialSpec keywords of a material's medium (its Volume: scene.Material's fields).
+MEDIUM_KEYS = ("absorption", "scattering", "anisotropy", "volume_emission")
+NO_MEDIUM = {"absorption": (0.0, 0.0, 0.0), "scattering": (0.0, 0.0, 0.0), "anisotropy": 0.0,
+             "volume_emission": (0.0, 0.0, 0.0)}
+
+
+def _is_medium(medium):
+    """Whether medium keywords (MEDIUM_KEYS) describe anything: absorption, scattering or
+    emission."""
+    return medium is not None and any(max(medium[k]) > 0 for k in ("absorption", "scattering",
+                                                                     "volume_emission"))
 
 
 # The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
@@ -145,11 +160,10 @@ def _give_normal_map(spec, normal_map):
             leaf.kwargs.update(normal_map)
 
 
-def invisible_boundary(name, absorption=(0.0, 0.0, 0.0)):
-    """What a Volume-only material renders as: glass of IOR 1 (it refracts and reflects
-    nothing) around its medium's absorption."""
-    return MaterialSpec("glass", name, {"colour": (1.0, 1.0, 1.0), "ior": 1.0,
-                                        "absorption": tuple(absorption)})
+def invisible_boundary(name, medium=None):
+    """What a Volume-only material renders as: no surface (paths and shadow rays cross it
+    as Cycles crosses a volume's boundary) around its medium (MEDIUM_KEYS keywords)."""
+    return MaterialSpec("boundary", name, dict(NO_MEDIUM if medium is None else medium))
 
 
 def transparent(name, colour=(1.0, 1.0, 1.0)):
@@ -717,12 +731,11 @@ class _Reader:
         link = None if surface is None else live_link(surface)
         volume = out.inputs.get("Volume")
         volume_link = None if volume is None else live_link(volume)
-        absorption = None if volume_link is None else self.volume(volume_link)
+        medium = None if volume_link is None else self.volume(volume_link)
         if link is None and volume_link is not None:
             # A Volume-only material (smoke, fog, an absorbing liquid) has no surface: a
-            # boundary light crosses unchanged, around the medium (Cycles: the same, except
-            # that shadow rays cross it too; Specula's reach lights by BSDF sampling).
-            return invisible_boundary(mat.name, absorption)
+            # boundary light and shadow rays cross unchanged, around the medium (Cycles).
+            return invisible_boundary(mat.name, medium)
         if link is None:
             return self.viewport_fallback(f"nothing is linked to '{out.name}' Surface")
         for socket_name, meaning in OUTPUT_IGNORED:
@@ -738,38 +751,100 @@ class _Reader:
                                           f"nowhere")
         spec = self.shader(source.from_node)
         _give_normal_map(spec, self.normal_map)
-        if absorption is not None and max(absorption) > 0:
-            spec.kwargs["absorption"] = absorption
+        if _is_medium(medium):
+            spec.kwargs.update(medium)
         return spec
 
     def volume(self, link):
-        """The medium of the Material Output's Volume as an absorption coefficient (3,) per
-        world unit: Volume Absorption exactly (density x (1 - colour)); the absorption part
-        of a Principled Volume (Cycles: density x (1 - colour) x (1 - sqrt(absorption
-        colour))), its scattering and emission warned and left out; other volume shaders
-        warned and not rendered."""
+        """The medium of the Material Output's Volume (MEDIUM_KEYS keywords: coefficients
+        per world unit), as Cycles' closures sum them: Volume Absorption (density x
+        (1 - colour)), Volume Scatter (density x colour, Henyey-Greenstein), Principled
+        Volume (scattering density x colour, absorption density x (1 - colour) x (1 -
+        sqrt(absorption colour)), emission strength x colour), Volume Coefficients,
+        Emission (strength x colour per unit length), and Add and Mix Shader (constant
+        factor) of them; anything else is warned and adds nothing."""
         source = _past_reroutes(link)
-        node = link.from_node if source is None else source.from_node
+        if source is None:
+            return dict(NO_MEDIUM)
+        node = source.from_node
         kind = node.bl_idname
+        if kind in ("ShaderNodeAddShader", "ShaderNodeMixShader"):
+            fac = 0.5 if kind == "ShaderNodeAddShader" else self.unit(node, "Fac", 0.5)
+            weights = (1.0, 1.0) if kind == "ShaderNodeAddShader" else (1.0 - fac, fac)
+            parts = [self.volume(sock_link) if sock_link is not None else dict(NO_MEDIUM)
+                     for sock_link in (live_link(sock) for sock in
+                                       [x for x in node.inputs if x.type == "SHADER"][:2])]
+            return self._summed_media(node, parts, weights)
+        medium = dict(NO_MEDIUM)
         if kind == "ShaderNodeVolumeAbsorption":
             colour = self.colour(node, "Color", (0.8, 0.8, 0.8))
             density = max(self.number(node, "Density", 1.0), 0.0)
-            return tuple(density * max(1.0 - c, 0.0) for c in colour)
-        if kind == "ShaderNodeVolumePrincipled":
-            colour = self.colour(node, "Color", (0.5, 0.5, 0.5))
+            medium["absorption"] = tuple(density * max(1.0 - c, 0.0) for c in colour)
+        elif kind == "ShaderNodeVolumeScatter":
+            colour = self.colour(node, "Color", (0.8, 0.8, 0.8))
             density = max(self.number(node, "Density", 1.0), 0.0)
-            tint = self.colour(node, "Absorption Color", (0.0, 0.0, 0.0))
-            if density * max(colour) > 0:
-                self.warn(f"node '{node.name}' scatters (Color {_fmt(colour)} x Density "
-                          f"{density:.3g}); volume scattering is not rendered: only its "
-                          f"absorption is")
-            for socket_name in ("Emission Strength", "Blackbody Intensity"):
-                self.ignored(node, socket_name, 0.0, "volume emission is not rendered")
-            return tuple(density * max(1.0 - c, 0.0) * max(1.0 - math.sqrt(a), 0.0)
-                         for c, a in zip(colour, tint))
-        self.warn(f"Volume from node '{node.name}' ({_label(node)}) is not rendered (Specula "
-                  f"renders Volume Absorption and the Principled Volume's absorption)")
-        return (0.0, 0.0, 0.0)
+            medium["scattering"] = tuple(density * c for c in colour)
+            medium["anisotropy"] = self._anisotropy(node)
+        elif kind == "ShaderNodeVolumePrincipled":
+            medium.update(self._principled_volume(node))
+        elif kind == "ShaderNodeVolumeCoefficients":
+            medium["absorption"] = self.colour(node, "Absorption Coefficients", (0.0,) * 3)
+            medium["scattering"] = self.colour(node, "Scatter Coefficients", (0.0,) * 3)
+            medium["anisotropy"] = self._anisotropy(node)
+            medium["volume_emission"] = self.colour(node, "Emission Coefficients", (0.0,) * 3)
+        elif kind == "ShaderNodeEmission":
+            colour = self.colour(node, "Color", (1.0, 1.0, 1.0))
+            strength = max(self.number(node, "Strength", 1.0), 0.0)
+            medium["volume_emission"] = tuple(strength * c for c in colour)
+        else:
+            self.warn(f"Volume from node '{node.name}' ({_label(node)}) is not rendered "
+                      f"(Specula renders Volume Absorption, Volume Scatter, Principled Volume, "
+                      f"Volume Coefficients and Emission, added and mixed)")
+        return medium
+
+    def _principled_volume(self, node):
+        """A Principled Volume's medium keywords (Cycles' svm_node_principled_volume)."""
+        colour = self.colour(node, "Color", (0.5, 0.5, 0.5))
+        density = max(self.number(node, "Density", 1.0), 0.0)
+        tint = self.colour(node, "Absorption Color", (0.0, 0.0, 0.0))
+        strength = max(self.number(node, "Emission Strength", 0.0), 0.0)
+        emission = self.colour(node, "Emission Color", (1.0, 1.0, 1.0))
+        self.ignored(node, "Blackbody Intensity", 0.0, "blackbody emission is not rendered")
+        return {"scattering": tuple(density * c for c in colour),
+                "absorption": tuple(density * max(1.0 - c, 0.0) * max(1.0 - math.sqrt(a), 0.0)
+                                    for c, a in zip(colour, tint)),
+                "anisotropy": self._anisotropy(node),
+                "volume_emission": tuple(strength * c for c in emission)}
+
+    def _anisotropy(self, node):
+        """A scattering node's Henyey-Greenstein g in [-1, 1]; other phase functions (Volume
+        Scatter's Fournier-Forand, Draine, Rayleigh, Mie) are warned and rendered as
+        Henyey-Greenstein of its Anisotropy (isotropic for Rayleigh, whose mean cosine is
+        0)."""
+        g = min(max(self.number(node, "Anisotropy", 0.0), -1.0), 1.0)
+        phase = getattr(node, "phase", "HENYEY_GREENSTEIN")
+        if phase != "HENYEY_GREENSTEIN":
+            g = 0.0 if phase == "RAYLEIGH" else g
+            self.warn(f"node '{node.name}' phase function {phase.replace('_', ' ').title()} "
+                      f"is not supported; rendered as Henyey-Greenstein with anisotropy "
+                      f"{g:.3g}")
+        return g
+
+    def _summed_media(self, node, parts, weights):
+        """Two media weighted and added (Add Shader: 1 and 1; Mix Shader: 1 - fac and fac);
+        where both scatter with different anisotropy, one Henyey-Greenstein of their
+        scattering-weighted mean g (warned: Cycles keeps both lobes)."""
+        out = {key: tuple(sum(w * p[key][c] for p, w in zip(parts, weights)) for c in range(3))
+               for key in ("absorption", "scattering", "volume_emission")}
+        scatter = [w * sum(p["scattering"]) for p, w in zip(parts, weights)]
+        g = [p["anisotropy"] for p in parts]
+        out["anisotropy"] = (sum(s * x for s, x in zip(scatter, g)) / sum(scatter)
+                             if sum(scatter) > 0 else 0.0)
+        if min(scatter) > 0 and abs(g[0] - g[1]) > 1e-6:
+            self.warn(f"node '{node.name}' ({_label(node)}) mixes volumes scattering with "
+                      f"anisotropy {g[0]:.3g} and {g[1]:.3g}; rendered as one phase function "
+                      f"of anisotropy {out['anisotropy']:.3g}")
+        return out
 
     def shader(self, node):
         name, kind = self.material.name, node.bl_idname

@@ -3,8 +3,9 @@
 A wavefront of rays alternates between embree (closest hits, shadow rays) and `shade`, the
 compiled bounce, which runs these stages per ray:
 
-    absorb_along_ray -> handle_light_hits -> handle_escaped | choose_closure
-    -> surface_interaction -> handle_emission -> pass_through (transparent) | russian_roulette
+    handle_light_hits -> traverse_medium [-> scatter_in_medium: a vertex in a medium]
+    -> handle_escaped | choose_closure -> surface_interaction -> handle_emission
+    -> pass_through (transparent, volume boundary) | russian_roulette
     -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
 
 and, where the plan has transparent surfaces, shadow rays take closest hits in turn and
@@ -49,12 +50,16 @@ from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_S
                        ROULETTE,
                        bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
                        sample_1d, sample_2d)
-from .scene import (DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED, ROUGH_GLASS,
-                    ROUGH_METAL, SHEEN, TRANSLUCENT, TRANSPARENT, glass_tints)
+from .scene import (BOUNDARY, DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED,
+                    ROUGH_GLASS, ROUGH_METAL, SHEEN, TRANSLUCENT, TRANSPARENT, glass_tints)
 
 # Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
 # scrambled by this (and the crossing's number), apart from the path's own choices.
 SHADOW_CLOSURE_SALT = 0x5AD0C105
+# A segment through a scattering medium samples its distance (and the channel it samples
+# it in) from the sampler scrambled by this, apart from the dimensions of the vertex it
+# ends at (a scattering vertex or the surface).
+FREE_FLIGHT_SALT = 0xF1EE7F11
 # A shadow ray moves past a transparent surface along itself by the ray offset / cos: the
 # cosine is taken as at least this (a grazing ray moves at most 1000 offsets).
 GRAZING_COS = 1e-3
@@ -72,8 +77,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_SAMPLING", "HAS_LIGHT_OBJECTS", "HAS_LIGHT_HITS", "HAS_SUN_DISCS",
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
-                  "HAS_VOLUMES", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY", "HAS_TRANSLUCENT",
-                   "HAS_SHEEN",
+                  "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
+                  "HAS_TRANSLUCENT", "HAS_SHEEN",
                   "EXACT_FRESNEL", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
@@ -84,7 +89,8 @@ HAS_LIGHT_IMPORTANCE = True
 HAS_LIGHT_TRACING = True  # caustics.py: light paths, and the path tracer's weight against them
 HAS_TEXTURES = True  # shading.py: colours from shader programs (image textures)
 HAS_NORMAL_MAPS = True  # shading.normal_map: tangent-space normal maps
-HAS_VOLUMES = True  # media.py: absorbing media inside closed meshes
+HAS_VOLUMES = True  # media.py: media inside closed meshes (absorbing, emitting)
+HAS_SCATTERING = True  # media.py: media that scatter (free-flight distances, phase functions)
 HAS_MIXES = True  # mixed shaders (scene.Material.mix): each hit picks one component
 HAS_COATS = True  # Principled coats (scene.Material.coated): layers over mixed components
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
@@ -109,14 +115,14 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # kind, colour (k, 3), ior (k,), reflection_tint, transmission_tint, emission (k, 3), the
 # rough materials' bsdf.LayerTables (None without rough materials) and the colour and
 # emission programs' shading.ProgramTable (None without textures), and each normal map's
-# strength (k,), its medium's absorption coefficient (k, 3) and, for mixes, the two
+# strength (k,), its medium (k, media.COLUMNS: media.medium_table) and, for mixes, the two
 # component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
 # whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
 # tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool,
 # each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
-                                            "normal_strength absorption mix_components "
+                                            "normal_strength medium mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
                                             "sheen_ltc")
@@ -132,14 +138,18 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # the lens point to where the camera ray starts (per row); svm: the shader programs'
 # registers (shading.MAX_REGISTERS floats, reused by every path of the batch); the media
 # each path is inside (media.MEDIA_STACK material indices, -1 empty); with transparency
-# (HAS_TRANSPARENCY), each path's bounce count, its transparent crossings and the distance
-# from its last scattering vertex (o64, where its MIS state was set) to the ray's start.
+# (HAS_TRANSPARENCY), each path's bounce count, its transparent crossings, the distance
+# from its last scattering vertex (o64, where its MIS state was set) to the ray's start and
+# the volume boundaries it crossed (counted apart, as Cycles does).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
-                            "camera_near prev_normal svm media bounce transparent mis_t")
+                            "camera_near prev_normal svm media bounce transparent mis_t "
+                            "bounds")
 # Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
-# path's transparent crossings plus its own, and the sampler bounce of its vertex.
-ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib transparent vertex")
+# path's transparent crossings plus its own, the sampler bounce of its vertex and the media
+# it is in (traced a segment at a time, media.MEDIA_STACK entries).
+ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib transparent vertex "
+                                      "media")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side; s after the material's normal map), the specular lobes' normal m, wo,
 # front face, triangle, barycentrics, material, distance, the offset scale and the mesh's
@@ -227,8 +237,10 @@ def generate_camera_rays(pixels, sample, seed, centred, sc, paths):
 
 def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
     """Light objects crossed before the surface (lights are transparent), then sun discs
-    for escaped rays, MIS-weighted after soft bounces. Camera rays see the lights visible
-    to the camera; other rays the lights with MIS on (Cycles)."""
+    for escaped rays, MIS-weighted after soft bounces, each seen through the media of the
+    segment up to it (whether or not the path scatters before: its light is a term of its
+    own along the ray). Camera rays see the lights visible to the camera; other rays the
+    lights with MIS on (Cycles)."""
     em = sc.emitters
     L = em.objects
     t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
@@ -256,7 +268,10 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                 w = power_heuristic(paths.prev_pdf[i], pdf_l)
             elif HAS_LIGHT_TRACING and depth >= 2 and paths.caustic_q[i] > 0.0:
                 w = caustic_weight(i, sc.caustics.source_of_light[j], 1.0, sc, paths)
-            _add(paths, row, t0, t1, t2, l0, l1, l2, w)
+            a0 = a1 = a2 = 1.0
+            if HAS_VOLUMES:
+                a0, a1, a2 = medium_transmittance(i, -1, False, False, th - t_start, sc, paths)
+            _add(paths, row, t0 * a0, t1 * a1, t2 * a2, l0, l1, l2, w)
     if HAS_SUN_DISCS and f < 0:
         sun_seen = _SUN_CAMERA if depth == 0 else _SUN_BSDF
         for j in range(L.shape[0]):
@@ -275,8 +290,11 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                           + dz * L[j, _DIRECTION + 2])
                 w = caustic_weight(i, sc.caustics.source_of_light[j], cos_y, sc, paths)
             sr = L[j, _SUN_RADIANCE]
-            _add(paths, row, t0, t1, t2, L[j, _POWER] * sr, L[j, _POWER + 1] * sr,
-                 L[j, _POWER + 2] * sr, w)
+            a0 = a1 = a2 = 1.0
+            if HAS_VOLUMES:
+                a0, a1, a2 = medium_transmittance(i, -1, False, False, np.inf, sc, paths)
+            _add(paths, row, t0 * a0, t1 * a1, t2 * a2, L[j, _POWER] * sr,
+                 L[j, _POWER + 1] * sr, L[j, _POWER + 2] * sr, w)
     if DEBUG:
         _debug_mark(paths, row, 2, paths.radiance[row, 0], paths.radiance[row, 1],
                     paths.radiance[row, 2])
@@ -790,19 +808,35 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     if not (max(g0, max(g1, g2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0):
         return n_shadow
     w = 1.0 if math.isinf(pdf_l) else power_heuristic(pdf_l, pdf_b)
+    ox, oy, oz = shadow_origin(x, wx, wy, wz, sc)
+    # The shadow ray crosses the media on the light's side of the surface.
+    return queue_shadow(i, row, depth, x, ox, oy, oz, wx, wy, wz, dist, light_scale,
+                        g0 * q0 * w, g1 * q1 * w, g2 * q2 * w,
+                        sc.geometry.material_index[x.f] if HAS_VOLUMES else 0,
+                        wx * x.nx + wy * x.ny + wz * x.nz < 0.0, sc, paths, shadow, n_shadow)
+
+
+def queue_shadow(i, row, depth, x, ox, oy, oz, wx, wy, wz, dist, light_scale, f0, f1, f2,
+                 mat, crossed, sc, paths, shadow, n_shadow):
+    """Queue the shadow ray of path i's vertex x (from o, toward w; dist: to the sampled
+    point, inf for a distant light) carrying throughput x f. With media it starts in the
+    path's after crossing (if `crossed`) the surface of material `mat` from x's side:
+    traced a segment at a time with transparency (cross_transparent attenuates each), else
+    attenuated over its whole length here (it meets no surface before its light). Returns
+    the shadow rays queued."""
     t = paths.throughput
-    c0, c1, c2 = t[i, 0] * g0 * q0 * w, t[i, 1] * g1 * q1 * w, t[i, 2] * g2 * q2 * w
+    c0, c1, c2 = t[i, 0] * f0, t[i, 1] * f1, t[i, 2] * f2
     if DEBUG:
         _debug_mark(paths, row, 6, c0, c1, c2)
-    if HAS_VOLUMES:  # the shadow ray crosses the media on the light's side of the surface
-        a0, a1, a2 = medium_transmittance(i, sc.geometry.material_index[x.f], x.front,
-                                          wx * x.nx + wy * x.ny + wz * x.nz < 0.0, dist, sc,
-                                          paths)
+    if HAS_VOLUMES and not HAS_TRANSPARENCY:
+        a0, a1, a2 = medium_transmittance(i, mat, x.front, crossed, dist, sc, paths)
         c0, c1, c2 = c0 * a0, c1 * a1, c2 * a2
     if not max(c0, max(c1, c2)) > 0:
         return n_shadow
-    ox, oy, oz = shadow_origin(x, wx, wy, wz, sc)
     s = n_shadow
+    if HAS_VOLUMES and HAS_TRANSPARENCY:
+        media.carry(paths.media, i, shadow.media, s, sc.materials.medium, mat, x.front,
+                    crossed)
     shadow.row[s] = row
     shadow.origin[s, 0], shadow.origin[s, 1], shadow.origin[s, 2] = ox, oy, oz
     if math.isinf(dist):
@@ -939,29 +973,121 @@ def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
 def medium_transmittance(i, mat, entering, crossed, t, sc, paths):
     """Beer-Lambert over length t (inf: to infinity) in the media path i is inside, after it
     crosses (if `crossed`) a surface of material `mat` from its front (`entering`)."""
-    s0, s1, s2 = media.extinction(paths.media, i, sc.materials.absorption, mat, entering,
+    s0, s1, s2 = media.extinction(paths.media, i, sc.materials.medium, mat, entering,
                                   crossed)
     return media.transmittance(s0, s1, s2, t)
 
 
-def absorb_along_ray(i, f, tfar, sc, paths):
-    """The segment just traced lay in the path's media: its throughput is attenuated by their
-    transmittance up to the hit (a light object crossed on the way is attenuated as the
-    surface behind it: lights inside a medium are not exact)."""
+def traverse_medium(i, row, vertex, scatters, f, tfar, sc, paths, rev_sample):
+    """The segment just traced (to the hit tfar away, or to infinity) lay in the path's
+    media: their emission along it is added; where they scatter and the path may still
+    bounce (`scatters`), a free-flight distance is sampled (media.sample_distance, in a
+    channel chosen by throughput), else the throughput takes the transmittance up to the
+    hit, exactly. Returns the distance along the segment where the path scatters (inf: it
+    reaches the hit, its throughput weighted for that)."""
+    mt = sc.materials.medium
     t = np.float64(tfar) if f >= 0 else np.inf
-    a0, a1, a2 = medium_transmittance(i, -1, False, False, t, sc, paths)
-    paths.throughput[i, 0] *= a0
-    paths.throughput[i, 1] *= a1
-    paths.throughput[i, 2] *= a2
+    t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
+    st0, st1, st2 = media.coefficients(paths.media, i, mt, media.SIGMA_T)
+    e0, e1, e2 = media.coefficients(paths.media, i, mt, media.EMISSION)
+    if max(e0, max(e1, e2)) > 0.0:
+        _add(paths, row, t0, t1, t2, media.emission_along(e0, st0, t),
+             media.emission_along(e1, st1, t), media.emission_along(e2, st2, t), 1.0)
+    ss0 = ss1 = ss2 = 0.0
+    if HAS_SCATTERING and scatters:
+        ss0, ss1, ss2 = media.coefficients(paths.media, i, mt, media.SIGMA_S)
+    if not max(ss0, max(ss1, ss2)) > 0.0:
+        a0, a1, a2 = media.transmittance(st0, st1, st2, t)
+        paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = (
+            t0 * a0, t1 * a1, t2 * a2)
+        return np.inf
+    total = t0 + t1 + t2
+    p0, p1 = (t0 / total, t1 / total) if total > 0.0 else (1.0 / 3.0, 1.0 / 3.0)
+    seed = hash_combine(paths.pseed[row], np.uint64(FREE_FLIGHT_SALT))
+    u_channel, u = sample_2d(seed, rev_sample, bounce_dim(vertex, LOBE))
+    ts, w0, w1, w2 = media.sample_distance(u_channel, u, t, st0, st1, st2, ss0, ss1, ss2, p0,
+                                           p1, 1.0 - p0 - p1)
+    paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = (
+        t0 * w0, t1 * w1, t2 * w2)
+    return ts
+
+
+def scatter_in_medium(i, out, row, depth, vertex, ts, sc, paths, shadow, n_shadow,
+                      rev_sample):
+    """Path i scatters in its media ts along its segment: a vertex without a surface. As at
+    a surface: Russian roulette, a light sampled and weighed by the phase function (MIS
+    against phase sampling), then a direction from the phase function; the bounce counts
+    (Cycles: a volume bounce is a bounce). Returns (rows going on, shadow rays queued)."""
+    t_start = paths.mis_t[i] if HAS_TRANSPARENCY else 0.0
+    dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
+    t = t_start + ts
+    px, py, pz = paths.o64[i, 0] + dx * t, paths.o64[i, 1] + dy * t, paths.o64[i, 2] + dz * t
+    alive, t0, t1, t2 = russian_roulette(depth, vertex, paths.throughput[i, 0],
+                                         paths.throughput[i, 1], paths.throughput[i, 2],
+                                         paths.pseed[row], rev_sample)
+    if not alive:
+        return out, n_shadow
+    paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2] = t0, t1, t2
+    mt = sc.materials.medium
+    # A vertex with no normal (zeros: lights are chosen from every side) and no surface to
+    # offset rays from; `mat` is only read for the kind of surface it is not.
+    x = Vertex(px, py, pz, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -dx, -dy, -dz, True,
+               -1, 0.0, 0.0, max(paths.media[i, 0], 0), t, max(abs(px), max(abs(py), abs(pz))),
+               0.0, 0.0, 0.0)
+    ps = paths.pseed[row]
+    if HAS_LIGHT_SAMPLING:
+        u_sel = sample_1d(ps, rev_sample, bounce_dim(vertex, LIGHT_SELECT))
+        ua, ub = sample_2d(ps, rev_sample, bounce_dim(vertex, LIGHT_POINT))
+        wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
+                                                                          paths)
+        f0, f1, f2, pdf_p = media.eval_phase(paths.media, i, mt, dx, dy, dz, wx, wy, wz)
+        if max(f0, max(f1, f2)) > 0 and max(q0, max(q1, q2)) > 0 and dist > 0:
+            w = 1.0 if math.isinf(pdf_l) else power_heuristic(pdf_l, pdf_p)
+            n_shadow = queue_shadow(i, row, vertex, x, px, py, pz, wx, wy, wz, dist,
+                                    light_scale, f0 * q0 * w, f1 * q1 * w, f2 * q2 * w, 0,
+                                    False, sc, paths, shadow, n_shadow)
+    u_lobe = sample_1d(ps, rev_sample, bounce_dim(vertex, LOBE))
+    ua, ub = sample_2d(ps, rev_sample, bounce_dim(vertex, BSDF))
+    wx, wy, wz, f0, f1, f2, pdf = media.sample_phase(paths.media, i, mt, dx, dy, dz, u_lobe,
+                                                     ua, ub)
+    t0, t1, t2 = t0 * f0, t1 * f1, t2 * f2
+    if not (pdf > 0.0 and max(t0, max(t1, t2)) > 0):
+        return out, n_shadow
+    spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
+    return out + 1, n_shadow
+
+
+def spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
+    """Continue path i from its scattering point p in a medium as row `out`: no surface to
+    leave (no offset), its media unchanged, no normal for the next MIS weight."""
+    media.carry(paths.media, i, paths.media, out, sc.materials.medium, 0, False, False)
+    if HAS_LIGHT_TRACING:  # (light paths never end in a medium)
+        paths.caustic_q[out], paths.caustic_eta[out] = 0.0, 1.0
+    if HAS_TRANSPARENCY:
+        paths.bounce[out] = depth + 1
+        paths.transparent[out] = paths.transparent[i]
+        paths.bounds[out] = paths.bounds[i]
+        paths.mis_t[out] = 0.0
+    paths.o64[out, 0], paths.o64[out, 1], paths.o64[out, 2] = px, py, pz
+    paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
+    for j in range(3):
+        paths.origin32[out, j] = paths.o64[out, j]
+        paths.dir32[out, j] = paths.d64[out, j]
+        paths.prev_normal[out, j] = 0.0
+    paths.tmax32[out] = np.inf
+    paths.throughput[out, 0], paths.throughput[out, 1], paths.throughput[out, 2] = t0, t1, t2
+    paths.prev_pdf[out] = pdf
+    paths.live[out] = row
 
 
 def path_counts(i, step, tfar, paths):
     """Path i at this step: (depth, the bounce: Blender's count; vertex, the sampler's
-    bounce: transparent crossings count too; the hit's distance from the last scattering
-    vertex). Without transparency every path's is the step's."""
+    bounce: transparent and volume boundary crossings count too; the hit's distance from
+    the last scattering vertex). Without transparency every path's is the step's."""
     if HAS_TRANSPARENCY:
         depth = paths.bounce[i]
-        return depth, depth + paths.transparent[i], np.float64(tfar) + paths.mis_t[i]
+        return (depth, depth + paths.transparent[i] + paths.bounds[i],
+                np.float64(tfar) + paths.mis_t[i])
     return step, step, np.float64(tfar)
 
 
@@ -974,11 +1100,12 @@ def write_passes(row, x, sc, paths):
         _debug_mark(paths, row, 4, paths.depth[row], x.sx, x.sy + x.sz)
 
 
-def pass_through(i, out, row, x, tfar, sc, paths):
+def pass_through(i, out, row, x, tfar, boundary, sc, paths):
     """Continue path i as row `out` straight through a transparent surface (tfar away), its
     throughput tinted by the surface's colour: only embree's ray start moves (behind the
     surface) and its end stays (a camera ray's clipping); o64, the MIS pdf and normal stay
-    the scattering vertex's, mis_t grows to here. Returns the rows going on."""
+    the scattering vertex's, mis_t grows to here. A volume `boundary` counts as a boundary
+    crossed, not a transparent bounce (Cycles). Returns the rows going on."""
     eps = ray_offset(x.scale)  # n faces the incoming ray: behind is -n
     for j in range(3):
         paths.o64[out, j] = paths.o64[i, j]
@@ -993,13 +1120,26 @@ def pass_through(i, out, row, x, tfar, sc, paths):
     paths.prev_pdf[out] = paths.prev_pdf[i]
     paths.mis_t[out] = x.t
     paths.bounce[out] = paths.bounce[i]
-    paths.transparent[out] = paths.transparent[i] + 1
+    paths.transparent[out] = paths.transparent[i] + (0 if boundary else 1)
+    paths.bounds[out] = paths.bounds[i] + (1 if boundary else 0)
     paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
     if HAS_VOLUMES:  # a transparent surface lets the path into its medium as glass does
-        media.carry(paths.media, i, out, sc.materials.absorption,
+        media.carry(paths.media, i, paths.media, out, sc.materials.medium,
                     sc.geometry.material_index[x.f], x.front, True)
     paths.live[out] = row
     return out + 1
+
+
+def cross_surface(i, out, row, x, k, tfar, transparent_max, sc, paths):
+    """Past the transparent limit a surface only adds emission (Cycles: terminate on the
+    next surface); before it a transparent surface or a volume boundary (k) is crossed
+    (pass_through), even past the bounce limit. Returns (whether path i is done with this
+    surface, the rows going on)."""
+    if paths.transparent[i] >= max(transparent_max, 1):
+        return True, out
+    if k == TRANSPARENT or (k == BOUNDARY and paths.bounds[i] < media.VOLUME_BOUNDS_MAX):
+        return True, pass_through(i, out, row, x, tfar, k == BOUNDARY, sc, paths)
+    return k == BOUNDARY, out
 
 
 def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
@@ -1010,12 +1150,13 @@ def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
         cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
         paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
     if HAS_VOLUMES:  # the medium is the triangle's material's, a mix's as a whole
-        media.carry(paths.media, i, out, sc.materials.absorption,
+        media.carry(paths.media, i, paths.media, out, sc.materials.medium,
                     sc.geometry.material_index[x.f], x.front,
                     wx * x.nx + wy * x.ny + wz * x.nz < 0.0)
     if HAS_TRANSPARENCY:
         paths.bounce[out] = depth + 1
         paths.transparent[out] = paths.transparent[i]
+        paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
     eps = side * ray_offset(x.scale)
@@ -1045,17 +1186,21 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
     loop, sample light, sample BSDF. Returns (paths that go on, shadow rays queued)."""
     if PROFILE:
         c_loop = _cycles()
-    out = 0
-    n_shadow = 0
+    out = n_shadow = 0
     for i in range(m):
         row = paths.live[i]
         f = prim[i]
         depth, vertex, t_hit = path_counts(i, step, tfar[i], paths)
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
-        if HAS_VOLUMES:
-            absorb_along_ray(i, f, tfar[i], sc, paths)
         if HAS_LIGHT_HITS or HAS_SUN_DISCS:
             handle_light_hits(i, row, depth, f, tfar[i], sc, paths, mis)
+        if HAS_VOLUMES:
+            ts = traverse_medium(i, row, vertex, depth <= max_bounces, f, tfar[i], sc, paths,
+                                 rev_sample)
+            if HAS_SCATTERING and ts < np.inf:  # (a vertex of its own: no surface shading)
+                out, n_shadow = scatter_in_medium(i, out, row, depth, vertex, ts, sc, paths,
+                                                  shadow, n_shadow, rev_sample)
+                continue
         if f < 0:
             handle_escaped(i, row, sc, paths, mis)
             continue
@@ -1067,7 +1212,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
                                          paths.d64[i, 2], mat, sc, paths)
         x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
         k = sc.materials.kind[x.mat]
-        if depth == 0 and not (HAS_TRANSPARENCY and k == TRANSPARENT):
+        if depth == 0 and not (HAS_TRANSPARENCY and (k == TRANSPARENT or k == BOUNDARY)):
             write_passes(row, x, sc, paths)
         if HAS_EMISSION:
             handle_emission(i, row, depth, x, sc, paths, mis)
@@ -1075,12 +1220,8 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             for j in range(3):
                 paths.throughput[i, j] *= weight[j]
         if HAS_TRANSPARENCY:
-            # Past the transparent limit a surface only adds emission (Cycles: terminate on
-            # the next surface); a transparent one is crossed even past the bounce limit.
-            if paths.transparent[i] >= max(transparent_max, 1):
-                continue
-            if k == TRANSPARENT:
-                out = pass_through(i, out, row, x, tfar[i], sc, paths)
+            ended, out = cross_surface(i, out, row, x, k, tfar[i], transparent_max, sc, paths)
+            if ended:
                 continue
         # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
         if depth > max_bounces or k == NONE:
@@ -1131,15 +1272,26 @@ def accumulate_unoccluded(radiance, shadow, occluded_prim, count):
 
 def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count, shadow,
                       paths):
-    """Shadow rays after their closest hits (Cycles' transparent shadows): one that hits
-    nothing adds its contribution; one that hits a transparent surface (a mix's: the
-    component a sample picks, which estimates its transparency) goes on behind it, tinted
-    by its colour, compacted to the front, while its path's transparent crossings and its
-    own stay within the limit; any other surface blocks it. Returns the rays going on."""
+    """Shadow rays after their closest hits (Cycles' transparent shadows): each segment is
+    attenuated by the media it lies in; one that hits nothing adds its contribution; one
+    that hits a transparent surface (a mix's: the component a sample picks, which
+    estimates its transparency) or a volume boundary goes on behind it, tinted by its
+    colour, into or out of its medium, compacted to the front, while its path's
+    transparent crossings and its own (boundaries count here, as in Cycles) stay within
+    the limit; any other surface blocks it. Returns the rays going on."""
     out = 0
     for j in range(count):
         row = shadow.row[j]
         f = prim[j]
+        if HAS_VOLUMES:
+            s0, s1, s2 = media.coefficients(shadow.media, j, sc.materials.medium,
+                                            media.SIGMA_T)
+            if max(s0, max(s1, s2)) > 0.0:
+                a0, a1, a2 = media.transmittance(
+                    s0, s1, s2, np.float64(tfar[j]) if f >= 0 else np.float64(shadow.tmax[j]))
+                shadow.contrib[j, 0] *= a0
+                shadow.contrib[j, 1] *= a1
+                shadow.contrib[j, 2] *= a2
         if f < 0:
             for c in range(3):
                 paths.radiance[row, c] += shadow.contrib[j, c]
@@ -1155,13 +1307,14 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
             d = shadow.direction[j]
             mat, weight = choose_closure(u, f, bu[j], bv[j], np.float64(d[0]), np.float64(d[1]),
                                          np.float64(d[2]), mat, sc, paths)
-        if sc.materials.kind[mat] != TRANSPARENT:
+        if sc.materials.kind[mat] != TRANSPARENT and sc.materials.kind[mat] != BOUNDARY:
             continue
         # Go on along the ray itself, past the surface by the usual offset measured along
         # its normal: the ray still ends where it did, just short of the light.
         o, d = shadow.origin[j], shadow.direction[j]
         n = sc.geometry.tri_normal[f]
-        cos_n = max(abs(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]), GRAZING_COS)
+        cos_in = d[0] * n[0] + d[1] * n[1] + d[2] * n[2]
+        cos_n = max(abs(cos_in), GRAZING_COS)
         t = np.float64(tfar[j])
         px, py, pz = o[0] + d[0] * t, o[1] + d[1] * t, o[2] + d[2] * t
         t += ray_offset(offset_scale(sc.geometry, f, px, py, pz)) / cos_n
@@ -1173,6 +1326,9 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         shadow.row[out] = row
         shadow.transparent[out] = crossed
         shadow.vertex[out] = shadow.vertex[j]
+        if HAS_VOLUMES:
+            media.carry(shadow.media, j, shadow.media, out, sc.materials.medium,
+                        sc.geometry.material_index[f], cos_in < 0.0, True)
         out += 1
     return out
 
@@ -1200,11 +1356,14 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     russian_roulette, emitter_pmf,
     lit_side, sample_emitter, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,
-    medium_transmittance,
-    absorb_along_ray, path_counts, write_passes, pass_through, spawn)}
+    medium_transmittance, queue_shadow, traverse_medium, spawn_in_medium,
+    path_counts, write_passes, pass_through, cross_surface,
+    spawn)}
 # perturbed_normal runs programs (a bump's height three times): compiled once and called
 # from its sites rather than inlined into each, which cut compiling the generic and a
 # diffuse plan's kernels from 171 s to 109 s (test_kernel's diffuse-only test, no cache).
+# scatter_in_medium holds a second copy of light sampling: compiled on its own too (it
+# runs only where a path scatters in a medium).
 STAGES.update({f.__name__: (f, JIT) for f in (
-    perturbed_normal, generate_camera_rays, shade, accumulate_unoccluded, cross_transparent,
-    all_finite)})
+    perturbed_normal, scatter_in_medium, generate_camera_rays, shade, accumulate_unoccluded,
+    cross_transparent, all_finite)})

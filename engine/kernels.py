@@ -29,7 +29,7 @@ from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, P
                          SceneData, ShadowRays)
 from .jit import INLINE
 from .lights import BOUND_COLUMNS, COLUMNS, Emitters
-from .media import MEDIA_STACK
+from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
 from .shading import MAX_REGISTERS, SLOTS, ProgramTable
@@ -114,9 +114,9 @@ def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -
     (numba compiles for the argument types it is called with)."""
     data = scene_data(scene, settings, plan, emitters, camera, kernel.generic)
     tracer = Tracer(kernel, data, accel, settings, lambda stage, seconds: None,
-                    transparency=plan.transparency)
+                    transparency=plan.transparency, volumes=plan.volumes)
     tracer.trace_pixels(np.zeros(1, np.int64), 0)
-    if plan.transparency:  # (one pixel need not have queued a shadow ray)
+    if tracer.segmented_shadows:  # (one pixel need not have queued a shadow ray)
         tracer.trace_shadow_rays(tracer.shadow_rays(1), 0, tracer.new_paths(1),
                                  reverse_bits(np.uint64(0)))
     if kernel.constants["HAS_LIGHT_TRACING"]:
@@ -224,7 +224,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
                               m.transmission_tint, m.emission, layers, programs,
                               np.asarray(strength, np.float64),
-                              m.absorption if plan.volumes or generic else None,
+                              m.medium if plan.volumes or generic else None,
                               m.mix_components if needs_mixes else None,
                               m.mix_fac if needs_mixes else None,
                               m.mix_scale if needs_mixes else None,
@@ -274,7 +274,7 @@ class Tracer:
     sampling."""
 
     def __init__(self, kernel: Kernel, data: SceneData, accel, settings, count,
-                 transparency: bool = False):
+                 transparency: bool = False, volumes: bool = False):
         self.kernel, self.data, self.accel, self.settings = kernel, data, accel, settings
         self._count = count  # callable(stage, seconds)
         self.profile = bool(kernel.constants["PROFILE"])
@@ -282,6 +282,11 @@ class Tracer:
         self.transparency = bool(transparency)
         if transparency and not kernel.constants["HAS_TRANSPARENCY"]:
             raise ValueError("transparent shadows need a kernel with HAS_TRANSPARENCY")
+        # Shadow rays are traced a segment at a time through transparent surfaces, and
+        # through the plan's media where the kernel has transparency (its shadow rays
+        # carry their media to be attenuated per segment, integrator.queue_shadow).
+        self.segmented_shadows = self.transparency or bool(
+            volumes and kernel.constants["HAS_TRANSPARENCY"] and kernel.constants["HAS_VOLUMES"])
 
     @staticmethod
     def new_paths(n: int) -> Paths:
@@ -291,14 +296,15 @@ class Tracer:
                      np.full(n, BACKGROUND_DEPTH), np.zeros((n, 3)), np.zeros(n, np.int32),
                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
-                     np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n))
+                     np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n),
+                     np.zeros(n, np.int64))
 
     @staticmethod
     def shadow_rays(n: int) -> ShadowRays:
         """Room for n shadow rays: at most one per path and bounce."""
         return ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
                           np.empty(n, F32), np.empty((n, 3)), np.empty(n, np.int64),
-                          np.empty(n, np.int64))
+                          np.empty(n, np.int64), np.full((n, MEDIA_STACK), -1, np.int64))
 
     def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
         """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):
@@ -317,8 +323,9 @@ class Tracer:
         shadow = self.shadow_rays(n)
         profile = np.zeros(3 if self.profile else 0, np.uint64)
         m = n
-        # Each step is a bounce; transparent crossings take steps of their own.
-        steps = s.max_bounces + 2 + (max(s.transparent_max_bounces, 1)
+        # Each step is a bounce; transparent and volume boundary crossings take steps of
+        # their own (every path ends within this: each step counts one of them).
+        steps = s.max_bounces + 2 + (max(s.transparent_max_bounces, 1) + VOLUME_BOUNDS_MAX
                                      if self.transparency else 0)
         for step in range(steps):
             if m == 0:
@@ -337,7 +344,7 @@ class Tracer:
         lights: one occlusion query, or closest hits in turn through transparent surfaces."""
         k = self.kernel
         t0 = time.perf_counter()
-        if not self.transparency:
+        if not self.segmented_shadows:
             blocked = self.accel.occluded_raw(shadow.origin[:count], shadow.direction[:count],
                                               shadow.tmax[:count])
             k.accumulate_unoccluded(paths.radiance, shadow, blocked, count)

@@ -12,7 +12,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .lights import traces_light_paths
+from .media import SIGMA_S, has_medium
 from .scene import (
+    BOUNDARY,
     DIFFUSE,
     GLASS,
     GLOSSY,
@@ -74,8 +76,10 @@ class Plan:
     rough_metal: bool = False
     # Some material used has a tangent-space normal map (shading.normal_map).
     normal_maps: bool = False
-    # Some transmitting material used encloses an absorbing medium (media.py).
+    # Some transmitting material used encloses a medium (media.py): it absorbs or emits.
     volumes: bool = False
+    # ... and some such medium scatters.
+    scattering: bool = False
     # Some material used is a mix of two (Mix / Add Shader): each hit picks one.
     mixes: bool = False
     # Some mix used is a Principled coat (scene.Material.coated): a layer over the rest.
@@ -89,10 +93,11 @@ class Plan:
 
     @property
     def light_sampling(self) -> bool:
-        """Next-event estimation runs only where a non-delta surface can see an emitter."""
+        """Next-event estimation runs only where a non-delta surface or a scattering medium
+        can see an emitter."""
         return self.emitters and (self.diffuse or self.principled or self.glossy
                                   or self.rough_glass or self.rough_metal or self.translucent
-                                  or self.sheen)
+                                  or self.sheen or self.scattering)
 
     def stages(self) -> list[str]:
         s = ["generate camera rays"]
@@ -108,7 +113,8 @@ class Plan:
         if self.normal_maps:
             s.append("apply normal maps")
         if self.volumes:
-            s.append("absorb in media")
+            s.append("absorb in media" + (", scatter (phase functions)" if self.scattering
+                                          else ""))
         if self.mixes:
             s.append("choose one of mixed shaders" + (" (coats)" if self.coats else ""))
         if self.transparency:
@@ -152,7 +158,8 @@ class Plan:
             HAS_TERMINATOR=self.terminator, HAS_LIGHT_GRID=bool(light_grid) and self.emitters,
             HAS_LIGHT_IMPORTANCE=bool(light_importance) and self.emitters,
             HAS_LIGHT_TRACING=self.light_tracing, HAS_TEXTURES=self.textures,
-            HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes, HAS_MIXES=self.mixes,
+            HAS_NORMAL_MAPS=self.normal_maps, HAS_VOLUMES=self.volumes,
+            HAS_SCATTERING=self.scattering, HAS_MIXES=self.mixes,
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen,
@@ -176,8 +183,9 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     used = scene.materials.reachable(np.unique(scene.material_index))
     kinds = set(scene.materials.kind[used].tolist())
     mixes = MIX in kinds
-    transparency = TRANSPARENT in kinds
-    kinds -= {MIX, TRANSPARENT}
+    # A volume boundary is crossed as a transparent surface is (counted apart).
+    transparency = TRANSPARENT in kinds or BOUNDARY in kinds
+    kinds -= {MIX, TRANSPARENT, BOUNDARY}
     # Only emissive triangles need an area: per-material test first (millions of triangles).
     emissive = (scene.materials.emission.max(axis=1) > 0)[scene.material_index]
     v = scene.vertices[emissive]
@@ -196,10 +204,12 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     # Only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
     # medium is its own row's, entered through any transmitting component.
     m = scene.materials
-    volumes = m.absorption is not None and any(
-        m.absorption[top].max() > 0 and bool(np.any(np.isin(m.kind[m.reachable([top])],
-                                                             (GLASS, ROUGH_GLASS))))
-        for top in np.unique(scene.material_index))
+    entered = [top for top in np.unique(scene.material_index)
+               if m.medium is not None and has_medium(m.medium[top:top + 1])[0]
+               and bool(np.any(np.isin(m.kind[m.reachable([top])],
+                                       (GLASS, ROUGH_GLASS, TRANSPARENT, BOUNDARY))))]
+    volumes = bool(entered)
+    scattering = any(m.medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
@@ -217,7 +227,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         max_bounces=int(settings.max_bounces), triangles=scene.num_triangles,
         textures=scene.programs is not None and any(
             bool(np.any(getattr(scene.programs, slot)[used, 0] >= 0)) for slot in SLOTS),
-        normal_maps=normal_maps, volumes=volumes, mixes=mixes, transparency=transparency,
+        normal_maps=normal_maps, volumes=volumes, scattering=scattering, mixes=mixes,
+        transparency=transparency,
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
         translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit

@@ -183,7 +183,8 @@ class Kernels:
         data = kernels.scene_data(self.scene, self.settings, self.plan, self.emitters,
                                   self.camera, kernel.generic)
         return kernels.Tracer(kernel, data, self.accel, self.settings, self.timers,
-                              transparency=self.plan.transparency)
+                              transparency=self.plan.transparency,
+                              volumes=self.plan.volumes)
 
     def _compile(self, kernel) -> None:
         kernels.compile_on(kernel, self.scene, self.settings, self.plan, self.emitters,

@@ -19,15 +19,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .jit import ALLOCATING, JIT, njit
+from .media import medium_table
 from .shading import Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
- TRANSPARENT, TRANSLUCENT, SHEEN) = range(13)
+ TRANSPARENT, TRANSLUCENT, SHEEN, BOUNDARY) = range(14)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
               ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent",
-              TRANSLUCENT: "translucent", SHEEN: "sheen"}
+              TRANSLUCENT: "translucent", SHEEN: "sheen", BOUNDARY: "boundary"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
@@ -80,6 +81,15 @@ def _colour(value, what: str) -> np.ndarray:
     if np.any(c < 0):
         raise ValueError(f"{what} must not be negative, got {tuple(c)}")
     return c
+
+
+def _anisotropy(m) -> float:
+    """A material's Henyey-Greenstein g, which must lie in [-1, 1]."""
+    g = float(m.anisotropy)
+    if not -1.0 <= g <= 1.0:
+        raise ValueError(f"material '{m.name}': volume anisotropy must be in [-1, 1], got "
+                         f"{m.anisotropy!r}")
+    return g
 
 
 def _positive(value, what: str) -> float:
@@ -160,7 +170,13 @@ class Material:
         is needed (choosing lights by power), so it must be > 0.
     absorption : (3,) sigma_a per world unit of the homogeneous medium inside the meshes
         wearing the material (Cycles' Volume Absorption: density x (1 - colour)); paths
-        reach it through a transmitting surface (glass), media.py.
+        reach it through a transmitting surface (glass, a volume boundary), media.py.
+    scattering, anisotropy : (3,) sigma_s per world unit of that medium and its
+        Henyey-Greenstein g (Cycles' Volume Scatter: density x colour).
+    volume_emission : (3,) the medium's emitted radiance per world unit (Cycles' volume
+        Emission: strength x colour).
+    A "boundary" material is a Volume-only material's surface: none (paths and shadow rays
+    cross it as Cycles crosses one, counted apart) around its medium.
     """
 
     name: str
@@ -183,6 +199,9 @@ class Material:
     normal_strength: float = 1.0
     height_program: Program | None = field(default=None, compare=False)  # a Bump node
     absorption: tuple = (0.0, 0.0, 0.0)
+    scattering: tuple = (0.0, 0.0, 0.0)
+    anisotropy: float = 0.0
+    volume_emission: tuple = (0.0, 0.0, 0.0)
     components: tuple = ()  # mix: the two Materials mixed
     fac: float = 0.0  # mix: the weight of components[1] (a constant standing for fac_program)
     # mix: a Program whose result's first channel is the factor at each hit (a textured Mix
@@ -340,6 +359,12 @@ class Material:
         return cls(name, "translucent", tuple(colour), colour_program=colour_program)
 
     @classmethod
+    def boundary(cls, name, **medium):
+        """A Volume-only material's surface: none, around its medium (absorption,
+        scattering, anisotropy, volume_emission keywords)."""
+        return cls(name, "boundary", (1.0, 1.0, 1.0), **medium)
+
+    @classmethod
     def transparent(cls, name, colour=(1, 1, 1)):
         """Cycles' Transparent BSDF: straight through, tinted by colour."""
         return cls(name, "transparent", tuple(colour))
@@ -444,6 +469,9 @@ class Materials:
     normal_programs: list | None = None
     normal_strength: np.ndarray | None = None
     absorption: np.ndarray | None = None  # (k, 3), Material.absorption
+    scattering: np.ndarray | None = None  # (k, 3), Material.scattering
+    anisotropy: np.ndarray | None = None  # (k,), Material.anisotropy
+    volume_emission: np.ndarray | None = None  # (k, 3), Material.volume_emission
     # Mixes: per row its two component rows (-1, -1 if not a mix), fac and scale; the
     # components are rows after the materials given (from_list flattens them).
     mix_components: np.ndarray | None = None
@@ -531,6 +559,12 @@ class Materials:
                                  f"got {m.normal_strength!r}")
         absorption = np.array([_colour(m.absorption, f"material '{m.name}' absorption")
                                for m in materials])
+        medium = (absorption,
+                  np.array([_colour(m.scattering, f"material '{m.name}' scattering")
+                            for m in materials]),
+                  np.array([_anisotropy(m) for m in materials]),
+                  np.array([_colour(m.volume_emission, f"material '{m.name}' volume emission")
+                            for m in materials]))
         for m in materials:
             if m.roughness_program is not None and m.kind not in ROUGH_KINDS:
                 raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
@@ -546,12 +580,24 @@ class Materials:
                    np.array([float(m.roughness) for m in materials]),
                    np.array([bool(m.multiscatter) for m in materials]),
                    programs, emission_programs, normal_programs,
-                   np.array([float(m.normal_strength) for m in materials]), absorption,
+                   np.array([float(m.normal_strength) for m in materials]), *medium,
                    fac_programs=fac_programs, roughness_programs=roughness_programs,
                    height_programs=height_programs,
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64))
+
+    @property
+    def medium(self) -> np.ndarray | None:
+        """Each material's medium as the kernel reads it (k, media.COLUMNS)."""
+        if self.absorption is None:
+            return None
+        k = len(self.absorption)
+        zeros = np.zeros((k, 3))
+        return medium_table(self.absorption,
+                            zeros if self.scattering is None else self.scattering,
+                            np.zeros(k) if self.anisotropy is None else self.anisotropy,
+                            zeros if self.volume_emission is None else self.volume_emission)
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,

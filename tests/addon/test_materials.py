@@ -681,11 +681,11 @@ def volume_material(name, with_surface):
 
 
 def test_volume_only_material_is_an_invisible_boundary_around_its_medium(fresh, core):
-    """Volume Absorption (default Color 0.8, Density 1) alone: an IOR-1 boundary around
-    sigma_a = density x (1 - colour), rendered without a warning."""
+    """Volume Absorption (default Color 0.8, Density 1) alone: a boundary (no surface)
+    around sigma_a = density x (1 - colour), rendered without a warning."""
     mat, vol = volume_material("Fog", with_surface=False)
     spec, warnings = convert(mat)
-    assert spec.ctor == "glass" and spec.kwargs["ior"] == 1.0
+    assert spec.ctor == "boundary" and spec.to_core(core).kind == "boundary"
     np.testing.assert_allclose(spec.kwargs["absorption"], (0.2, 0.2, 0.2), rtol=1e-6)
     m = spec.to_core(core)
     assert isinstance(m, core.Material) and m.absorption == spec.kwargs["absorption"]
@@ -703,9 +703,10 @@ def test_glass_with_volume_absorption_is_coloured_glass(fresh, core):
     np.testing.assert_allclose(spec.to_core(core).absorption, (0.2, 1.0, 1.6), rtol=1e-6)
 
 
-def test_principled_volume_absorbs_as_cycles_and_warns_of_its_scattering(fresh):
+def test_principled_volume_absorbs_scatters_and_emits_as_cycles(fresh, core):
     """Cycles' Principled Volume: sigma_a = density x (1 - colour) x (1 - sqrt(absorption
-    colour)); its scattering (density x colour) is not rendered, which is said."""
+    colour)), sigma_s = density x colour (Henyey-Greenstein of its Anisotropy), emission
+    strength x colour; blackbody emission is not rendered, which is said."""
     mat, _ = volume_material("Smoke", with_surface=True)
     tree = mat.node_tree
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
@@ -718,27 +719,76 @@ def test_principled_volume_absorbs_as_cycles_and_warns_of_its_scattering(fresh):
     np.testing.assert_allclose(spec.kwargs["absorption"], (1.5, 0.6, 0.0), rtol=1e-6)
     assert warnings == []
     vol.inputs["Color"].default_value = (0.5, 0.5, 0.5, 1.0)
+    vol.inputs["Anisotropy"].default_value = 0.4
+    vol.inputs["Emission Strength"].default_value = 2.0
+    vol.inputs["Emission Color"].default_value = (1.0, 0.5, 0.0, 1.0)
     spec, warnings = convert(mat)
     np.testing.assert_allclose(spec.kwargs["absorption"], (0.75, 0.3, 0.0), rtol=1e-6)
-    assert len(warnings) == 1 and vol.name in warnings[0] and "scatter" in warnings[0]
+    np.testing.assert_allclose(spec.kwargs["scattering"], (1.5, 1.5, 1.5), rtol=1e-6)
+    np.testing.assert_allclose(spec.kwargs["volume_emission"], (2.0, 1.0, 0.0), rtol=1e-6)
+    m = spec.to_core(core)
+    assert m.anisotropy == pytest.approx(0.4) and warnings == []
+    vol.inputs["Blackbody Intensity"].default_value = 1.0
+    _, warnings = convert(mat)
+    assert len(warnings) == 1 and vol.name in warnings[0] and "Blackbody" in warnings[0]
+
+
+def test_added_and_mixed_volumes_sum_as_cycles_closures(fresh):
+    """Volume Scatter + Volume Absorption through an Add Shader (the usual fog), and an
+    Emission mixed in by a Mix Shader: the coefficients add, weighted by the factor."""
+    mat, absorb = volume_material("Fog", with_surface=False)
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    scatter = tree.nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Color"].default_value = (0.5, 0.25, 1.0, 1.0)
+    scatter.inputs["Density"].default_value = 2.0
+    scatter.inputs["Anisotropy"].default_value = -0.3
+    add = tree.nodes.new("ShaderNodeAddShader")
+    tree.links.new(scatter.outputs[0], add.inputs[0])
+    tree.links.new(absorb.outputs[0], add.inputs[1])
+    emit = tree.nodes.new("ShaderNodeEmission")
+    emit.inputs["Strength"].default_value = 4.0
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = 0.25
+    tree.links.new(add.outputs[0], mix.inputs[1])
+    tree.links.new(emit.outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], out.inputs["Volume"])
+    spec, warnings = convert(mat)
+    assert spec.ctor == "boundary" and warnings == []
+    np.testing.assert_allclose(spec.kwargs["scattering"], (0.75, 0.375, 1.5), rtol=1e-6)
+    np.testing.assert_allclose(spec.kwargs["absorption"], (0.15, 0.15, 0.15), rtol=1e-6)
+    np.testing.assert_allclose(spec.kwargs["volume_emission"], (1.0, 1.0, 1.0), rtol=1e-6)
+    assert spec.kwargs["anisotropy"] == pytest.approx(-0.3)
 
 
 def test_an_unsupported_volume_shader_is_named_and_not_rendered(fresh):
     mat, old = volume_material("Mist", with_surface=False)
     tree = mat.node_tree
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    tree.links.new(diffuse.outputs[0], out.inputs["Volume"])
+    spec, warnings = convert(mat)
+    assert spec.ctor == "boundary" and spec.kwargs["absorption"] == (0.0, 0.0, 0.0)
+    assert spec.kwargs["scattering"] == (0.0, 0.0, 0.0)
+    assert len(warnings) == 1 and diffuse.name in warnings[0] and "'Mist'" in warnings[0]
+
+
+def test_a_phase_function_other_than_henyey_greenstein_is_warned(fresh):
+    mat, old = volume_material("Haze", with_surface=False)
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     scatter = tree.nodes.new("ShaderNodeVolumeScatter")
+    scatter.phase = "RAYLEIGH"
     tree.links.new(scatter.outputs[0], out.inputs["Volume"])
     spec, warnings = convert(mat)
-    assert spec.ctor == "glass" and spec.kwargs["ior"] == 1.0
-    assert spec.kwargs["absorption"] == (0.0, 0.0, 0.0)
-    assert len(warnings) == 1 and scatter.name in warnings[0] and "'Mist'" in warnings[0]
+    assert spec.kwargs["anisotropy"] == 0.0
+    assert len(warnings) == 1 and "Rayleigh" in warnings[0] and scatter.name in warnings[0]
 
 
 @pytest.mark.slow
 def test_object_behind_a_volume_only_cube_is_seen_through_its_medium(fresh, core):
     """Seen through a Volume-only cube of side 1, a red emitter keeps exp(-sigma_a) of its
-    radiance (IOR 1 glass refracts and reflects nothing; sigma_a 0.2); an opaque fallback
+    radiance (its boundary refracts and reflects nothing; sigma_a 0.2); an opaque fallback
     would show the cube, an ignored medium the full radiance."""
     from addon_helpers import camera_object, cube_object, depsgraph
 

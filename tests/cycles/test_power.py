@@ -357,6 +357,24 @@ def _absorption_plus_10_percent(scene, settings):
     return scene, settings
 
 
+def _scattering_plus_10_percent(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, scattering=m.scattering * 1.1)
+    return scene, settings
+
+
+def _anisotropy_negated(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, anisotropy=-m.anisotropy)
+    return scene, settings
+
+
+def _phase_isotropic(scene, settings):
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, anisotropy=np.zeros_like(m.anisotropy))
+    return scene, settings
+
+
 def _mix_factor_reversed(scene, settings):
     m = scene.materials
     mixes = m.mix_components[:, 0] >= 0
@@ -597,6 +615,9 @@ INJECTIONS = {
     "normal_map_strength_halved": ("normal_maps", _normal_map_strength_halved, None),
     "absorption_plus_10_percent": ("coloured_glass", _absorption_plus_10_percent, None),
     "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
+    "scattering_plus_10_percent": ("fog_point_light", _scattering_plus_10_percent, None),
+    "phase_isotropic": ("fog_point_light", _phase_isotropic, None),
+    "anisotropy_negated": ("scattering_media", _anisotropy_negated, None),
     "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
     "textured_mix_factor_as_its_mean": ("mixed_shaders", _mix_factors_as_their_means, None),
     "alpha_as_its_mean": ("alpha_cutouts", _mix_factors_as_their_means, None),

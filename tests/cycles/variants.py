@@ -688,6 +688,75 @@ def coloured_glass():
                      **{"Absorption Color": (0.2, 0.4, 0.9, 1.0)})])
 
 
+def _volume_only(mat):
+    """`mat` with its Surface shader moved to the Material Output's Volume (nothing on
+    Surface: a volume's invisible boundary)."""
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    link = out.inputs["Surface"].links[0]
+    node = link.from_node
+    tree.links.remove(link)
+    tree.links.new(node.outputs[0], out.inputs["Volume"])
+    return mat
+
+
+def _fog(name, scatter, absorb):
+    """A Volume-only material: Volume Scatter + Volume Absorption (the usual fog), each
+    given as {input: value}."""
+    mat = _volume_only(bs.material(name, "ShaderNodeAddShader"))
+    tree = mat.node_tree
+    add = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeAddShader")
+    for sock, (kind, inputs) in zip(add.inputs, (("ShaderNodeVolumeScatter", scatter),
+                                                 ("ShaderNodeVolumeAbsorption", absorb))):
+        node = tree.nodes.new(kind)
+        for key, value in inputs.items():
+            node.inputs[key].default_value = value
+        tree.links.new(node.outputs[0], sock)
+    return mat
+
+
+def scattering_media():
+    """Scattering media (issue 14, point 3): milky glass (a Glass BSDF over a Principled
+    Volume scattering forward), a Volume-only ball of orange fog scattering backward (Volume
+    Scatter + Volume Absorption) and a Volume-only ball of thin glowing smoke (a Principled
+    Volume's emission), under the ceiling emitter."""
+    _box()
+    _balls([
+        _with_volume(_glass("Milky", (1.0, 1.0, 1.0), 0.0), "ShaderNodeVolumePrincipled",
+                     Color=(0.9, 0.9, 0.9, 1.0), Density=3.0, Anisotropy=0.5),
+        _fog("Orange", {"Color": (0.9, 0.5, 0.2, 1.0), "Density": 4.0, "Anisotropy": -0.3},
+             {"Color": (0.5, 0.8, 0.9, 1.0), "Density": 1.0}),
+        _volume_only(bs.material("Glow", "ShaderNodeVolumePrincipled",
+                                 Color=(0.6, 0.6, 0.6, 1.0), Density=1.0,
+                                 **{"Emission Strength": 3.0,
+                                    "Emission Color": (1.0, 0.4, 0.1, 1.0)}))])
+
+
+def fog_point_light():
+    """A Volume-only cube of fog (Volume Scatter, forward) filling most of the box, with a
+    point light of radius 0.1 and a clay ball inside it: light reaches the walls outside
+    the fog through its boundary (shadow rays cross it), and scattered rays hit the
+    light inside the fog."""
+    scene = _box(emitter=False)
+    mesh = bpy.data.meshes.new("Fog")
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    fog = bpy.data.objects.new("Fog", mesh)
+    fog.location, fog.scale = (0.0, 0.0, 0.66), (1.6, 1.6, 1.28)
+    fog.data.materials.append(_volume_only(bs.material(
+        "Fog", "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8, 1.0), Density=0.6,
+        Anisotropy=0.4)))
+    scene.collection.objects.link(fog)
+    _sphere(bs.diffuse("Clay", (0.8, 0.6, 0.4)), (-0.35, 0.1, 0.3), 0.3, "Clay")
+    light = bpy.data.lights.new("Lamp", "POINT")
+    light.energy, light.shadow_soft_size = 30.0, 0.1
+    obj = bpy.data.objects.new("Lamp", light)
+    obj.location = (0.25, 0.0, 0.9)
+    scene.collection.objects.link(obj)
+
+
 def _mix_of(name, node, first, second, fac=None):
     """A material whose surface is a `node` (Mix or Add Shader) of two shader nodes, each
     given as (bl_idname, {input: value})."""
@@ -1689,6 +1758,9 @@ for _setup in (spot_user, spot_wide_blend_one, spot_radius_zero,
 # interfaces, mostly by next-event estimation at the inner one.
 for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_glass,
                mixed_shaders, alpha_cutouts, transparent_limit, view_factors):
+    _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
+# Scattering media (issue 14, point 3): paths through fog are long and noisy in both.
+for _setup in (scattering_media, fog_point_light):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Roughness varying in squares: 10% more roughness shows at |z| 10.6 at these samples,
 # only 5.6 at rough glass' 512 / 1024 (measured): four times those, for a clear margin.

@@ -389,7 +389,8 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_ENVIRONMENT": "to_uv", "HAS_TERMINATOR": "offset_amount",
            "HAS_LIGHT_GRID": "voxel", "HAS_LIGHT_IMPORTANCE": "importance_pmf",
            "HAS_LIGHT_TRACING": "path_tracing_weight", "HAS_TEXTURES": "image_channel",
-           "HAS_VOLUMES": "transmittance", "HAS_MIXES": "choose_closure",
+           "HAS_VOLUMES": "transmittance", "HAS_SCATTERING": "scatter_in_medium",
+           "HAS_MIXES": "choose_closure",
            "HAS_COATS": "coat_layering", "HAS_TRANSPARENCY": "pass_through",
            "HAS_SHEEN": "sheen_ltc"}
 
