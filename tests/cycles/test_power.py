@@ -351,28 +351,17 @@ def _normal_map_strength_halved(scene, settings):
     return scene, settings
 
 
-def _absorption_plus_10_percent(scene, settings):
-    m = scene.materials
-    scene.materials = dataclasses.replace(m, absorption=m.absorption * 1.1)
-    return scene, settings
+def _media_scaled(field, factor):
+    """An injection scaling every material's medium `field` (absorption, scattering,
+    anisotropy) by `factor`."""
+    def inject(scene, settings):
+        m = scene.materials
+        scene.materials = dataclasses.replace(m, **{field: getattr(m, field) * factor})
+        return scene, settings
+    return inject
 
 
-def _scattering_plus_10_percent(scene, settings):
-    m = scene.materials
-    scene.materials = dataclasses.replace(m, scattering=m.scattering * 1.1)
-    return scene, settings
-
-
-def _anisotropy_negated(scene, settings):
-    m = scene.materials
-    scene.materials = dataclasses.replace(m, anisotropy=-m.anisotropy)
-    return scene, settings
-
-
-def _phase_isotropic(scene, settings):
-    m = scene.materials
-    scene.materials = dataclasses.replace(m, anisotropy=np.zeros_like(m.anisotropy))
-    return scene, settings
+_absorption_plus_10_percent = _media_scaled("absorption", 1.1)
 
 
 def _mix_factor_reversed(scene, settings):
@@ -615,9 +604,9 @@ INJECTIONS = {
     "normal_map_strength_halved": ("normal_maps", _normal_map_strength_halved, None),
     "absorption_plus_10_percent": ("coloured_glass", _absorption_plus_10_percent, None),
     "gltf_absorption_plus_10_percent": ("gltf_attenuation", _absorption_plus_10_percent, None),
-    "scattering_plus_10_percent": ("fog_point_light", _scattering_plus_10_percent, None),
-    "phase_isotropic": ("fog_point_light", _phase_isotropic, None),
-    "anisotropy_negated": ("scattering_media", _anisotropy_negated, None),
+    "scattering_plus_10_percent": ("fog_point_light", _media_scaled("scattering", 1.1), None),
+    "phase_isotropic": ("fog_point_light", _media_scaled("anisotropy", 0.0), None),
+    "anisotropy_negated": ("scattering_media", _media_scaled("anisotropy", -1.0), None),
     "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
     "textured_mix_factor_as_its_mean": ("mixed_shaders", _mix_factors_as_their_means, None),
     "alpha_as_its_mean": ("alpha_cutouts", _mix_factors_as_their_means, None),

@@ -98,6 +98,20 @@ def _box(emitter=True):
     return scene
 
 
+def _cube(name, location, scale, mat):
+    """A unit cube (flat, outward normals) of material `mat`, moved and scaled."""
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_cube(bm, size=1.0)
+    bm.to_mesh(mesh)
+    bm.free()
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location, obj.scale = location, scale
+    obj.data.materials.append(mat)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
 def _sphere(mat, centre=(0.0, 0.0, 0.4), radius=0.4, name="Subject"):
     return bs.uv_sphere(name, centre, radius, mat, bpy.context.scene.collection)
 
@@ -738,17 +752,9 @@ def fog_point_light():
     the fog through its boundary (shadow rays cross it), and scattered rays hit the
     light inside the fog."""
     scene = _box(emitter=False)
-    mesh = bpy.data.meshes.new("Fog")
-    bm = bmesh.new()
-    bmesh.ops.create_cube(bm, size=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    fog = bpy.data.objects.new("Fog", mesh)
-    fog.location, fog.scale = (0.0, 0.0, 0.66), (1.6, 1.6, 1.28)
-    fog.data.materials.append(_volume_only(bs.material(
+    _cube("Fog", (0.0, 0.0, 0.66), (1.6, 1.6, 1.28), _volume_only(bs.material(
         "Fog", "ShaderNodeVolumeScatter", Color=(0.8, 0.8, 0.8, 1.0), Density=0.6,
         Anisotropy=0.4)))
-    scene.collection.objects.link(fog)
     _sphere(bs.diffuse("Clay", (0.8, 0.6, 0.4)), (-0.35, 0.1, 0.3), 0.3, "Clay")
     light = bpy.data.lights.new("Lamp", "POINT")
     light.energy, light.shadow_soft_size = 30.0, 0.1
@@ -969,18 +975,11 @@ def texture_spaces():
     coordinates (unlinked: the default) on a ball, on Generated through a Mapping on a
     scaled, rotated box (its texture space follows the mesh, not the object), and on
     Object coordinates on a ball whose object is moved and turned (they follow it)."""
-    scene = _box()
+    _box()
     _sphere(_procedural("Default"), (-0.6, 0.0, 0.27), 0.27, "Default")
-    mesh = bpy.data.meshes.new("Crate")
-    bm = bmesh.new()
-    bmesh.ops.create_cube(bm, size=1.0)
-    bm.to_mesh(mesh)
-    bm.free()
-    crate = bpy.data.objects.new("Crate", mesh)
-    crate.location, crate.scale = (0.0, 0.1, 0.2), (0.35, 0.25, 0.4)
+    crate = _cube("Crate", (0.0, 0.1, 0.2), (0.35, 0.25, 0.4),
+                  _procedural("Generated", "Generated"))
     crate.rotation_euler = (0.0, 0.0, 0.5)
-    crate.data.materials.append(_procedural("Generated", "Generated"))
-    scene.collection.objects.link(crate)
     ball = _sphere(_procedural("Object", "Object", scale=2.0), (0.6, 0.0, 0.27), 0.27, "Obj")
     ball.rotation_euler = (0.4, 0.0, 0.9)
 
