@@ -1354,7 +1354,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
-    lit_side, sample_emitter, textured_emitter,
+    lit_side, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,
     medium_transmittance, queue_shadow, traverse_medium, spawn_in_medium,
     path_counts, write_passes, pass_through, cross_surface,
@@ -1362,8 +1362,10 @@ STAGES = {f.__name__: (f, INLINE) for f in (
 # perturbed_normal runs programs (a bump's height three times): compiled once and called
 # from its sites rather than inlined into each, which cut compiling the generic and a
 # diffuse plan's kernels from 171 s to 109 s (test_kernel's diffuse-only test, no cache).
-# scatter_in_medium holds a second copy of light sampling: compiled on its own too (it
-# runs only where a path scatters in a medium).
+# scatter_in_medium (it runs only where a path scatters in a medium) and sample_emitter,
+# which it shares with sample_light, are compiled once too: with both inlined, the medium's
+# scattering vertex held a second copy of light sampling and compiling the generic kernel
+# grew by a third.
 STAGES.update({f.__name__: (f, JIT) for f in (
-    perturbed_normal, scatter_in_medium, generate_camera_rays, shade, accumulate_unoccluded,
-    cross_transparent, all_finite)})
+    perturbed_normal, scatter_in_medium, sample_emitter, generate_camera_rays, shade,
+    accumulate_unoccluded, cross_transparent, all_finite)})

@@ -16,7 +16,7 @@ DEFAULT = os.path.join(SCENES_DIR, "default.blend")
 CBSPHERES = os.path.join(SCENES_DIR, "cbspheres.blend")
 
 
-def run(*args, timeout=300):
+def run(*args, timeout=1200):
     return subprocess.run([sys.executable, "-m", "addon", *map(str, args)], cwd=REPO,
                           capture_output=True, text=True, timeout=timeout)
 
@@ -143,7 +143,7 @@ def test_enables_as_an_installed_addon(tmp_path):
         "print(json.dumps(rs.last_summary, default=str))\n")
     env = dict(os.environ, BLENDER_USER_SCRIPTS=str(tmp_path / "scripts"))
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=1200)
     assert proc.returncode == 0, proc.stderr
     assert last_json(proc.stdout)["samples"] == 2
     assert out.is_file()
@@ -208,7 +208,7 @@ def test_json_stays_last_when_blender_prints_at_exit(tmp_path):
         f" '16x12', '--output', {str(tmp_path / 'x.exr')!r}]\n"
         "sys.exit(cli.main())\n")
     proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
-                          text=True, timeout=300, check=False)
+                          text=True, timeout=1200, check=False)
     assert proc.returncode == 0, proc.stderr
     assert last_json(proc.stdout)["samples"] == 1
     assert "Not freed memory blocks" in proc.stderr and "Python at exit" in proc.stderr
