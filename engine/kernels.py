@@ -244,9 +244,20 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         caustics = caustic_data(settings.width * settings.height, emitters)
     elif generic:
         caustics = no_caustic_data()
-    return SceneData(geometry, materials, em, np.asarray(scene.world.colour, np.float64),
-                     cam.data(), PixelFilter(settings.filter_type, settings.filter_width).table(),
-                     caustics)
+    return c_contiguous(SceneData(
+        geometry, materials, em, np.asarray(scene.world.colour, np.float64), cam.data(),
+        PixelFilter(settings.filter_type, settings.filter_width).table(), caustics))
+
+
+def c_contiguous(data):
+    """`data` (nested named tuples of arrays) with every array C-contiguous. numba compiles
+    a kernel per argument layout: one strided view (the emitters' first corners are a column
+    of their corner array) compiled the whole kernel a second time (~150 s cold)."""
+    if isinstance(data, np.ndarray):
+        return data if data.flags.c_contiguous else np.ascontiguousarray(data)
+    if isinstance(data, tuple) and hasattr(data, "_fields"):
+        return type(data)(*(c_contiguous(x) for x in data))
+    return data
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:

@@ -77,30 +77,30 @@ def transmittance(s0, s1, s2, t):
 def extinction(media, row, table, mat, entering, crossed):
     """The summed extinction of path `row`'s stack (media (n, MEDIA_STACK)), after it
     crosses (if `crossed`) a surface of material `mat` from its front (`entering`)."""
-    s0 = s1 = s2 = 0.0
-    for j in range(MEDIA_STACK):
-        m = media[row, j]
-        if _kept(m, mat, entering, crossed):
-            s0 += table[m, SIGMA_T]
-            s1 += table[m, SIGMA_T + 1]
-            s2 += table[m, SIGMA_T + 2]
-    if _pushed(media, row, table, mat, entering, crossed):
-        s0 += table[mat, SIGMA_T]
-        s1 += table[mat, SIGMA_T + 1]
-        s2 += table[mat, SIGMA_T + 2]
-    return s0, s1, s2
+    return _summed(media, row, table, SIGMA_T, mat, entering, crossed)
 
 
 @njit(**INLINE)
 def coefficients(media, row, table, column):
     """The stack's summed coefficient at `column` (SIGMA_T, SIGMA_S or EMISSION), (3)."""
+    return _summed(media, row, table, column, -1, False, False)
+
+
+@njit(**INLINE)
+def _summed(media, row, table, column, mat, entering, crossed):
+    """The coefficient at `column` (3) summed over path `row`'s stack as it is after the
+    crossing (if `crossed`) of a surface of material `mat`."""
     s0 = s1 = s2 = 0.0
     for j in range(MEDIA_STACK):
         m = media[row, j]
-        if m >= 0:
+        if _kept(m, mat, entering, crossed):
             s0 += table[m, column]
             s1 += table[m, column + 1]
             s2 += table[m, column + 2]
+    if _pushed(media, row, table, mat, entering, crossed):
+        s0 += table[mat, column]
+        s1 += table[mat, column + 1]
+        s2 += table[mat, column + 2]
     return s0, s1, s2
 
 
@@ -167,7 +167,7 @@ def eval_phase(media, row, table, dx, dy, dz, wx, wy, wz):
     (Cycles sums the phase closures so). Returns (f (3), pdf): pdf is the mixture that
     `sample_phase` samples (weights: each medium's mean sigma_s)."""
     cos = dx * wx + dy * wy + dz * wz
-    f0 = f1 = f2 = pdf = total = 0.0
+    f0 = f1 = f2 = pdf = s0 = s1 = s2 = 0.0
     for j in range(MEDIA_STACK):
         m = media[row, j]
         if m < 0:
@@ -176,10 +176,11 @@ def eval_phase(media, row, table, dx, dy, dz, wx, wy, wz):
         f0 += table[m, SIGMA_S] * p
         f1 += table[m, SIGMA_S + 1] * p
         f2 += table[m, SIGMA_S + 2] * p
-        q = table[m, SIGMA_S] + table[m, SIGMA_S + 1] + table[m, SIGMA_S + 2]
-        pdf += q * p
-        total += q
-    s0, s1, s2 = coefficients(media, row, table, SIGMA_S)
+        pdf += (table[m, SIGMA_S] + table[m, SIGMA_S + 1] + table[m, SIGMA_S + 2]) * p
+        s0 += table[m, SIGMA_S]
+        s1 += table[m, SIGMA_S + 1]
+        s2 += table[m, SIGMA_S + 2]
+    total = s0 + s1 + s2
     return (f0 / s0 if s0 > 0.0 else 0.0, f1 / s1 if s1 > 0.0 else 0.0,
             f2 / s2 if s2 > 0.0 else 0.0, pdf / total if total > 0.0 else 0.0)
 

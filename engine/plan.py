@@ -204,12 +204,13 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     # Only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
     # medium is its own row's, entered through any transmitting component.
     m = scene.materials
+    medium = m.medium  # (built from the materials' fields: once)
     entered = [top for top in np.unique(scene.material_index)
-               if m.medium is not None and has_medium(m.medium[top:top + 1])[0]
+               if medium is not None and has_medium(medium[top:top + 1])[0]
                and bool(np.any(np.isin(m.kind[m.reachable([top])],
                                        (GLASS, ROUGH_GLASS, TRANSPARENT, BOUNDARY))))]
     volumes = bool(entered)
-    scattering = any(m.medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
+    scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,

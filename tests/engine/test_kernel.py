@@ -422,6 +422,34 @@ def test_a_diffuse_only_kernel_has_no_code_for_absent_features():
     assert len(own_ir) < 0.7 * len(generic_ir), (len(own_ir), len(generic_ir))  # 56 %
 
 
+def test_the_kernel_is_handed_c_contiguous_arrays():
+    """numba compiles a kernel once per argument layout, so a strided view anywhere in the
+    scene's data compiles the whole kernel again (it did: the emitters' first corners, a
+    column of their corner array, cost the suite a second cold compile of every kernel)."""
+    from engine import kernels
+    from engine.camera import CameraModel
+    from engine.lights import LightSampler
+    from engine.plan import make_plan
+
+    box, st = scenes.caustic_box(), scenes.settings(light_tracing=True)
+    plan, emitters = make_plan(box, st), LightSampler(box)
+    assert not emitters.data().v0.flags.c_contiguous  # what the test guards against
+    camera = CameraModel(box.camera, st.width, st.height, box.origin)
+    for generic in (True, False):
+        strided = []
+
+        def walk(x, name):
+            if isinstance(x, np.ndarray):
+                if not x.flags.c_contiguous:
+                    strided.append(name)
+            elif isinstance(x, tuple) and hasattr(x, "_fields"):
+                for field, y in zip(x._fields, x):
+                    walk(y, f"{name}.{field}")
+
+        walk(kernels.scene_data(box, st, plan, emitters, camera, generic), "scene")
+        assert strided == [], (generic, strided)
+
+
 def test_a_kernel_without_glass_does_not_cover_a_glass_scene():
     from engine import kernels
     from engine.plan import make_plan
