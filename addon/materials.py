@@ -39,7 +39,6 @@ Fallbacks:
     then off: a hidden white default must not turn a textured surface into a light.
 """
 
-import colorsys
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -316,8 +315,7 @@ def _c_checker(k, node, out):
 def _blend(blend_type, t, c1, c2):
     """Cycles' colour Mix of two constant colours (the core's formula, shading.blend)."""
     sh = core.load().shading
-    mode = sh.BLENDS.index(blend_type)
-    return tuple(sh.blend(mode, t, a, b) for a, b in zip(c1, c2))
+    return sh.blend_colour(sh.BLENDS.index(blend_type), t, *c1, *c2)
 
 
 def _mix(k, node, t, a, b, blend_type, clamp):
@@ -361,21 +359,16 @@ def _c_mix_rgb(k, node, out):
                 node.blend_type, node.use_clamp)
 
 
-def _to_mode(mode, rgb):
-    if mode == "HSV":
-        return colorsys.rgb_to_hsv(*rgb)
-    if mode == "HSL":
-        h, lum, s = colorsys.rgb_to_hls(*rgb)
-        return h, s, lum
-    return rgb
-
-
 def _c_separate(k, node, out):
-    """Separate Color / RGB / XYZ: one channel of the mean is the mean of that channel."""
+    """Separate Color / RGB / XYZ: one channel of the mean is the mean of that channel
+    (after Cycles' conversion to HSV or HSL, which is not linear: approximate)."""
     c = k.input(node.inputs[0])
     if c is None:
         return None
-    c = _to_mode(getattr(node, "mode", "RGB"), c)
+    mode = getattr(node, "mode", "RGB")
+    if mode != "RGB":
+        sh = core.load().shading
+        c = sh.convert_colour(sh.CONVERSIONS.index(f"RGB_TO_{mode}"), *c)
     return c[[s.identifier for s in node.outputs].index(out.identifier) % 3]
 
 
@@ -384,10 +377,9 @@ def _c_combine(k, node, out):
     if any(v is None for v in c):
         return None
     mode = getattr(node, "mode", "RGB")
-    if mode == "HSV":
-        return colorsys.hsv_to_rgb(*c)
-    if mode == "HSL":
-        return colorsys.hls_to_rgb(c[0], c[2], c[1])
+    if mode != "RGB":
+        sh = core.load().shading
+        return tuple(sh.convert_colour(sh.CONVERSIONS.index(f"{mode}_TO_RGB"), *c))
     return tuple(c)
 
 

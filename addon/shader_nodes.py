@@ -504,19 +504,26 @@ def _n_math(c, node, out):
 
 
 def _n_separate(c, node, out):
-    if getattr(node, "mode", "RGB") != "RGB":
-        raise Unsupported(f"separate '{node.name}' mode {node.mode}")
+    """Separate XYZ / Color (RGB, HSV, HSL): register addressing, after a conversion."""
     kind = "VECTOR" if node.bl_idname == "ShaderNodeSeparateXYZ" else "RGBA"
     reg = c.input(node.inputs[0], kind)
+    mode = getattr(node, "mode", "RGB")
+    if mode != "RGB":
+        reg = c.program.emit(c.sh.OP_COLOUR_SPACE, 3, a=reg,
+                             d=c.sh.CONVERSIONS.index(f"RGB_TO_{mode}"))
     index = [s.identifier for s in node.outputs].index(out.identifier)
     return reg + index, "VALUE"
 
 
 def _n_combine(c, node, out):
-    if getattr(node, "mode", "RGB") != "RGB":
-        raise Unsupported(f"combine '{node.name}' mode {node.mode}")
+    """Combine XYZ / Color (RGB, HSV, HSL)."""
     a, b, d = (c.input(s, "VALUE") for s in node.inputs[:3])
-    return c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=b, c=d), out.type
+    reg = c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=b, c=d)
+    mode = getattr(node, "mode", "RGB")
+    if mode != "RGB":
+        reg = c.program.emit(c.sh.OP_COLOUR_SPACE, 3, a=reg,
+                             d=c.sh.CONVERSIONS.index(f"{mode}_TO_RGB"))
+    return reg, out.type
 
 
 def _n_invert(c, node, out):

@@ -58,6 +58,7 @@ OP_VECTOR_MATH = 16  # reg[out:out+3] vector, reg[out+3] value of vector math d 
 OP_FRESNEL = 17     # reg[out] = Fresnel node of IOR reg[a], normal reg[b:b+3] (b < 0: the hit's)
 OP_LAYER_WEIGHT = 18  # reg[out] Fresnel, reg[out+1] Facing of Layer Weight: blend reg[a],
 #                     normal reg[b:b+3] (b < 0: the hit's)
+OP_COLOUR_SPACE = 19  # reg[out:out+3] = conversion d (CONVERSIONS) of reg[a:a+3]
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -79,9 +80,14 @@ def map_label(name: str) -> str:
         return f"colour attribute '{attribute}'" if attribute else "colour attribute"
     return f"UV map '{name}'" if name else "UV map"
 
-# Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h), per channel.
+# Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h): per channel up to
+# HUE, then the four that work in HSV on the whole colour.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",
-          "LIGHTEN", "EXCLUSION")
+          "LIGHTEN", "EXCLUSION", "OVERLAY", "DODGE", "BURN", "SOFT_LIGHT", "LINEAR_LIGHT",
+          "HUE", "SATURATION", "COLOR", "VALUE")
+HUE = BLENDS.index("HUE")
+# Conversions of OP_COLOUR_SPACE (Separate and Combine Color's modes; util/color.h).
+CONVERSIONS = ("RGB_TO_HSV", "RGB_TO_HSL", "HSV_TO_RGB", "HSL_TO_RGB")
 # Operations of OP_MATH (Cycles' svm_math, kernel/svm/math_util.h).
 MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "MINIMUM", "MAXIMUM",
          "LESS_THAN", "GREATER_THAN", "ABSOLUTE", "SQRT", "FLOOR", "CEIL", "FRACT", "MODULO",
@@ -249,26 +255,67 @@ def srgb_decode(c):
 
 @njit(**JIT)
 def blend(mode, t, a, b):
-    """One channel of Cycles' colour Mix of a and b at factor t (mode: BLENDS index)."""
+    """One channel of Cycles' colour Mix of a and b at factor t, for the modes that work
+    per channel (mode: BLENDS index; kernel/svm/color_util.h, svm_mix_*)."""
+    tm = 1.0 - t
     if mode == 1:  # ADD
         return a + t * b
     if mode == 2:  # MULTIPLY
-        return a * ((1.0 - t) + t * b)
+        return a * (tm + t * b)
     if mode == 3:  # SUBTRACT
         return a - t * b
     if mode == 4:  # SCREEN
-        return 1.0 - ((1.0 - t) + t * (1.0 - b)) * (1.0 - a)
+        return 1.0 - (tm + t * (1.0 - b)) * (1.0 - a)
     if mode == 5:  # DIVIDE
-        return (1.0 - t) * a + t * a / b if b != 0.0 else a
+        return tm * a + t * a / b if b != 0.0 else a
     if mode == 6:  # DIFFERENCE
-        return (1.0 - t) * a + t * abs(a - b)
+        return tm * a + t * abs(a - b)
     if mode == 7:  # DARKEN
-        return (1.0 - t) * a + t * min(a, b)
-    if mode == 8:  # LIGHTEN
-        return max(a, t * b)
+        return tm * a + t * min(a, b)
+    if mode == 8:  # LIGHTEN (Cycles 5; before 4.x it was max(a, t b))
+        return tm * a + t * max(a, b)
     if mode == 9:  # EXCLUSION
-        return max((1.0 - t) * a + t * (a + b - 2.0 * a * b), 0.0)
-    return (1.0 - t) * a + t * b
+        return max(tm * a + t * (a + b - 2.0 * a * b), 0.0)
+    if mode == 10:  # OVERLAY
+        if a < 0.5:
+            return a * (tm + 2.0 * t * b)
+        return 1.0 - (tm + 2.0 * t * (1.0 - b)) * (1.0 - a)
+    if mode == 11:  # DODGE
+        if a == 0.0:
+            return a
+        d = 1.0 - t * b
+        return 1.0 if d <= 0.0 else min(a / d, 1.0)
+    if mode == 12:  # BURN
+        d = tm + t * b
+        if d <= 0.0:
+            return 0.0
+        return min(max(1.0 - (1.0 - a) / d, 0.0), 1.0)
+    if mode == 13:  # SOFT_LIGHT
+        screen = 1.0 - (1.0 - b) * (1.0 - a)
+        return tm * a + t * ((1.0 - a) * b * a + a * screen)
+    if mode == 14:  # LINEAR_LIGHT
+        return a + t * (2.0 * b - 1.0)
+    return tm * a + t * b
+
+
+@njit(**JIT)
+def blend_colour(mode, t, a0, a1, a2, b0, b1, b2):
+    """Cycles' colour Mix of colours a and b at factor t (mode: BLENDS index): the modes
+    of HSV (Hue, Saturation, Value, Color) on the whole colour, the rest per channel."""
+    if mode < HUE:
+        return blend(mode, t, a0, b0), blend(mode, t, a1, b1), blend(mode, t, a2, b2)
+    h, s, v = rgb_to_hsv(a0, a1, a2)
+    h2, s2, v2 = rgb_to_hsv(b0, b1, b2)
+    if mode == HUE or mode == HUE + 2:  # HUE, COLOR: only where b has a hue
+        if s2 == 0.0:
+            return a0, a1, a2
+        r, g, b = hsv_to_rgb(h2, s2 if mode == HUE + 2 else s, v)
+        return (1.0 - t) * a0 + t * r, (1.0 - t) * a1 + t * g, (1.0 - t) * a2 + t * b
+    if mode == HUE + 1:  # SATURATION: only where a has one
+        if s == 0.0:
+            return a0, a1, a2
+        return hsv_to_rgb(h, (1.0 - t) * s + t * s2, v)
+    return hsv_to_rgb(h, s, (1.0 - t) * v + t * v2)  # VALUE
 
 
 @njit(**JIT)
@@ -623,6 +670,46 @@ def hsv_to_rgb(h, s, v):
     return v, p, q
 
 
+@njit(**JIT)
+def rgb_to_hsl(r, g, b):
+    """Cycles' rgb_to_hsl (util/color.h): hue in [0, 1), lightness at most 1."""
+    cmax, cmin = max(r, max(g, b)), min(r, min(g, b))
+    lum = min(1.0, (cmax + cmin) / 2.0)
+    if cmax == cmin:
+        return 0.0, 0.0, lum
+    d = cmax - cmin
+    s = d / (2.0 - cmax - cmin) if lum > 0.5 else d / (cmax + cmin)
+    if cmax == r:
+        h = (g - b) / d + (6.0 if g < b else 0.0)
+    elif cmax == g:
+        h = (b - r) / d + 2.0
+    else:
+        h = (r - g) / d + 4.0
+    return h / 6.0, s, lum
+
+
+@njit(**JIT)
+def hsl_to_rgb(h, s, lum):
+    """Cycles' hsl_to_rgb (util/color.h)."""
+    nr = min(max(abs(h * 6.0 - 3.0) - 1.0, 0.0), 1.0)
+    ng = min(max(2.0 - abs(h * 6.0 - 2.0), 0.0), 1.0)
+    nb = min(max(2.0 - abs(h * 6.0 - 4.0), 0.0), 1.0)
+    chroma = (1.0 - abs(2.0 * lum - 1.0)) * s
+    return (nr - 0.5) * chroma + lum, (ng - 0.5) * chroma + lum, (nb - 0.5) * chroma + lum
+
+
+@njit(**JIT)
+def convert_colour(conversion, x, y, z):
+    """Separate and Combine Color's modes (conversion: CONVERSIONS index)."""
+    if conversion == 0:
+        return rgb_to_hsv(x, y, z)
+    if conversion == 1:
+        return rgb_to_hsl(x, y, z)
+    if conversion == 2:
+        return hsv_to_rgb(x, y, z)
+    return hsl_to_rgb(x, y, z)
+
+
 @njit(**INLINE)
 def node_hsv(ins, reg):
     """Cycles' Hue/Saturation/Value node (svm/hsv.h): hue shifted (0.5 keeps it),
@@ -645,12 +732,15 @@ def node_hsv(ins, reg):
 def node_colour_ops(ins, reg):
     """The colour adjustments: Mix (blend modes), Invert, Gamma, Bright/Contrast."""
     op, out, a, b, c = ins[0], ins[1], ins[2], ins[3], ins[4]
+    if op == OP_BLEND:
+        v0, v1, v2 = blend_colour(ins[5], reg[a], reg[b], reg[b + 1], reg[b + 2], reg[c],
+                                  reg[c + 1], reg[c + 2])
+        if ins[6] != 0:
+            v0, v1, v2 = min(max(v0, 0.0), 1.0), min(max(v1, 0.0), 1.0), min(max(v2, 0.0), 1.0)
+        reg[out], reg[out + 1], reg[out + 2] = v0, v1, v2
+        return
     for j in range(3):
-        if op == OP_BLEND:
-            t = reg[a]
-            v = blend(ins[5], t, reg[b + j], reg[c + j])
-            reg[out + j] = min(max(v, 0.0), 1.0) if ins[6] != 0 else v
-        elif op == OP_INVERT:
+        if op == OP_INVERT:
             x = reg[b + j]
             reg[out + j] = (1.0 - reg[a]) * x + reg[a] * (1.0 - x)
         elif op == OP_GAMMA:
@@ -705,6 +795,10 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_fresnel(ins, reg)
         elif op == OP_LAYER_WEIGHT:
             node_layer_weight(ins, reg)
+        elif op == OP_COLOUR_SPACE:
+            a = ins[2]
+            reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],
+                                                                  reg[a + 2])
         else:
             node_colour_ops(ins, reg)
 

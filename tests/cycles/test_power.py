@@ -276,6 +276,30 @@ def _colour_attributes_encoded():
         yield
 
 
+@contextmanager
+def _colour_and_value_swapped():
+    """The Mix node's Color and Value blend modes exchanged (a slip this variant caught:
+    their indices after Hue were swapped in the kernel's first version)."""
+    shading = renderers.core().shading
+    modes = list(shading.BLENDS)
+    i, j = modes.index("COLOR"), modes.index("VALUE")
+    modes[i], modes[j] = modes[j], modes[i]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shading, "BLENDS", tuple(modes))
+        yield
+
+
+@contextmanager
+def _hsv_read_as_hsl():
+    """Separate and Combine Color's HSV mode converted as HSL."""
+    shading = renderers.core().shading
+    modes = [m.replace("HSV", "HSL") if "HSV" in m else m.replace("HSL", "HSV")
+             for m in shading.CONVERSIONS]
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shading, "CONVERSIONS", tuple(modes))
+        yield
+
+
 def _translucent_as_diffuse(scene, settings):
     """The Translucent BSDF rendered as a Diffuse one of its colour: reflecting, not
     transmitting."""
@@ -619,6 +643,8 @@ INJECTIONS = {
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
     "generated_as_object": ("texture_spaces", None, _generated_as_object),
     "colour_attributes_encoded": ("colour_attributes", None, _colour_attributes_encoded),
+    "colour_and_value_swapped": ("blend_modes", None, _colour_and_value_swapped),
+    "hsv_read_as_hsl": ("blend_modes", None, _hsv_read_as_hsl),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
     "emission_strength_as_its_mean": ("emission_strength_texture", _emission_as_its_mean,
                                       None),

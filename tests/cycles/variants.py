@@ -1024,6 +1024,83 @@ def colour_attributes():
     ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
 
 
+def _blend_card(name, centre, blend_type, odd, textured):
+    """A card whose Emission colour is a Mix node in `blend_type`, its result clamped if
+    `odd`. `textured`: A, B and the factor vary over the card's UV map, A a hue sweep
+    through Combine Color (HSL if `odd`, else HSV), B the (h, s, v) (HSL: (h, s, l)) of a
+    gradient through Separate Color, times 1.5 plus 0.2 (Dodge and Burn reach their limits,
+    Divide stays finite where the hue is 0); else all constants, which both engines fold."""
+    mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
+    tree = mat.node_tree
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", blend_type
+    mix.clamp_result = odd
+    a, b_in, f = (next(s for s in mix.inputs if s.identifier == i)
+                  for i in ("A_Color", "B_Color", "Factor_Float"))
+    if textured:
+        mode = "HSL" if odd else "HSV"
+        uv = tree.nodes.new("ShaderNodeSeparateXYZ")
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], uv.inputs[0])
+        hue = tree.nodes.new("ShaderNodeCombineColor")
+        hue.mode = mode
+        tree.links.new(uv.outputs["X"], hue.inputs[0])
+        hue.inputs[1].default_value = 0.85
+        tree.links.new(uv.outputs["Y"], hue.inputs[2])
+        ramp = tree.nodes.new("ShaderNodeCombineColor")
+        tree.links.new(uv.outputs["Y"], ramp.inputs[0])
+        ramp.inputs[1].default_value = 0.4
+        tree.links.new(uv.outputs["X"], ramp.inputs[2])
+        split = tree.nodes.new("ShaderNodeSeparateColor")
+        split.mode = "HSV" if odd else "HSL"
+        tree.links.new(ramp.outputs[0], split.inputs[0])
+        b = tree.nodes.new("ShaderNodeCombineColor")
+        for i in range(3):
+            tree.links.new(split.outputs[i], b.inputs[i])
+        scale = tree.nodes.new("ShaderNodeVectorMath")
+        scale.operation = "MULTIPLY_ADD"
+        scale.inputs[1].default_value = (1.5, 1.5, 1.5)
+        scale.inputs[2].default_value = (0.2, 0.2, 0.2)
+        tree.links.new(b.outputs[0], scale.inputs[0])
+        fac = tree.nodes.new("ShaderNodeMath")
+        fac.operation = "MULTIPLY_ADD"
+        tree.links.new(uv.outputs["Y"], fac.inputs[0])
+        fac.inputs[1].default_value, fac.inputs[2].default_value = 0.8, 0.3
+        tree.links.new(hue.outputs[0], a)
+        tree.links.new(scale.outputs[0], b_in)
+        tree.links.new(fac.outputs[0], f)
+    else:
+        a.default_value = (0.7, 0.35, 0.15, 1.0)
+        b_in.default_value = (0.25, 0.9, 1.3, 1.0)
+        f.default_value = 0.65
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    tree.links.new(mix.outputs["Result"], emission.inputs["Color"])
+    obj = _card(name, centre, (0.17, 0.5), mat)
+    _quad_uvs(obj)
+    return obj
+
+
+def blend_modes():
+    """Every blend mode of the colour Mix node (issue 14, point 1) on emitting cards seen
+    head-on by an orthographic camera, nothing else in the scene: each pixel is the mix
+    itself, free of lighting noise. Top row: A, B and the factor vary over each card
+    (shader programs, and Combine / Separate Color in HSV and HSL); bottom row: constants
+    (folded to one colour by the exporter, as by Cycles). Every other card clamps its
+    result, and Linear Light's: Cycles emits the negative colours it makes (negative
+    light), which Specula renders as 0 (README_addon.md)."""
+    modes = ("MIX", "DARKEN", "MULTIPLY", "BURN", "LIGHTEN", "SCREEN", "DODGE", "ADD",
+             "OVERLAY", "SOFT_LIGHT", "LINEAR_LIGHT", "DIFFERENCE", "EXCLUSION", "SUBTRACT",
+             "DIVIDE", "HUE", "SATURATION", "COLOR", "VALUE")
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (228, 72))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    for i, mode in enumerate(modes):
+        x = -2.0 + (i + 0.5) * 4.0 / len(modes)
+        odd = i % 2 == 1 or mode == "LINEAR_LIGHT"
+        _blend_card(f"T{mode}", (x, 0.0, 0.3), mode, odd, True)
+        _blend_card(f"C{mode}", (x, 0.0, -0.33), mode, odd, False)
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -1786,6 +1863,8 @@ _add(Variant("specular_tint", specular_tint, max_bounces=8, samples=1024, cycles
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
+_add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
+             cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))

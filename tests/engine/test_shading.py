@@ -103,6 +103,36 @@ def test_mapping_blend_and_math():
     assert reg[power] == pytest.approx(0.85 ** 0.25)
 
 
+def test_colour_conversions_invert_each_other(rng):
+    """Separate / Combine Color's HSV and HSL conversions (Cycles' util/color.h) undo each
+    other, and give the textbook values on the primaries."""
+    for rgb in rng.uniform(0.0, 1.0, (200, 3)):
+        for there, back in (("RGB_TO_HSV", "HSV_TO_RGB"), ("RGB_TO_HSL", "HSL_TO_RGB")):
+            mid = shading.convert_colour(shading.CONVERSIONS.index(there), *rgb)
+            np.testing.assert_allclose(
+                shading.convert_colour(shading.CONVERSIONS.index(back), *mid), rgb, atol=1e-12)
+    hsl = shading.CONVERSIONS.index("RGB_TO_HSL")
+    assert shading.convert_colour(hsl, 0.0, 0.0, 1.0) == pytest.approx((2 / 3, 1.0, 0.5))
+    assert shading.convert_colour(hsl, 1.0, 0.5, 0.5) == pytest.approx((0.0, 1.0, 0.75))
+
+
+def test_blend_modes_of_hsv_keep_what_they_do_not_take():
+    """Hue takes b's hue (a's saturation and value stay), Color b's hue and saturation,
+    Saturation and Value blend one of a's channels toward b's; a grey b has no hue to
+    give."""
+    hsv = shading.CONVERSIONS.index("RGB_TO_HSV")
+    a, b = (0.8, 0.4, 0.2), (0.1, 0.3, 0.9)
+    ha, sa, va = shading.convert_colour(hsv, *a)
+    hb, sb, vb = shading.convert_colour(hsv, *b)
+    for mode, want in (("HUE", (hb, sa, va)), ("COLOR", (hb, sb, va)),
+                       ("SATURATION", (ha, sb, va)), ("VALUE", (ha, sa, vb))):
+        got = shading.blend_colour(shading.BLENDS.index(mode), 1.0, *a, *b)
+        assert shading.convert_colour(hsv, *got) == pytest.approx(want), mode
+    grey = (0.5, 0.5, 0.5)
+    assert shading.blend_colour(shading.BLENDS.index("HUE"), 1.0, *a, *grey) == \
+        pytest.approx(a)
+
+
 @pytest.mark.parametrize("op, a, b, want", [
     ("DIVIDE", 1.0, 0.0, 0.0), ("POWER", -2.0, 0.5, 0.0), ("POWER", -2.0, 3.0, -8.0),
     ("POWER", 0.0, -1.0, 0.0), ("SQRT", -4.0, 0.0, 0.0), ("MODULO", 5.5, 2.0, 1.5),
