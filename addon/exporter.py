@@ -125,11 +125,12 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None) -> dict:
     sh = core.load().shading
     out = {}
     for name in spaces:
-        if name.startswith(sh.COLOUR_ATTRIBUTE):
-            colours = _colour_attribute(mesh, name[len(sh.COLOUR_ATTRIBUTE):], tri_verts,
-                                        tri_loops)
-            if colours is not None:
-                out[name] = colours
+        for prefix in (sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA):
+            if name.startswith(prefix):
+                colours = _colour_attribute(mesh, name[len(prefix):], tri_verts, tri_loops,
+                                            prefix == sh.COLOUR_ALPHA)
+                if colours is not None:
+                    out[name] = colours
     if sh.OBJECT in spaces:
         out[sh.OBJECT] = co[tri_verts]
     if sh.GENERATED in spaces:
@@ -140,16 +141,22 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None) -> dict:
     return out
 
 
-def _colour_attribute(mesh, name, tri_verts, tri_loops):
+def _colour_attribute(mesh, name, tri_verts, tri_loops, alpha=False):
     """(t, 3, 3) linear RGB of colour attribute `name` ("": the default one) per triangle
-    corner, or None where the mesh has none by that name."""
+    corner (with `alpha`, its alpha in the first channel), or None where the mesh has none
+    by that name."""
     attributes = mesh.color_attributes
     attr = attributes.get(name or attributes.default_color_name or "")
     if attr is None or attr.domain not in ("POINT", "CORNER"):
         return None
     rgba = np.zeros(len(attr.data) * 4, np.float32)
     attr.data.foreach_get("color", rgba)  # linear, byte colours decoded from sRGB
-    rgb = rgba.reshape(-1, 4)[:, :3]
+    rgba = rgba.reshape(-1, 4)
+    rgb = np.zeros_like(rgba[:, :3])
+    if alpha:
+        rgb[:, 0] = rgba[:, 3]
+    else:
+        rgb[:] = rgba[:, :3]
     index = tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)
     return rgb[index]
 
@@ -279,7 +286,7 @@ class _Exporter:
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
                               if name in (sh.GENERATED, sh.OBJECT)
-                              or name.startswith(sh.COLOUR_ATTRIBUTE)})
+                              or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA))})
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:

@@ -401,6 +401,9 @@ def _n_tex_coord(c, node, out):
 
 
 def _n_color_attribute(c, node, out):
+    """Color Attribute: its Color, or its Alpha (the first channel of the alpha map)."""
+    if out.name == "Alpha":
+        return c.program.uv(c.sh.COLOUR_ALPHA + node.layer_name), "VALUE"
     if out.name != "Color":
         raise Unsupported(f"color attribute '{node.name}' output {out.name}")
     return c.program.uv(c.sh.COLOUR_ATTRIBUTE + node.layer_name), "RGBA"

@@ -67,6 +67,8 @@ GENERATED, OBJECT = "\x00generated", "\x00object"
 # A Color Attribute node's colours (linear RGB per corner) are the map of this prefix and
 # the attribute's name ("": the mesh's default colour attribute, as Cycles reads it).
 COLOUR_ATTRIBUTE = "\x00colour:"
+# ... and its alpha, the map of this prefix and the name (alpha in the first channel).
+COLOUR_ALPHA = "\x00alpha:"
 
 
 def map_label(name: str) -> str:
@@ -75,9 +77,10 @@ def map_label(name: str) -> str:
         return "Generated coordinates"
     if name == OBJECT:
         return "Object coordinates"
-    if name.startswith(COLOUR_ATTRIBUTE):
-        attribute = name[len(COLOUR_ATTRIBUTE):]
-        return f"colour attribute '{attribute}'" if attribute else "colour attribute"
+    for prefix in (COLOUR_ATTRIBUTE, COLOUR_ALPHA):
+        if name.startswith(prefix):
+            attribute = name[len(prefix):]
+            return f"colour attribute '{attribute}'" if attribute else "colour attribute"
     return f"UV map '{name}'" if name else "UV map"
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h): per channel up to

@@ -267,12 +267,30 @@ def _colour_attributes_encoded():
 
     colour_attribute = exporter._colour_attribute
 
-    def encoded(mesh, name, tri_verts, tri_loops):
-        rgb = colour_attribute(mesh, name, tri_verts, tri_loops)
-        return None if rgb is None else np.maximum(rgb, 0.0) ** (1.0 / 2.2)
+    def encoded(mesh, name, tri_verts, tri_loops, alpha=False):
+        rgb = colour_attribute(mesh, name, tri_verts, tri_loops, alpha)
+        return None if rgb is None or alpha else np.maximum(rgb, 0.0) ** (1.0 / 2.2)
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(exporter, "_colour_attribute", encoded)
+        yield
+
+
+@contextmanager
+def _colour_alpha_opaque():
+    """The exporter reads every colour attribute's alpha as 1."""
+    from addon import exporter
+
+    colour_attribute = exporter._colour_attribute
+
+    def opaque(mesh, name, tri_verts, tri_loops, alpha=False):
+        out = colour_attribute(mesh, name, tri_verts, tri_loops, alpha)
+        if out is not None and alpha:
+            out[..., 0] = 1.0
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_colour_attribute", opaque)
         yield
 
 
@@ -643,6 +661,7 @@ INJECTIONS = {
     "group_inputs_unread": ("node_groups", None, _group_inputs_unread),
     "generated_as_object": ("texture_spaces", None, _generated_as_object),
     "colour_attributes_encoded": ("colour_attributes", None, _colour_attributes_encoded),
+    "colour_alpha_opaque": ("colour_attributes", None, _colour_alpha_opaque),
     "colour_and_value_swapped": ("blend_modes", None, _colour_and_value_swapped),
     "hsv_read_as_hsl": ("blend_modes", None, _hsv_read_as_hsl),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),

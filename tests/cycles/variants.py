@@ -984,28 +984,43 @@ def texture_spaces():
     ball.rotation_euler = (0.4, 0.0, 0.9)
 
 
-def _painted_ball(name, centre, domain, data_type, attribute="Paint"):
+def _painted_ball(name, centre, domain, data_type, attribute="Paint", alpha=False):
     """A smooth UV sphere of radius 0.27 whose colour attribute `attribute` (per `domain`)
     paints bands of colour from its vertices' positions, Diffuse-shaded by a Color
-    Attribute node reading it by name ("" for the mesh's default)."""
+    Attribute node reading it by name ("" for the mesh's default). With `alpha` the bands
+    are in its alpha too, and the Diffuse colour mixes orange and blue by it."""
     mesh = _uv_sphere_mesh(name, 0.27)
     attr = mesh.color_attributes.new(attribute, data_type, domain)
     co = np.array([v.co[:] for v in mesh.vertices])
     points = co if domain == "POINT" else co[[loop.vertex_index for loop in mesh.loops]]
     if domain == "CORNER":  # per face: a hard pattern only corners can hold
-        face = np.repeat(np.arange(len(mesh.polygons)),
-                         [len(p.vertices) for p in mesh.polygons])
+        # Keyed by where the face is, not its index: bmesh orders the sphere's faces
+        # differently in each process, and the reference is rendered in another.
+        middle = np.array([p.center[:] for p in mesh.polygons])
+        key = np.floor(middle[:, 0] * 40.0) + np.floor(middle[:, 2] * 40.0)
+        face = np.repeat(key, [len(p.vertices) for p in mesh.polygons])
         points = points + 0.05 * (face % 3)[:, None]
     rgba = np.ones((len(points), 4))
     rgba[:, 0] = 0.5 + 0.5 * np.sin(12.0 * points[:, 2])
     rgba[:, 1] = 0.5 + 0.5 * np.cos(9.0 * points[:, 0])
     rgba[:, 2] = np.clip(0.3 + 2.0 * points[:, 1], 0.0, 1.0)
+    if alpha:
+        rgba[:, 3] = 0.5 + 0.5 * np.cos(14.0 * points[:, 2] + 6.0 * points[:, 0])
     attr.data.foreach_set("color", rgba.astype(np.float32).ravel())
     mat = bs.material(name, "ShaderNodeBsdfDiffuse")
     tree = mat.node_tree
     node = tree.nodes.new("ShaderNodeVertexColor")
     node.layer_name = attribute if attribute != "Paint" else ""
-    tree.links.new(node.outputs["Color"], next(
+    colour = node.outputs["Color"]
+    if alpha:
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type = "RGBA"
+        ins = {s.identifier: s for s in mix.inputs}
+        ins["A_Color"].default_value = (0.9, 0.5, 0.1, 1.0)
+        ins["B_Color"].default_value = (0.1, 0.3, 0.9, 1.0)
+        tree.links.new(node.outputs["Alpha"], ins["Factor_Float"])
+        colour = mix.outputs["Result"]
+    tree.links.new(colour, next(
         n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse").inputs["Color"])
     obj = bpy.data.objects.new(name, mesh)
     obj.location = centre
@@ -1016,12 +1031,13 @@ def _painted_ball(name, centre, domain, data_type, attribute="Paint"):
 
 def colour_attributes():
     """Color Attribute nodes (issue 14, point 1): a byte colour attribute per face corner
-    read as the mesh's default (its layer name empty), and a float one per point read by
-    name beside another attribute."""
+    read as the mesh's default (its layer name empty), a float one per point read by name
+    beside another attribute, and a byte one's Alpha as a Mix factor."""
     _box()
-    _painted_ball("Corners", (-0.35, 0.0, 0.27), "CORNER", "BYTE_COLOR")
-    ball = _painted_ball("Points", (0.35, 0.0, 0.27), "POINT", "FLOAT_COLOR", "Tint")
+    _painted_ball("Corners", (-0.55, 0.0, 0.27), "CORNER", "BYTE_COLOR")
+    ball = _painted_ball("Points", (0.0, 0.0, 0.27), "POINT", "FLOAT_COLOR", "Tint")
     ball.data.color_attributes.new("Other", "FLOAT_COLOR", "POINT")
+    _painted_ball("Alpha", (0.55, 0.0, 0.27), "CORNER", "BYTE_COLOR", alpha=True)
 
 
 def _blend_card(name, centre, blend_type, odd, textured):
