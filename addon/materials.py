@@ -24,8 +24,8 @@ Fallbacks:
     (a mix of shaders where two or more weigh > 0), and Alpha < 1 (or textured) mixes in
     transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes,
     and a Sheen Weight > 0 (or textured) Cycles' microfiber sheen over that.
-    Specular Tint bends the metal's F82 Fresnel (the dielectric and glass reflections stay
-    untinted, warned). Inputs Specula does not render (Subsurface, Anisotropic, Thin Film,
+    Specular Tint bends the metal's F82 Fresnel and scales the dielectric and glass
+    Fresnel's F0 (Cycles' generalized Schlick). Inputs Specula does not render (Subsurface, Anisotropic, Thin Film,
     Diffuse Roughness) warn when used.
   * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
@@ -988,10 +988,10 @@ class _Reader:
         for socket_name, neutral, rendered in PRINCIPLED_IGNORED:
             self.ignored(node, socket_name, neutral, rendered)
 
-    def specular_tint(self, node, dielectric):
-        """The Principled BSDF's Specular Tint as the metal's F82 edge tint (its mean where
-        it varies, warned); on the dielectric and glass lobes (`dielectric`: some are
-        there) it is not rendered, warned. White before 4.0, where it was a float."""
+    def specular_tint(self, node):
+        """The Principled BSDF's Specular Tint: the metal's F82 edge tint and the F0 tint of
+        its dielectric and glass Fresnel (its mean where it varies, warned). White before
+        4.0, where it was a float."""
         sock = enabled_input(node, "Specular Tint")
         if sock is None or sock.type != "RGBA":
             return (1.0, 1.0, 1.0)
@@ -999,10 +999,7 @@ class _Reader:
         if program is not None:
             self.warn(f"node '{node.name}' input 'Specular Tint' varies over the surface; "
                       f"rendered as its mean {_fmt(tint)}")
-        if dielectric and (program is not None or max(abs(t - 1.0) for t in tint) > 1e-6):
-            self.warn(f"node '{node.name}' input 'Specular Tint' {_fmt(tint)} is rendered on "
-                      f"its metal only; the dielectric and glass reflections are untinted")
-        return tint
+        return tuple(max(t, 0.0) for t in tint)
 
     def principled(self, node):
         """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x
@@ -1032,7 +1029,7 @@ class _Reader:
             self.warn(f"node '{node.name}' emission under its coat is rendered undimmed by "
                       f"the coat (Cycles dims it by the coat's reflectance and tint)")
         multiscatter = self.multiscatter(node)
-        tint = self.specular_tint(node, metal_program is not None or metallic < 1.0)
+        tint = self.specular_tint(node)
 
         def metal():
             base, program = self.textured_colour(node, "Base Color")
@@ -1044,7 +1041,7 @@ class _Reader:
             base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("principled_glass", name, {
                 "base_colour": base, **_with(program), "ior": self.ior(node), **roughness,
-                "multiscatter": multiscatter})
+                "multiscatter": multiscatter, "specular_tint": tint})
 
         def either(first, second, fac, program):
             """first (1 - fac) and second (fac), or one alone where fac is 0 or 1."""
@@ -1055,7 +1052,8 @@ class _Reader:
             return self.mixed(first(), second(), fac, 1.0, program)
 
         def non_metal():
-            return either(lambda: self.dielectric(node), glass, transmission, glass_program)
+            return either(lambda: self.dielectric(node, tint), glass, transmission,
+                          glass_program)
 
         spec = self.sheen(node, self.coat(node, either(non_metal, metal, metallic,
                                                        metal_program)))
@@ -1144,9 +1142,9 @@ class _Reader:
         mix.kwargs.update(kwargs)
         return mix
 
-    def dielectric(self, node):
+    def dielectric(self, node, specular_tint=(1.0, 1.0, 1.0)):
         """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer
-        (Cycles' Principled v2)."""
+        (Cycles' Principled v2), its Fresnel under the Specular Tint."""
         base, program = self.textured_colour(node, "Base Color")
         if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and self.rough(node):
             self.warn(f"node '{node.name}' distribution GGX is not supported for the "
@@ -1155,7 +1153,8 @@ class _Reader:
             if "Specular IOR Level" in node.inputs else 0.5
         return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), **self.roughness(node),
-            "ior": self.ior(node), "specular_ior_level": level})
+            "ior": self.ior(node), "specular_ior_level": level,
+            "specular_tint": tuple(specular_tint)})
 
 
 def convert(material, image_cache=None):

@@ -23,7 +23,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .fresnel import fresnel_dielectric, glass_fresnel
+from .fresnel import fresnel_dielectric, glass_fresnel, tinted_fresnel
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import (build_frame, concentric_disk, cosine_hemisphere, guided_interp,
                        interp_guide)
@@ -133,19 +133,24 @@ def reflect(wox, woy, woz, nx, ny, nz):
 
 
 @njit(**JIT)
-def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact, fresnel_on):
+def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact,
+                      fresnel_on):
     """Smooth dielectric (Cycles' Glass BSDF and Principled transmission at roughness 0;
     without fresnel_on, the Refraction BSDF: glass_fresnel).
 
     eta : relative IOR across the surface as seen from wo (IOR on front faces, 1/IOR on
-    back faces); r_tint, t_tint : (3,) tints. Reflection R = F x r_tint, transmission
-    T = (1 - F) x t_tint; reflection is chosen with probability avg(R) / avg(R + T) and the
-    weight is R / p or T / (1 - p), as in Cycles. Returns (w, weight (3 values), ok).
+    back faces); r_tint, t_tint : (3,) tints; st : (3,) the Principled BSDF's Specular Tint
+    (fresnel.tinted_fresnel: F per channel; white leaves F as it is). Reflection
+    R = F x r_tint, transmission T = (1 - F) x t_tint; reflection is chosen with
+    probability avg(R) / avg(R + T) and the weight is R / p or T / (1 - p), as in Cycles.
+    Returns (w, weight (3 values), ok).
     """
     wx, wy, wz, cos_o = reflect(wox, woy, woz, nx, ny, nz)
     fr, cos_t = glass_fresnel(cos_o, eta, exact, fresnel_on)
-    r0, r1, r2 = fr * r_tint[0], fr * r_tint[1], fr * r_tint[2]
-    q0, q1, q2 = (1.0 - fr) * t_tint[0], (1.0 - fr) * t_tint[1], (1.0 - fr) * t_tint[2]
+    f0, f1, f2 = (tinted_fresnel(fr, eta, st[0]), tinted_fresnel(fr, eta, st[1]),
+                  tinted_fresnel(fr, eta, st[2]))
+    r0, r1, r2 = f0 * r_tint[0], f1 * r_tint[1], f2 * r_tint[2]
+    q0, q1, q2 = (1.0 - f0) * t_tint[0], (1.0 - f1) * t_tint[1], (1.0 - f2) * t_tint[2]
     r_avg = (r0 + r1 + r2) / 3.0
     t_avg = (q0 + q1 + q2) / 3.0
     total = r_avg + t_avg
@@ -333,7 +338,9 @@ class MicrofacetTables:
         the lobe roughens;
     layering_table : the same estimate for the compensated lobe, times Cycles' darkening
         (1 + Fms (1 - E) / E) E (microfacet_ggx_preserve_energy scales the closure's
-        weight by it, and the estimate includes the weight).
+        weight by it, and the estimate includes the weight);
+    spread : s over mu, the mean place between F0 and 1 (the estimate's own table);
+    fss : the Fresnel's hemispherical average (1 without a Fresnel).
     Integrals use a fixed low-discrepancy set of visible-normal samples: deterministic
     tables.
     """
@@ -364,6 +371,7 @@ class MicrofacetTables:
         f0 = ((float(eta) - 1.0) / (float(eta) + 1.0)) ** 2 if fresnel_on else 1.0
         self.estimate_table = f0 + (1.0 - f0) * schlick_s
         self.layering_table = self.estimate_table * self.compensation_table * e_white
+        self.spread, self.fss = schlick_s, float(fss)
         self.fresnel, self.eta = fresnel, float(eta)
 
     def multiscatter_fresnel(self, fss):
@@ -431,24 +439,27 @@ ROUGHNESS_WARP = 1.5
 # view cosines (m,) with its guided_interp guide; e_avg the lobe's average albedo (a
 # textured Glossy colour's Fms at each hit). Rough glass: fms, missing and e_avg are its
 # front side's (entering, IOR), fms_back, missing_back and e_avg_back its back side's
-# (leaving, 1 / IOR).
+# (leaving, 1 / IOR). spread (n, m): the Principled rows' mean place of the Fresnel between
+# F0 and 1 over mu, and fss (k,) the Principled materials' Fresnel average: what a Specular
+# Tint's Fresnel needs (tinted_layer_at).
 LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_guide alpha fms "
                                         "missing albedo e_avg fms_back missing_back "
-                                        "e_avg_back")
+                                        "e_avg_back spread fss")
 
 # One rough vertex's lobe: the diffuse weight dw and specular (reflection) tint (3 each),
 # alpha, eta, fresnel_on, the compensation per channel at mu_o (3), the chance of the
-# specular lobe, the transmission tint (3; rough glass, else 0) and the F82 model's b
-# (3; rough metal, fresnel_f82, else 0).
+# specular lobe, the transmission tint (3; rough glass, else 0), the F82 model's b
+# (3; rough metal, fresnel_f82, else 0) and the Principled BSDF's Specular Tint on a
+# dielectric Fresnel (3; fresnel.tinted_fresnel; 1 elsewhere).
 Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
-                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2")
+                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2 st0 st1 st2")
 
 
 @njit(**INLINE)
 def no_layer():
     """The Layer of a vertex without a rough lobe."""
     return Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
 
 
 def layer_tables(materials, used) -> LayerTables:
@@ -462,12 +473,15 @@ def layer_tables(materials, used) -> LayerTables:
     roughness = materials.roughness if materials.roughness is not None else np.zeros(k)
     textured = materials.roughness_programs or [None] * k
     rows = [_lobe_row(materials, j, 0.0, False) for j in range(k)]  # zeros but for `used`
+    fss = np.ones(k)
     for j in used:
         kind = materials.kind[j]
         if kind not in (PRINCIPLED, GLOSSY, ROUGH_METAL, ROUGH_GLASS):
             continue
         principled = kind == PRINCIPLED
         fresnel[j] = principled
+        if principled:
+            fss[j] = microfacet_tables(MIN_ALPHA, "dielectric", float(materials.ior[j])).fss
         base[j] = materials.colour[j] if principled else 0.0
         tint[j] = materials.colour[j] if kind in (GLOSSY, ROUGH_METAL) else float(principled)
         rows[j] = _lobe_row(materials, j, float(roughness[j]))
@@ -476,21 +490,22 @@ def layer_tables(materials, used) -> LayerTables:
             rows += [_lobe_row(materials, j, float(t ** ROUGHNESS_WARP))
                      for t in np.linspace(0.0, 1.0, ROUGHNESS_GRID)]
     mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
-    alpha, fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back = \
+    alpha, fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back, spread = \
         (np.array(column, np.float64) for column in zip(*rows))
     return LayerTables(base, tint, fresnel, first, count, mu, interp_guide(mu, 256), alpha,
-                       fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back)
+                       fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back,
+                       spread, fss)
 
 
 def _lobe_row(materials, j, roughness, rough=True) -> tuple:
     """One row of LayerTables for material j's lobe at `roughness`: alpha, fms (3,),
-    missing (m,), albedo (m,), e_avg, fms_back (3,), missing_back (m,), e_avg_back; zeros
-    but for alpha where not `rough`."""
+    missing (m,), albedo (m,), e_avg, fms_back (3,), missing_back (m,), e_avg_back,
+    spread (m,); zeros but for alpha where not `rough`."""
     alpha = max(roughness * roughness, MIN_ALPHA)
     m = ALBEDO_TABLE_SIZE
     zero3, zeros = np.zeros(3), np.zeros(m)
     if not rough:
-        return alpha, zero3, zeros, zeros, 0.0, zero3, zeros, 0.0
+        return alpha, zero3, zeros, zeros, 0.0, zero3, zeros, 0.0, zeros
     kind, colour, ior = materials.kind[j], materials.colour[j], float(materials.ior[j])
     multiscatter = True if materials.multiscatter is None else bool(materials.multiscatter[j])
     if kind == ROUGH_GLASS:
@@ -501,20 +516,21 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
             sides.append((np.vectorize(multiscatter_fresnel)(fss, e_avg),
                           missing if multiscatter else zeros, e_avg))
         (fms, missing, e_avg), (fms_back, missing_back, e_avg_back) = sides
-        return alpha, fms, missing, zeros, e_avg, fms_back, missing_back, e_avg_back
+        return alpha, fms, missing, zeros, e_avg, fms_back, missing_back, e_avg_back, zeros
     if kind == ROUGH_METAL:
         tables = microfacet_tables(alpha, "none", 1.5)
         fms = tables.multiscatter_fresnel([
             f82_fss(c, f82_tint_b(c, t)) for c, t in zip(colour, materials.reflection_tint[j])])
         return (alpha, fms, tables.missing_table if multiscatter else zeros, zeros,
-                tables.e_avg, zero3, zeros, 0.0)
+                tables.e_avg, zero3, zeros, 0.0, zeros)
     principled = kind == PRINCIPLED
     tables = microfacet_tables(alpha, "dielectric" if principled else "none", ior)
+    spread = tables.spread if principled else zeros
     if multiscatter:
         return (alpha, layer_fms(tables, principled, colour), tables.missing_table,
-                tables.layering_table, tables.e_avg, zero3, zeros, 0.0)
+                tables.layering_table, tables.e_avg, zero3, zeros, 0.0, spread)
     return (alpha, layer_fms(tables, principled, colour), zeros, tables.estimate_table,
-            tables.e_avg, zero3, zeros, 0.0)
+            tables.e_avg, zero3, zeros, 0.0, spread)
 
 
 @functools.lru_cache(maxsize=512)
@@ -579,11 +595,14 @@ def fms_at(fms, r0, r1, w):
 
 
 @njit(**INLINE)
-def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness):
+def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
     """The layered lobe of rough material `mat` at view cosine mu (to its specular normal)
     from its LayerTables lt; with `textured`, its colour at this point is c (the Principled
     base, or the Glossy tint and, through Fss, its Fms) instead of the table's; roughness
-    is the hit's where it is textured (lobe_rows)."""
+    is the hit's where it is textured (lobe_rows); st (3) the Principled BSDF's Specular
+    Tint here (tinted_layer_at)."""
+    if lt.fresnel[mat] and (st[0] != 1.0 or st[1] != 1.0 or st[2] != 1.0):
+        return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st)
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
     albedo = table_at(mu, lt, lt.albedo, r0, r1, w)
@@ -604,7 +623,45 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness):
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, alpha, eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+
+
+@njit(**JIT)
+def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
+    """layer_at for a Principled layer under a Specular Tint st (3): Cycles' generalized
+    Schlick Fresnel from F0 x st to 1 (fresnel.tinted_fresnel). Per channel, its estimated
+    albedo is F0 st + (1 - F0 st) s(mu), s the real Fresnel's mean place between F0 and 1
+    (LayerTables.spread), times the compensation's darkening (1 + Fms (1 - E) / E) E, Fms
+    from Fss = F0 st + (1 - F0 st) s_ss (the same place for the hemispherical average);
+    the base keeps 1 - the largest channel of it (Cycles' closure_layering_weight)."""
+    r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
+    missing = table_at(mu, lt, lt.missing, r0, r1, w)
+    spread = table_at(mu, lt, lt.spread, r0, r1, w)
+    e = lt.e_avg[r0] + w * (lt.e_avg[r1] - lt.e_avg[r0])
+    f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+    s_ss = min(max((lt.fss[mat] - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
+    b0, b1, b2 = lt.base[mat, 0], lt.base[mat, 1], lt.base[mat, 2]
+    if textured:
+        b0, b1, b2 = c0, c1, c2
+    c0, a0 = _tinted_channel(f0, st[0], s_ss, spread, e, missing)
+    c1, a1 = _tinted_channel(f0, st[1], s_ss, spread, e, missing)
+    c2, a2 = _tinted_channel(f0, st[2], s_ss, spread, e, missing)
+    kept = 1.0 - min(max(a0, max(a1, a2)), 1.0)
+    dw0, dw1, dw2 = b0 * kept, b1 * kept, b2 * kept
+    sp = (a0 + a1 + a2) / 3.0
+    sd = (dw0 + dw1 + dw2) / 3.0
+    p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
+    return Layer(dw0, dw1, dw2, 1.0, 1.0, 1.0, alpha, eta, True, c0, c1, c2, p_spec,
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2])
+
+
+@njit(**INLINE)
+def _tinted_channel(f0, tint, s_ss, spread, e_avg, missing):
+    """One channel of tinted_layer_at: (the compensation 1 + Fms (1 - E) / E, the
+    estimated albedo)."""
+    t0 = min(max(f0 * tint, 0.0), 1.0)
+    comp = 1.0 + multiscatter_fresnel(t0 + (1.0 - t0) * s_ss, e_avg) * missing
+    return comp, (t0 + (1.0 - t0) * spread) * comp / (1.0 + missing)
 
 
 @njit(**JIT)
@@ -641,16 +698,18 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness, edge):
                       multiscatter_fresnel(f82_fss(c2, b2), e))
     return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, alpha, 1.0, False,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 0.0, 0.0, 0.0, b0, b1, b2)
+                 0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0)
 
 
 @njit(**INLINE)
-def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_on, textured):
+def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_on, textured,
+                   st):
     """The rough glass lobe of material `mat` at view cosine mu, on its front side (eta =
     IOR) or its back side (eta = 1 / IOR), from its LayerTables lt; roughness as
-    layer_at's; without fresnel_on, the Refraction BSDF's (glass_fresnel). With `textured`,
-    the tints are this point's: the compensation's Fss is its transmission tint (glass_fss;
-    a texel transmitting nothing gets no compensation)."""
+    layer_at's; without fresnel_on, the Refraction BSDF's (glass_fresnel); st (3) the
+    Principled BSDF's Specular Tint on its Fresnel. With `textured`, the tints are this
+    point's: the compensation's Fss is its transmission tint (glass_fss; a texel
+    transmitting nothing gets no compensation)."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     if front:
         missing = table_at(mu, lt, lt.missing, r0, r1, w)
@@ -668,7 +727,7 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
                       multiscatter_fresnel(max(t_tint[2], 0.0), e))
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0)
+                 t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0, st[0], st[1], st[2])
 
 
 @njit(**INLINE)
@@ -731,12 +790,20 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
     hx, hy, hz = wox + wix, woy + wiy, woz + wiz
     hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
     hx, hy, hz = hx / hl, hy / hl, hz / hl
+    cos_hv = hx * wox + hy * woy + hz * woz
+    tinted = lobe.fresnel_on and (lobe.st0 != 1.0 or lobe.st1 != 1.0 or lobe.st2 != 1.0)
     spec, pdf_s = eval_ggx(mx * wox + my * woy + mz * woz, mx * wix + my * wiy + mz * wiz,
-                           mx * hx + my * hy + mz * hz, hx * wox + hy * woy + hz * woz,
-                           lobe.alpha * lobe.alpha, lobe.eta, lobe.fresnel_on)
+                           mx * hx + my * hy + mz * hz, cos_hv, lobe.alpha * lobe.alpha,
+                           lobe.eta, lobe.fresnel_on and not tinted)
+    spec0 = spec1 = spec2 = spec
+    if tinted:  # the Specular Tint's Fresnel per channel
+        f = fresnel_dielectric(cos_hv, lobe.eta, True)[0]
+        spec0 = spec * tinted_fresnel(f, lobe.eta, lobe.st0)
+        spec1 = spec * tinted_fresnel(f, lobe.eta, lobe.st1)
+        spec2 = spec * tinted_fresnel(f, lobe.eta, lobe.st2)
     cos_d = max(sx * wix + sy * wiy + sz * wiz, 0.0)
     if not wix * nx + wiy * ny + wiz * nz > 0.0:
-        spec = 0.0
+        spec0 = spec1 = spec2 = 0.0
         pdf_s = 0.0
         if sampled:
             cos_d = 0.0
@@ -744,10 +811,11 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
     if bx != sx or by != sy or bz != sz:  # a normal map tilted s (no call without one)
         c *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, True, True)
         if not sampled:
-            spec *= bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
-    return (lobe.dw0 * c + lobe.tint0 * (spec * lobe.comp0),
-            lobe.dw1 * c + lobe.tint1 * (spec * lobe.comp1),
-            lobe.dw2 * c + lobe.tint2 * (spec * lobe.comp2),
+            shadowing = bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
+            spec0, spec1, spec2 = spec0 * shadowing, spec1 * shadowing, spec2 * shadowing
+    return (lobe.dw0 * c + lobe.tint0 * (spec0 * lobe.comp0),
+            lobe.dw1 * c + lobe.tint1 * (spec1 * lobe.comp1),
+            lobe.dw2 * c + lobe.tint2 * (spec2 * lobe.comp2),
             lobe.p_spec * pdf_s + (1.0 - lobe.p_spec) * cos_d / np.pi)
 
 
@@ -805,8 +873,10 @@ def eval_rough_dielectric(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
     hx, hy, hz = hx / length, hy / length, hz / length
     cos_ho = hx * wox + hy * woy + hz * woz
     fr = glass_fresnel(cos_ho, eta, True, lobe.fresnel_on)[0]
-    r0, r1, r2 = fr * lobe.tint0, fr * lobe.tint1, fr * lobe.tint2
-    t0, t1, t2 = (1.0 - fr) * lobe.tt0, (1.0 - fr) * lobe.tt1, (1.0 - fr) * lobe.tt2
+    f0, f1, f2 = (tinted_fresnel(fr, eta, lobe.st0), tinted_fresnel(fr, eta, lobe.st1),
+                  tinted_fresnel(fr, eta, lobe.st2))
+    r0, r1, r2 = f0 * lobe.tint0, f1 * lobe.tint1, f2 * lobe.tint2
+    t0, t1, t2 = (1.0 - f0) * lobe.tt0, (1.0 - f1) * lobe.tt1, (1.0 - f2) * lobe.tt2
     total = r0 + r1 + r2 + t0 + t1 + t2
     if not total > 0.0:
         return 0.0, 0.0, 0.0, 0.0
@@ -833,8 +903,14 @@ def sample_rough_dielectric(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, u_lobe,
     hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
     cos_ho = hwx * wox + hwy * woy + hwz * woz
     fr, cos_t = glass_fresnel(cos_ho, lobe.eta, True, lobe.fresnel_on)
-    r = fr * (lobe.tint0 + lobe.tint1 + lobe.tint2)
-    q = (1.0 - fr) * (lobe.tt0 + lobe.tt1 + lobe.tt2)
+    f0, f1, f2 = (tinted_fresnel(fr, lobe.eta, lobe.st0), tinted_fresnel(fr, lobe.eta, lobe.st1),
+                  tinted_fresnel(fr, lobe.eta, lobe.st2))
+    if f0 == fr and f1 == fr and f2 == fr:
+        r = fr * (lobe.tint0 + lobe.tint1 + lobe.tint2)
+        q = (1.0 - fr) * (lobe.tt0 + lobe.tt1 + lobe.tt2)
+    else:
+        r = f0 * lobe.tint0 + f1 * lobe.tint1 + f2 * lobe.tint2
+        q = (1.0 - f0) * lobe.tt0 + (1.0 - f1) * lobe.tt1 + (1.0 - f2) * lobe.tt2
     if not r + q > 0.0:
         return 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, False
     refract = u_lobe >= r / (r + q)

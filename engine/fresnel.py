@@ -51,3 +51,17 @@ def glass_fresnel(cos_i, eta, exact, fresnel_on):
     if fresnel_on:
         return f, cos_t
     return (0.0 if cos_t > 0.0 else 1.0), cos_t
+
+
+@njit(**JIT)
+def tinted_fresnel(f, eta, tint):
+    """One channel of the Principled BSDF's dielectric Fresnel under its Specular Tint
+    (Cycles' generalized Schlick Fresnel with exponent < 0): from F0 x tint (at most 1)
+    rising to 1 as the real Fresnel f of relative IOR eta rises from its own F0, i.e. f's
+    place between F0 and 1 carried over. A white tint is f itself."""
+    if tint == 1.0:
+        return f
+    f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+    t0 = min(max(f0 * tint, 0.0), 1.0)
+    s = min(max((f - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
+    return t0 + (1.0 - t0) * s

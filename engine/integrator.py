@@ -119,13 +119,14 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # component rows (k, 2), fac and scale (k,), coats' IOR (k,) and tint (k, 3), and
 # whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
 # tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool,
-# each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32).
+# each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32);
+# the Principled BSDF's Specular Tint on its dielectric Fresnel (k, 3; white elsewhere).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength medium mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
-                                            "sheen_ltc")
+                                            "sheen_ltc specular_tint")
 # caustics: caustics.CausticData (n_light 0 without light tracing).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
                                     "caustics")
@@ -592,15 +593,23 @@ def rough_lobe(x, k, c, sc, paths):
                                          paths.svm, roughness)
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
-                             roughness)
+                             roughness, specular_tint_at(x, sc))
     if HAS_ROUGH_METAL and k == ROUGH_METAL:
         return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2],
                                    roughness, mt.reflection_tint[x.mat])
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         tints = glass_tints_at(x, c, textured, sc)
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers, tints[:3],
-                                   tints[3:], roughness, mt.fresnel[x.mat], textured)
+                                   tints[3:], roughness, mt.fresnel[x.mat], textured,
+                                   specular_tint_at(x, sc))
     return bsdf.no_layer()
+
+
+def specular_tint_at(x, sc):
+    """The Principled BSDF's Specular Tint on vertex x's dielectric Fresnel (3 values;
+    white for every other material)."""
+    st = sc.materials.specular_tint
+    return st[x.mat, 0], st[x.mat, 1], st[x.mat, 2]
 
 
 def glass_tints_at(x, c, textured, sc):
@@ -901,8 +910,8 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
         tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
-            x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:], u,
-            EXACT_FRESNEL, mt.fresnel[x.mat])
+            x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:],
+            specular_tint_at(x, sc), u, EXACT_FRESNEL, mt.fresnel[x.mat])
         # A tilted normal (smooth, mapped or bumped) can refract a direction back above the
         # geometric surface: Cycles' bsdf_microfacet_sample drops it (as the rough lobe).
         below_m = wx * x.mx + wy * x.my + wz * x.mz < 0.0
@@ -1354,7 +1363,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     coat_layer, sheen_layer, sheen_normal,
     surface_interaction, shading_normal,
     mapped_normal, bumped_normal,
-    surface_colour, rough_lobe, glass_tints_at, handle_emission, caustic_weight,
+    surface_colour, rough_lobe, glass_tints_at, specular_tint_at, handle_emission,
+    caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,

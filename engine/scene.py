@@ -83,6 +83,16 @@ def _colour(value, what: str) -> np.ndarray:
     return c
 
 
+def _specular_tint(m) -> np.ndarray:
+    """m's Specular Tint (3,), negative channels 0 (Cycles' max(tint, 0)); white on kinds
+    without a dielectric Fresnel it could tint."""
+    tint = np.maximum(_colour(m.specular_tint, f"material '{m.name}' specular tint"), 0.0)
+    if m.kind not in ("principled", "glass", "rough_glass") and np.any(tint != 1.0):
+        raise ValueError(f"material '{m.name}': a {m.kind} material has no dielectric Fresnel "
+                         f"for a specular tint")
+    return tint
+
+
 def _anisotropy(m) -> float:
     """A material's Henyey-Greenstein g, which must lie in [-1, 1]."""
     g = float(m.anisotropy)
@@ -216,6 +226,9 @@ class Material:
     # Glass kinds: how the colour (or its program's result) tints reflection and
     # transmission, one of GLASS_TINTS (glass_tints).
     glass_tints: str = "colour"
+    # The Principled BSDF's Specular Tint on its dielectric and glass Fresnel (Cycles: F0 x
+    # tint rising to 1 as the real Fresnel does; fresnel.tinted_fresnel); white elsewhere.
+    specular_tint: tuple = (1.0, 1.0, 1.0)
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -318,18 +331,23 @@ class Material:
     @classmethod
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
                          emission_program=None, roughness=0.0, multiscatter=True,
-                         roughness_program=None, colour_program=None):
-        """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission."""
+                         roughness_program=None, colour_program=None,
+                         specular_tint=(1.0, 1.0, 1.0)):
+        """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission,
+        its Fresnel under the Specular Tint."""
         return cls._glass(name, "principled", base_colour, ior, roughness, roughness_program,
                           emission=tuple(emission), emission_program=emission_program,
-                          multiscatter=bool(multiscatter), colour_program=colour_program)
+                          multiscatter=bool(multiscatter), colour_program=colour_program,
+                          specular_tint=tuple(specular_tint))
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
-                   emission_program=None, roughness_program=None, multiscatter=True):
+                   emission_program=None, roughness_program=None, multiscatter=True,
+                   specular_tint=(1.0, 1.0, 1.0)):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
-        specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR)."""
+        specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
+        the Specular Tint scales F0 too (tinted_fresnel)."""
         ior = float(ior)
         if ior > 0 and specular_ior_level != 0.5 and ior != 1.0:
             f0 = ((ior - 1) / (ior + 1)) ** 2 * 2.0 * float(specular_ior_level)
@@ -339,7 +357,7 @@ class Material:
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
                    roughness=float(roughness), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
-                   multiscatter=bool(multiscatter))
+                   multiscatter=bool(multiscatter), specular_tint=tuple(specular_tint))
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -485,6 +503,7 @@ class Materials:
     sheen_parent: np.ndarray | None = None  # (k,) int: a sheen lobe's layer row, else -1
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
+    specular_tint: np.ndarray | None = None  # (k, 3), Material.specular_tint
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
     height_programs: list | None = None  # per row a Bump node's height Program or None
@@ -585,7 +604,8 @@ class Materials:
                    height_programs=height_programs,
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
-                                        np.int64))
+                                        np.int64),
+                   specular_tint=np.array([_specular_tint(m) for m in materials]))
 
     @property
     def medium(self) -> np.ndarray | None:

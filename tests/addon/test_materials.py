@@ -29,18 +29,19 @@ def convert(mat):
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
                                   "IOR": 1.45}, "principled",
      {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.45,
-      "specular_ior_level": 0.5}),
+      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0)}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.9, 0.6, 0.2, 1), "Metallic": 1.0,
                                   "Roughness": 0.0}, "metal",
      {"base_colour": (0.9, 0.6, 0.2), "roughness": 0.0, "multiscatter": True,
       "specular_tint": (1.0, 1.0, 1.0)}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": WHITE, "Transmission Weight": 1.0,
                                   "Roughness": 0.0, "IOR": 1.33}, "principled_glass",
-     {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33, "roughness": 0.0, "multiscatter": True}),
+     {"base_colour": (1.0, 1.0, 1.0), "ior": 1.33, "roughness": 0.0, "multiscatter": True,
+      "specular_tint": (1.0, 1.0, 1.0)}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.1, 0.1, 0.1, 1), "Emission Color":
                                   (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "principled",
      {"base_colour": (0.1, 0.1, 0.1), "roughness": 0.5, "ior": 1.5, "specular_ior_level": 0.5,
-      "emission": (4.0, 2.0, 0.0)}),
+      "specular_tint": (1.0, 1.0, 1.0), "emission": (4.0, 2.0, 0.0)}),
 ])
 def test_supported_nodes(fresh, shader, inputs, ctor, kwargs):
     mat, _ = node_material("M", shader, **inputs)
@@ -822,8 +823,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "link"), ("Specular Tint", (1.0, 0.5, 0.5, 1.0)),
-    ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
+    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")
@@ -1018,19 +1018,24 @@ def test_bump_nodes_are_compiled(fresh, core, shader):
                for w in warnings), warnings
 
 
-def test_specular_tint_bends_the_metal_only(fresh, core):
-    """Specular Tint is the metal's F82 edge tint (above 1 taken as 1, as Cycles); where
-    the Principled also has a dielectric part it is untinted there, warned."""
+def test_specular_tint_tints_every_fresnel(fresh, core):
+    """Specular Tint is the metal's F82 edge tint (above 1 taken as 1, as Cycles) and the
+    F0 tint of the dielectric and glass lobes' Fresnel (negative channels 0)."""
     mat, node = node_material("Tinted", "ShaderNodeBsdfPrincipled", Metallic=1.0, **{
         "Base Color": (0.9, 0.8, 0.7, 1.0), "Specular Tint": (0.2, 1.5, 0.6, 1.0)})
     spec, warnings = convert(mat)
     assert warnings == [] and spec.ctor == "metal"
     assert spec.to_core(core).reflection_tint == pytest.approx((0.2, 1.0, 0.6))
     node.inputs["Metallic"].default_value = 0.5
+    node.inputs["Transmission Weight"].default_value = 0.5
+    node.inputs["Specular Tint"].default_value = (0.2, 1.5, -0.6, 1.0)
     spec, warnings = convert(mat)
-    assert len(warnings) == 1 and "Specular Tint" in warnings[0] and node.name in warnings[0]
-    metal = next(leaf for leaf in spec.leaves() if leaf.ctor == "metal")
-    assert metal.kwargs["specular_tint"] == pytest.approx((0.2, 1.5, 0.6))
+    assert warnings == []
+    leaves = {leaf.ctor: leaf for leaf in spec.leaves()}
+    assert leaves["metal"].kwargs["specular_tint"] == pytest.approx((0.2, 1.5, 0.0))
+    for ctor in ("principled", "principled_glass"):
+        assert leaves[ctor].kwargs["specular_tint"] == pytest.approx((0.2, 1.5, 0.0)), ctor
+        assert leaves[ctor].to_core(core).specular_tint == pytest.approx((0.2, 1.5, 0.0))
 
 
 def test_linked_displacement_warns(fresh):

@@ -573,6 +573,13 @@ def _specular_tint_white(scene, settings):
     return scene, settings
 
 
+def _dielectric_specular_tint_white(scene, settings):
+    """The dielectric and glass Fresnel untinted (as before their Specular Tint)."""
+    scene.materials = dataclasses.replace(
+        scene.materials, specular_tint=np.ones_like(scene.materials.specular_tint))
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -688,6 +695,8 @@ INJECTIONS = {
     "coat_normal_as_the_normal": ("gltf_clear_coat", None, _coat_normal_as_the_normal),
     "bumps_ignored": ("bump", _bumps_ignored, None),
     "specular_tint_white": ("specular_tint", _specular_tint_white, None),
+    "dielectric_specular_tint_white": ("specular_tint_dielectric",
+                                       _dielectric_specular_tint_white, None),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

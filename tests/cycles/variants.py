@@ -674,6 +674,29 @@ def specular_tint():
                                        "Specular Tint": (0.3, 1.5, 0.6, 1.0)})])
 
 
+def specular_tint_dielectric():
+    """The Principled BSDF's Specular Tint on its dielectric and glass Fresnel (Cycles'
+    generalized Schlick: F0 x tint rising to 1; issue 14, point 1): a dark ball with an
+    orange-tinted coat of reflection (roughness 0.15), a green one tinted blue past 1
+    (roughness 0.4; F0 x tint is at most 1), smooth glass (IOR 1.8) tinted toward blue and
+    rough (0.3) glass (IOR 1.6) tinted toward red, both strongly: their reflections are a
+    small part of what the camera sees through them."""
+    _box()
+    balls = [
+        _principled("OrangeSheen", **{"Base Color": (0.05, 0.05, 0.05, 1.0), "Roughness": 0.15,
+                                      "Specular Tint": (1.0, 0.3, 0.1, 1.0)}),
+        _principled("BlueSheen", **{"Base Color": (0.2, 0.5, 0.2, 1.0), "Roughness": 0.4,
+                                    "Specular Tint": (0.2, 0.4, 1.8, 1.0)}),
+        _principled("TintedGlass", **{"Base Color": (1.0, 1.0, 1.0, 1.0), "Roughness": 0.0,
+                                      "Transmission Weight": 1.0, "IOR": 1.8,
+                                      "Specular Tint": (0.1, 1.0, 4.0, 1.0)}),
+        _principled("TintedFrost", **{"Base Color": (0.9, 0.9, 1.0, 1.0), "Roughness": 0.3,
+                                      "Transmission Weight": 1.0, "IOR": 1.6,
+                                      "Specular Tint": (5.0, 0.5, 0.1, 1.0)})]
+    for i, mat in enumerate(balls):
+        _sphere(mat, (-0.63 + 0.42 * i, 0.0, 0.2), 0.2, f"Ball{i}")
+
+
 def _with_volume(mat, shader, **inputs):
     """`mat` with a `shader` volume node on its Material Output's Volume."""
     tree = mat.node_tree
@@ -1876,6 +1899,8 @@ _add(Variant("normal_maps", normal_maps, max_bounces=8))
 # steeper ripples and four times the samples.
 _add(Variant("bump", bump, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("specular_tint", specular_tint, max_bounces=8, samples=1024, cycles_samples=2048))
+_add(Variant("specular_tint_dielectric", specular_tint_dielectric, max_bounces=8, samples=1024,
+             cycles_samples=2048))
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))

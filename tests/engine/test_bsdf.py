@@ -18,11 +18,12 @@ def fresnel(cos_i, eta, exact=True):
     return np.vectorize(lambda c: bsdf.fresnel_dielectric(c, eta, exact))(cos_i)
 
 
-def sample_dielectric(wo, eta, r_tint, t_tint, u, exact=True):
+def sample_dielectric(wo, eta, r_tint, t_tint, u, exact=True, st=(1.0, 1.0, 1.0)):
     """sample_dielectric about +z for one wo and an array of u: wi (m, 3), weight (m, 3),
     ok (m,)."""
     r_tint, t_tint = np.asarray(r_tint, np.float64), np.asarray(t_tint, np.float64)
-    out = np.vectorize(lambda uk: bsdf.sample_dielectric(*wo, *Z, eta, r_tint, t_tint, uk,
+    st = np.asarray(st, np.float64)
+    out = np.vectorize(lambda uk: bsdf.sample_dielectric(*wo, *Z, eta, r_tint, t_tint, st, uk,
                                                           exact, True))(np.atleast_1d(u))
     return np.column_stack(out[:3]), np.column_stack(out[3:6]), out[6]
 
@@ -209,3 +210,23 @@ def test_bump_shadowing_follows_cycles():
     g1 = 1 / (1 + 0.5 * (np.sqrt(1 + alpha2 * (1 / w[2] ** 2 - 1)) - 1))
     assert bsdf.bump_shadowing(*b, *s, *w, True, True) == pytest.approx(g1)
     assert bsdf.bump_shadowing(*b, *s, *w, False, True) == 1.0
+
+
+def test_a_specular_tint_moves_f0_and_keeps_the_curve():
+    """Cycles' generalized Schlick Fresnel under a Specular Tint: F0 x tint (at most 1) at
+    normal incidence, 1 at grazing and under total internal reflection, the real curve's
+    place between F0 and 1 in between; a white tint is the real Fresnel to the bit."""
+    from engine.fresnel import fresnel_dielectric, tinted_fresnel
+    for eta in (1.5, 1 / 1.5, 2.4):
+        f0 = ((eta - 1) / (eta + 1)) ** 2
+        for cos in np.linspace(0.0, 1.0, 41):
+            f = fresnel_dielectric(cos, eta, True)[0]
+            assert tinted_fresnel(f, eta, 1.0) == f
+            lo, hi = tinted_fresnel(f, eta, 0.5), tinted_fresnel(f, eta, 3.0)
+            assert 0.0 <= lo <= f <= hi <= 1.0
+            s = (f - f0) / (1 - f0)
+            assert lo == pytest.approx(0.5 * f0 + (1 - 0.5 * f0) * s, abs=1e-12)
+        assert tinted_fresnel(fresnel_dielectric(1.0, eta, True)[0], eta, 0.5) == \
+            pytest.approx(0.5 * f0)
+        assert tinted_fresnel(f0, eta, 100.0) == 1.0
+        assert tinted_fresnel(1.0, eta, 0.2) == 1.0  # grazing, total internal reflection

@@ -161,7 +161,7 @@ def test_a_wrong_ior_on_light_paths_fails(box, path_traced, monkeypatch):
             u = sample_1d(paths.pseed[row], rev_sample, bounce_dim(depth, LOBE))
             wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
                 x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, mt.reflection_tint[x.mat],
-                mt.transmission_tint[x.mat], u, True, True)
+                mt.transmission_tint[x.mat], mt.specular_tint[x.mat], u, True, True)
             return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
         return original_sample_bsdf(row, depth, x, lobe, c, sc, paths,  # noqa: F821
                                     rev_sample)

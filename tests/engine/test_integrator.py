@@ -75,6 +75,21 @@ def test_glass_sphere_in_uniform_environment_is_invisible(ior):
     assert np.abs(img - world).max() < 1e-6
 
 
+def test_a_specular_tint_leaves_white_glass_invisible_on_average():
+    """Under a Specular Tint a Principled glass reflects F per channel (fresnel.
+    tinted_fresnel) and transmits the rest, so white glass still passes all of a uniform
+    world, channel by channel; each sample's weight is no longer 1 (the lobe is chosen
+    by the channels' mean), only their mean is."""
+    world = np.array([0.5, 0.7, 0.9])
+    glass = Material.principled_glass("tinted", (1, 1, 1), 1.8, specular_tint=(0.1, 1.0, 4.0))
+    r = sphere_in_environment(glass, world, samples=64)
+    img = r.combined[..., :3]
+    assert np.abs(img - world).max() > 0.05  # single pixels are noisy ...
+    mean = img.reshape(-1, 3).mean(axis=0)
+    se = np.sqrt(r.variance[..., :3].reshape(-1, 3).sum(axis=0)) / img[..., 0].size
+    assert np.all(np.abs(mean - world) < 4 * se + 1e-6), (mean, world, se)  # ... not the mean
+
+
 def test_a_refraction_sphere_passes_its_colour_twice():
     """The Refraction BSDF reflects nothing and refracts all but under total internal
     reflection, which a ray through a sphere does not meet: in a uniform environment the
@@ -88,11 +103,11 @@ def test_a_refraction_sphere_passes_its_colour_twice():
         assert error < 1e-6 if kind == "refraction" else error > 0.01, (kind, error)
 
 
-def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact,
+def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact,
                            fresnel_on):
     """bsdf.sample_dielectric with refracted radiance scaled by 1/eta^2."""
     wx, wy, wz, f0, f1, f2, ok = original_sample_dielectric(  # noqa: F821
-        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, u, exact, fresnel_on)
+        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact, fresnel_on)
     if wx * nx + wy * ny + wz * nz < 0.0:  # transmitted
         k = 1.0 / (eta * eta)
         f0, f1, f2 = f0 * k, f1 * k, f2 * k

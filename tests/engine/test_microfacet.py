@@ -20,7 +20,7 @@ def specular_lobe(alpha):
     """A layered lobe that is GGX reflection alone: no base, white tint, no Fresnel and no
     compensation, chosen with probability 1."""
     return bsdf.Layer(0.0, 0.0, 0.0, 1.0, 1.0, 1.0, alpha, 1.5, False, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0,
-                      0.0, 0.0, 0.0, 0.0)
+                      0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
 
 
 @njit(cache=True)
@@ -197,7 +197,7 @@ def test_rough_metal_white_furnace_and_schlick_per_channel(rng):
     for mu in (0.3, 0.9):
         comp = 1.0 + lt.fms[0] * np.interp(mu, lt.mu, lt.missing[0])
         lobe = bsdf.Layer(0.0, 0.0, 0.0, 1.0, 0.6, 0.1, lt.alpha[0], 1.0, False, *comp, 1.0,
-                          0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                          0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
         wo = np.array([np.sqrt(1 - mu * mu), 0.0, mu])
         wi, w, pdf, ok = sample_metal_about_z(wo, lobe, rng.random((100_000, 2)))
         albedo = np.where(ok[:, None], w, 0.0).mean(axis=0)
@@ -253,11 +253,13 @@ def _lobe(m, lt, row, mu, front, roughness):
     kind = m.kind[row]
     if kind == bsdf.ROUGH_GLASS:
         layer = bsdf.glass_layer_at(row, mu, front, m.ior[row], lt, m.reflection_tint[row],
-                                    m.transmission_tint[row], roughness, True, False)
+                                    m.transmission_tint[row], roughness, True, False,
+                                    m.specular_tint[row])
     elif kind == bsdf.ROUGH_METAL:
         layer = bsdf.metal_layer_at(row, mu, lt, False, 0.0, 0.0, 0.0, roughness,
                                     m.reflection_tint[row])
     else:
-        layer = bsdf.layer_at(row, mu, m.ior[row], lt, False, 0.0, 0.0, 0.0, roughness)
+        layer = bsdf.layer_at(row, mu, m.ior[row], lt, False, 0.0, 0.0, 0.0, roughness,
+                              m.specular_tint[row])
     return (layer.alpha, layer.comp0, layer.comp1, layer.comp2, layer.dw0, layer.dw1,
             layer.dw2)

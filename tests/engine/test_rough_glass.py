@@ -18,7 +18,7 @@ RES = 24
 
 def glass_lobe(alpha, eta, comp=1.0, r_tint=(1.0, 1.0, 1.0), t_tint=(1.0, 1.0, 1.0)):
     return bsdf.Layer(0.0, 0.0, 0.0, *r_tint, alpha, eta, True, comp, comp, comp, 1.0, *t_tint,
-                      0.0, 0.0, 0.0)
+                      0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
 
 
 @njit(cache=True)

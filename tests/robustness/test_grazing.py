@@ -46,8 +46,8 @@ def test_reflect_refract_and_sample_at_grazing(eta, side):
         assert np.isclose(np.linalg.norm(r), 1.0)
         f, _ = bsdf.fresnel_dielectric(float(n @ wo), eta, True)
         for u in (0.0, 0.5, 1.0 - 1e-12):
-            wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(*wo, *n, eta, ones, ones, u,
-                                                                True, True)
+            wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(*wo, *n, eta, ones, ones,
+                                                                ones, u, True, True)
             wi = np.array([wx, wy, wz])
             assert ok and np.isfinite(wi).all() and np.isclose(np.linalg.norm(wi), 1.0)
             assert np.allclose([f0, f1, f2], 1.0, rtol=0, atol=1e-12)

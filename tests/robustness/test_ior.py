@@ -61,8 +61,8 @@ def test_dielectric_lobes_sum_to_one_for_extreme_ior(ior, rng):
     for eta in (ior, 1 / ior):
         f, _ = fresnel(cos, eta)
         assert np.all((f >= 0) & (f <= 1))
-        out = np.array([bsdf.sample_dielectric(s, 0.0, c, 0.0, 0.0, 1.0, eta, ones, ones, u,
-                                               True, True)
+        out = np.array([bsdf.sample_dielectric(s, 0.0, c, 0.0, 0.0, 1.0, eta, ones, ones, ones,
+                                               u, True, True)
                         for s, c, u in zip(sin, cos, rng.random(n))])
         wi, w = out[:, :3], out[:, 3:6]
         assert np.isfinite(wi).all() and np.isfinite(w).all()

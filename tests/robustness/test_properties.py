@@ -48,16 +48,16 @@ def test_dielectric_is_finite_and_bounded(wo, n, eta, u, tints, model):
         # above 1 at eta = 1e-3); harmless, as sampled directions are renormalised.
         assert 0 <= f <= 1 and 0 <= cos_t <= 1 + 1e-9
         for fresnel_on in (True, False):  # the Glass BSDF's, the Refraction BSDF's
-            out = bsdf.sample_dielectric(*wo[k], *n[k], eta, tints[0], tints[1], u[k], exact,
-                                         fresnel_on)
+            out = bsdf.sample_dielectric(*wo[k], *n[k], eta, tints[0], tints[1], np.ones(3),
+                                         u[k], exact, fresnel_on)
             wi, w = np.array(out[:3]), np.array(out[3:6])
             assert np.isfinite(wi).all() and np.isfinite(w).all()
             assert np.isclose(np.linalg.norm(wi), 1.0)
             # Weight R/p or T/(1-p) with p the lobes' mean: at most 3x the largest tint.
             assert np.all(w >= 0) and np.all(w <= 3.0 * max(tints.max(), 0.0) + 1e-9)
         # White tints: the weight is exactly 1 (energy conserved, no eta^2 factor).
-        out = bsdf.sample_dielectric(*wo[k], *n[k], eta, np.ones(3), np.ones(3), u[k], exact,
-                                     True)
+        out = bsdf.sample_dielectric(*wo[k], *n[k], eta, np.ones(3), np.ones(3), np.ones(3),
+                                     u[k], exact, True)
         assert np.allclose(out[3:6], 1.0)
 
 
