@@ -109,8 +109,9 @@ class MaterialSpec:
                 extra["coat_ior"] = float(k["coat_ior"])
             if k.get("sheen_layer"):
                 extra["sheen_layer"] = True
-            if "emission_program" in k:
-                extra["emission_program"] = k["emission_program"]
+            for key in ("emission_program", "tint_program"):
+                if key in k:
+                    extra[key] = k[key]
             return dataclasses.replace(m, **extra) if extra else m
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
@@ -136,7 +137,7 @@ def _is_medium(medium):
 # The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
 # with one reads UV maps.
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
-                "roughness_program", "height_program")
+                "roughness_program", "height_program", "tint_program")
 
 
 def default_material():
@@ -886,11 +887,10 @@ class _Reader:
                           f"supported; rendered as Microfiber")
             self.normal(node)
             colour, program = self.textured_colour(node, "Color")
-            if program is not None:
-                self.warn(f"node '{node.name}' input 'Color' varies over the surface; "
-                          f"rendered as its mean {_fmt(colour)}")
-            return MaterialSpec("sheen", name, {"colour": colour,
-                                                "roughness": self.unit(node, "Roughness", 0.5)})
+            roughness, roughness_program = self.textured_unit(node, "Roughness", 0.5)
+            return MaterialSpec("sheen", name, {
+                "colour": colour, **_with(program), "roughness": roughness,
+                **_with(roughness_program, "roughness_program")})
         if kind == "ShaderNodeBsdfTranslucent":
             self.normal(node)
             colour, program = self.textured_colour(node, "Color")
@@ -989,17 +989,15 @@ class _Reader:
             self.ignored(node, socket_name, neutral, rendered)
 
     def specular_tint(self, node):
-        """The Principled BSDF's Specular Tint: the metal's F82 edge tint and the F0 tint of
-        its dielectric and glass Fresnel (its mean where it varies, warned). White before
-        4.0, where it was a float."""
+        """The Principled BSDF's Specular Tint, the metal's F82 edge tint and the F0 tint of
+        its dielectric and glass Fresnel, as keywords: its constant (the mean where it
+        varies) and its program where it varies. White before 4.0, where it was a float."""
         sock = enabled_input(node, "Specular Tint")
         if sock is None or sock.type != "RGBA":
-            return (1.0, 1.0, 1.0)
+            return {"specular_tint": (1.0, 1.0, 1.0)}
         tint, program = self.textured_colour(node, "Specular Tint", (1.0, 1.0, 1.0))
-        if program is not None:
-            self.warn(f"node '{node.name}' input 'Specular Tint' varies over the surface; "
-                      f"rendered as its mean {_fmt(tint)}")
-        return tuple(max(t, 0.0) for t in tint)
+        return {"specular_tint": tuple(max(t, 0.0) for t in tint),
+                **_with(program, "tint_program")}
 
     def principled(self, node):
         """Cycles mixes the Principled BSDF's lobes linearly: metal x Metallic, glass x
@@ -1035,13 +1033,13 @@ class _Reader:
             base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("metal", name, {"base_colour": base, **_with(program),
                                                 **roughness, "multiscatter": multiscatter,
-                                                "specular_tint": tint})
+                                                **tint})
 
         def glass():
             base, program = self.textured_colour(node, "Base Color")
             return MaterialSpec("principled_glass", name, {
                 "base_colour": base, **_with(program), "ior": self.ior(node), **roughness,
-                "multiscatter": multiscatter, "specular_tint": tint})
+                "multiscatter": multiscatter, **tint})
 
         def either(first, second, fac, program):
             """first (1 - fac) and second (fac), or one alone where fac is 0 or 1."""
@@ -1064,8 +1062,8 @@ class _Reader:
 
     def coat(self, node, spec):
         """The Principled BSDF's coat over `spec` (Cycles: over every lobe but the sheen):
-        Coat Weight and Coat Roughness (either may vary), Coat IOR (at least 1, as Cycles
-        clamps it), Coat Tint (its mean where it varies, warned) and the Coat Normal's
+        Coat Weight, Coat Roughness and Coat Tint (any may vary), Coat IOR (at least 1, as
+        Cycles clamps it) and the Coat Normal's
         normal map (the Normal's where unlinked, as in Cycles). Emission below a coat is
         not dimmed by it (warned)."""
         if "Coat Weight" not in node.inputs:
@@ -1079,9 +1077,6 @@ class _Reader:
             self.warn(f"node '{node.name}' Coat IOR {ior:.3g} is below 1; using 1 (as Cycles)")
             ior = 1.0
         tint, tint_program = self.textured_colour(node, "Coat Tint", (1.0, 1.0, 1.0))
-        if tint_program is not None:
-            self.warn(f"node '{node.name}' input 'Coat Tint' varies over the surface; "
-                      f"rendered as its mean {_fmt(tint)}")
         lobe = MaterialSpec("coat_lobe", self.material.name, {
             "roughness": roughness, "ior": ior,
             **_with(roughness_program, "roughness_program")})
@@ -1096,13 +1091,13 @@ class _Reader:
             lobe.kwargs.update(normal_program=None, normal_strength=1.0)
             lobe.kwargs.pop("normal_uv")
         mix = self.mixed(spec, lobe, weight, 1.0, weight_program)
-        mix.kwargs.update(coat_ior=ior, coat_tint=tint)
+        mix.kwargs.update(coat_ior=ior, coat_tint=tint, **_with(tint_program, "tint_program"))
         return mix
 
     def sheen(self, node, spec):
         """The Principled BSDF's sheen over `spec` (Cycles' first layer: over the coat):
         Sheen Weight (which may vary; above 1 it scales the tint, the same closure), Sheen
-        Roughness and Sheen Tint (their means where they vary, warned)."""
+        Roughness and Sheen Tint (either may vary too)."""
         if "Sheen Weight" not in node.inputs:
             return spec
         weight, weight_program = self.textured_colour(node, "Sheen Weight", (0.0,) * 3)
@@ -1111,18 +1106,15 @@ class _Reader:
             return spec
         tint, tint_program = self.textured_colour(node, "Sheen Tint", (1.0, 1.0, 1.0))
         roughness, roughness_program = self.textured_unit(node, "Sheen Roughness", 0.5)
-        for socket, program, mean in (("Sheen Tint", tint_program, _fmt(tint)),
-                                      ("Sheen Roughness", roughness_program,
-                                       f"{roughness:.3g}")):
-            if program is not None:
-                self.warn(f"node '{node.name}' input '{socket}' varies over the surface; "
-                          f"rendered as its mean {mean}")
         if weight_program is not None:
             weight = min(weight, 1.0)
         elif weight > 1.0:
+            if tint_program is not None:
+                tint_program = shader_nodes.scaled(tint_program, weight)
             tint, weight = tuple(c * weight for c in tint), 1.0
-        lobe = MaterialSpec("sheen", self.material.name, {"colour": tint,
-                                                           "roughness": roughness})
+        lobe = MaterialSpec("sheen", self.material.name, {
+            "colour": tint, **_with(tint_program), "roughness": roughness,
+            **_with(roughness_program, "roughness_program")})
         mix = self.mixed(spec, lobe, weight, 1.0, weight_program)
         mix.kwargs.update(sheen_layer=True)
         return mix
@@ -1142,9 +1134,10 @@ class _Reader:
         mix.kwargs.update(kwargs)
         return mix
 
-    def dielectric(self, node, specular_tint=(1.0, 1.0, 1.0)):
+    def dielectric(self, node, specular_tint=None):
         """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer
-        (Cycles' Principled v2), its Fresnel under the Specular Tint."""
+        (Cycles' Principled v2), its Fresnel under the Specular Tint (specular_tint's
+        keywords)."""
         base, program = self.textured_colour(node, "Base Color")
         if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and self.rough(node):
             self.warn(f"node '{node.name}' distribution GGX is not supported for the "
@@ -1154,7 +1147,7 @@ class _Reader:
         return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), **self.roughness(node),
             "ior": self.ior(node), "specular_ior_level": level,
-            "specular_tint": tuple(specular_tint)})
+            **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)})})
 
 
 def convert(material, image_cache=None):

@@ -384,9 +384,12 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     if HAS_TEXTURES:
         roughness = shading.roughness_at(coat, f, u_b, v_b, mt.programs, g.uv, paths.svm,
                                          roughness)
+    tint = mt.coat_tint[mat, 0], mt.coat_tint[mat, 1], mt.coat_tint[mat, 2]
+    if HAS_TEXTURES:  # the Coat Tint may vary
+        tint = shading.tint_at(mat, f, u_b, v_b, mt.programs, g.uv, paths.svm, tint[0],
+                               tint[1], tint[2])
     albedo, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), coat, mt.layers,
-                                            roughness, mt.coat_ior[mat], weight,
-                                            mt.coat_tint[mat])
+                                            roughness, mt.coat_ior[mat], weight, tint)
     p = weight * albedo
     if u < p:
         return coat, u / p, 1.0 / albedo, 1.0 / albedo, 1.0 / albedo
@@ -408,9 +411,15 @@ def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     u_b, v_b = np.float64(bu), np.float64(bv)
     sx, sy, sz = shading_normal(f, u_b, v_b, sign, sc)
     sx, sy, sz = sheen_normal(f, u_b, v_b, sign, sx, sy, sz, lobe, sc, paths)
-    _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz),
-                                  mt.roughness[lobe])
-    tint = max(mt.colour[lobe, 0], max(mt.colour[lobe, 1], mt.colour[lobe, 2]))
+    roughness = mt.roughness[lobe]
+    t0, t1, t2 = mt.colour[lobe, 0], mt.colour[lobe, 1], mt.colour[lobe, 2]
+    if HAS_TEXTURES:  # the Sheen Tint and Roughness may vary
+        roughness = shading.roughness_at(lobe, f, u_b, v_b, mt.programs, g.uv, paths.svm,
+                                         roughness)
+        t0, t1, t2 = shading.colour_at(lobe, f, u_b, v_b, mt.programs, g.uv, paths.svm, t0,
+                                       t1, t2)
+    _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz), roughness)
+    tint = max(t0, max(t1, t2))
     p = min(weight * tint * albedo, 1.0)
     if u < p:
         return lobe, u / p, weight / p
@@ -584,32 +593,51 @@ def rough_lobe(x, k, c, sc, paths):
     roughness its program gives here where it has one; empty for others."""
     mt = sc.materials
     mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
-    textured = False
+    textured = tinted = False
     roughness = -1.0  # the table's own
     if HAS_TEXTURES and (k == PRINCIPLED or k == GLOSSY or k == ROUGH_METAL
                          or k == ROUGH_GLASS):
         textured = mt.programs.colour[x.mat, 0] >= 0
+        tinted = mt.programs.tint[x.mat, 0] >= 0
         roughness = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
                                          paths.svm, roughness)
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
-                             roughness, specular_tint_at(x, sc))
-    if HAS_ROUGH_METAL and k == ROUGH_METAL:
-        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured, c[0], c[1], c[2],
-                                   roughness, mt.reflection_tint[x.mat])
+                             roughness, specular_tint_at(x, sc, paths))
+    if HAS_ROUGH_METAL and k == ROUGH_METAL:  # (a varying tint needs its own Fss too)
+        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured or tinted, c[0], c[1],
+                                   c[2], roughness, metal_edge_at(x, sc, paths))
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         tints = glass_tints_at(x, c, textured, sc)
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers, tints[:3],
                                    tints[3:], roughness, mt.fresnel[x.mat], textured,
-                                   specular_tint_at(x, sc))
+                                   specular_tint_at(x, sc, paths))
     return bsdf.no_layer()
 
 
-def specular_tint_at(x, sc):
-    """The Principled BSDF's Specular Tint on vertex x's dielectric Fresnel (3 values;
-    white for every other material)."""
-    st = sc.materials.specular_tint
-    return st[x.mat, 0], st[x.mat, 1], st[x.mat, 2]
+def specular_tint_at(x, sc, paths):
+    """The Principled BSDF's Specular Tint on vertex x's dielectric Fresnel (3 values; its
+    program's result where it varies; white for every other material)."""
+    mt = sc.materials
+    st = mt.specular_tint
+    s0, s1, s2 = st[x.mat, 0], st[x.mat, 1], st[x.mat, 2]
+    if HAS_TEXTURES:
+        s0, s1, s2 = shading.tint_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                     paths.svm, s0, s1, s2)
+    return s0, s1, s2
+
+
+def metal_edge_at(x, sc, paths):
+    """A metal vertex's Specular Tint, the edge its F82 Fresnel bends toward (3 values, at
+    most 1 as Cycles takes it; its program's result where it varies)."""
+    mt = sc.materials
+    e = mt.reflection_tint
+    e0, e1, e2 = e[x.mat, 0], e[x.mat, 1], e[x.mat, 2]
+    if HAS_TEXTURES and mt.programs.tint[x.mat, 0] >= 0:
+        e0, e1, e2 = shading.tint_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                     paths.svm, e0, e1, e2)
+        e0, e1, e2 = min(e0, 1.0), min(e1, 1.0), min(e2, 1.0)
+    return e0, e1, e2
 
 
 def glass_tints_at(x, c, textured, sc):
@@ -802,7 +830,7 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
         shadowing = pdf_b * diffuse_shadowing(x, -1.0, wx, wy, wz, True)
         g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
     elif HAS_SHEEN and k == SHEEN:
-        a, b, albedo = sheen_at(x, sc)
+        a, b, albedo = sheen_at(x, sc, paths)
         pdf_b = bsdf.eval_sheen(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz, a, b)
         shadowing = albedo * pdf_b * diffuse_shadowing(x, 1.0, wx, wy, wz, True)
         g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
@@ -894,7 +922,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
     if HAS_SHEEN and k == SHEEN:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
-        a, b, albedo = sheen_at(x, sc)
+        a, b, albedo = sheen_at(x, sc, paths)
         wx, wy, wz, pdf, ok = bsdf.sample_sheen(x.wox, x.woy, x.woz, x.sx, x.sy, x.sz, x.nx,
                                                 x.ny, x.nz, a, b, ua, ub)
         albedo *= diffuse_shadowing(x, 1.0, wx, wy, wz, False)
@@ -911,7 +939,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:],
-            specular_tint_at(x, sc), u, EXACT_FRESNEL, mt.fresnel[x.mat])
+            specular_tint_at(x, sc, paths), u, EXACT_FRESNEL, mt.fresnel[x.mat])
         # A tilted normal (smooth, mapped or bumped) can refract a direction back above the
         # geometric surface: Cycles' bsdf_microfacet_sample drops it (as the rough lobe).
         below_m = wx * x.mx + wy * x.my + wz * x.mz < 0.0
@@ -919,7 +947,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         return wx, wy, wz, f0, f1, f2, DELTA_PDF, ok
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:  # the reflection tint is its Specular Tint (F82)
-        edge = mt.reflection_tint[x.mat]
+        edge = metal_edge_at(x, sc, paths)
         return (wx, wy, wz, bsdf.fresnel_f82(cos_o, c[0], bsdf.f82_tint_b(c[0], edge[0])),
                 bsdf.fresnel_f82(cos_o, c[1], bsdf.f82_tint_b(c[1], edge[1])),
                 bsdf.fresnel_f82(cos_o, c[2], bsdf.f82_tint_b(c[2], edge[2])), DELTA_PDF, True)
@@ -939,10 +967,16 @@ def diffuse_shadowing(x, side, wx, wy, wz, evaluated):
                                wz, True, evaluated)
 
 
-def sheen_at(x, sc):
-    """The sheen lobe of vertex x: (A, B, albedo) at its view (bsdf.sheen_ltc)."""
+def sheen_at(x, sc, paths):
+    """The sheen lobe of vertex x: (A, B, albedo) at its view (bsdf.sheen_ltc), at its
+    roughness there."""
+    mt = sc.materials
     cos_o = x.sx * x.wox + x.sy * x.woy + x.sz * x.woz
-    return bsdf.sheen_ltc(sc.materials.sheen_ltc, cos_o, sc.materials.roughness[x.mat])
+    roughness = mt.roughness[x.mat]
+    if HAS_TEXTURES:
+        roughness = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                         paths.svm, roughness)
+    return bsdf.sheen_ltc(mt.sheen_ltc, cos_o, roughness)
 
 
 def caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths):
@@ -1363,8 +1397,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     coat_layer, sheen_layer, sheen_normal,
     surface_interaction, shading_normal,
     mapped_normal, bumped_normal,
-    surface_colour, rough_lobe, glass_tints_at, specular_tint_at, handle_emission,
-    caustic_weight,
+    surface_colour, rough_lobe, glass_tints_at, specular_tint_at, metal_edge_at,
+    handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,

@@ -36,9 +36,13 @@ DELTA_IOR = 1e-4
 
 # The kinds whose colour may come from a shader program (Material.colour_program).
 TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal", "glass",
-                  "rough_glass", "translucent")
-# The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes.
-ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass")
+                  "rough_glass", "translucent", "sheen")
+# The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes
+# and the sheen.
+ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass", "sheen")
+# The kinds with a Specular Tint that may vary (Material.tint_program); a coat's mix has its
+# Coat Tint there.
+TINTED_KINDS = ("principled", "metal", "rough_metal", "glass", "rough_glass")
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
@@ -219,6 +223,9 @@ class Material:
     fac_program: Program | None = field(default=None, compare=False)
     scale: float = 1.0  # mix: the factor of the whole sum
     roughness_program: Program | None = field(default=None, compare=False)
+    # A Program whose result replaces the Specular Tint (principled, glass kinds:
+    # `specular_tint`; metal kinds: `reflection_tint`, at most 1) or a coat's `coat_tint`.
+    tint_program: Program | None = field(default=None, compare=False)
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
     sheen_layer: bool = False  # mix: Cycles' Principled sheen over components[0] (see above)
@@ -242,7 +249,7 @@ class Material:
 
     @classmethod
     def coated(cls, name, base, weight, roughness=0.03, ior=1.5, tint=(1.0, 1.0, 1.0),
-               weight_program=None, roughness_program=None):
+               weight_program=None, roughness_program=None, tint_program=None):
         """Cycles' Principled coat (Coat Weight, Roughness, IOR, Tint) over `base`: a mix
         whose second component is the coat's own lobe, a Principled specular layer over
         black, energy compensated (Cycles' bsdf_microfacet_setup_fresnel_dielectric
@@ -253,7 +260,8 @@ class Material:
             raise ValueError(f"material '{name}': a coat's IOR must be >= 1, got {ior!r}")
         m = cls.mix(name, base, cls.coat_lobe(name, roughness, ior, roughness_program), weight,
                     1.0, weight_program)
-        return dataclasses.replace(m, coat_ior=ior, coat_tint=tuple(tint))
+        return dataclasses.replace(m, coat_ior=ior, coat_tint=tuple(tint),
+                                   tint_program=tint_program)
 
     @classmethod
     def coat_lobe(cls, name, roughness=0.03, ior=1.5, roughness_program=None):
@@ -264,18 +272,21 @@ class Material:
 
     @classmethod
     def sheened(cls, name, base, weight, roughness=0.5, tint=(1.0, 1.0, 1.0),
-                weight_program=None):
+                weight_program=None, tint_program=None, roughness_program=None):
         """Cycles' Principled sheen (Sheen Weight, Roughness, Tint) over `base`: a mix whose
         second component is the sheen lobe (Material.sheen of colour `tint`)."""
-        m = cls.mix(name, base, cls.sheen(name, tint, roughness), weight, 1.0, weight_program)
+        lobe = cls.sheen(name, tint, roughness, tint_program, roughness_program)
+        m = cls.mix(name, base, lobe, weight, 1.0, weight_program)
         return dataclasses.replace(m, sheen_layer=True)
 
     @classmethod
-    def sheen(cls, name, colour=(1.0, 1.0, 1.0), roughness=0.5):
+    def sheen(cls, name, colour=(1.0, 1.0, 1.0), roughness=0.5, colour_program=None,
+              roughness_program=None):
         """Cycles' microfiber sheen (the Sheen BSDF, the Principled BSDF's sheen lobe):
         reflection by the linearly transformed cosine of roughness `roughness`, weighted by
-        its albedo at the view and `colour` (bsdf.eval_sheen)."""
-        return cls(name, "sheen", tuple(colour), roughness=float(roughness))
+        its albedo at the view and `colour` (bsdf.eval_sheen); either may vary (programs)."""
+        return cls(name, "sheen", tuple(colour), roughness=float(roughness),
+                   colour_program=colour_program, roughness_program=roughness_program)
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
@@ -292,15 +303,16 @@ class Material:
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
               emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None,
-              specular_tint=(1.0, 1.0, 1.0)):
+              specular_tint=(1.0, 1.0, 1.0), tint_program=None):
         """Principled metallic: smooth at Cycles' delta roughness, else rough; its Specular
-        Tint above 1 is 1, as Cycles takes it."""
+        Tint (or its program's result) above 1 is 1, as Cycles takes it."""
         rough = roughness > DELTA_ROUGHNESS or roughness_program is not None
         edge = tuple(min(float(t), 1.0) for t in specular_tint)
         return cls(name, "rough_metal" if rough else "metal", tuple(base_colour),
                    reflection_tint=edge, emission=tuple(emission), roughness=float(roughness),
                    multiscatter=bool(multiscatter), colour_program=colour_program,
-                   emission_program=emission_program, roughness_program=roughness_program)
+                   emission_program=emission_program, roughness_program=roughness_program,
+                   tint_program=tint_program)
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
@@ -332,19 +344,19 @@ class Material:
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
                          emission_program=None, roughness=0.0, multiscatter=True,
                          roughness_program=None, colour_program=None,
-                         specular_tint=(1.0, 1.0, 1.0)):
+                         specular_tint=(1.0, 1.0, 1.0), tint_program=None):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission,
         its Fresnel under the Specular Tint."""
         return cls._glass(name, "principled", base_colour, ior, roughness, roughness_program,
                           emission=tuple(emission), emission_program=emission_program,
                           multiscatter=bool(multiscatter), colour_program=colour_program,
-                          specular_tint=tuple(specular_tint))
+                          specular_tint=tuple(specular_tint), tint_program=tint_program)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
                    emission_program=None, roughness_program=None, multiscatter=True,
-                   specular_tint=(1.0, 1.0, 1.0)):
+                   specular_tint=(1.0, 1.0, 1.0), tint_program=None):
         """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
         the Specular Tint scales F0 too (tinted_fresnel)."""
@@ -357,7 +369,8 @@ class Material:
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
                    roughness=float(roughness), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
-                   multiscatter=bool(multiscatter), specular_tint=tuple(specular_tint))
+                   multiscatter=bool(multiscatter), specular_tint=tuple(specular_tint),
+                   tint_program=tint_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -507,6 +520,7 @@ class Materials:
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
     height_programs: list | None = None  # per row a Bump node's height Program or None
+    tint_programs: list | None = None  # per row a Specular or Coat Tint Program or None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -588,12 +602,17 @@ class Materials:
             if m.roughness_program is not None and m.kind not in ROUGH_KINDS:
                 raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
                                  f"vary (textured roughness: {', '.join(ROUGH_KINDS)})")
+        for m in materials:
+            if m.tint_program is not None and m.kind not in TINTED_KINDS and \
+                    not m.coat_ior > 0:
+                raise ValueError(f"material '{m.name}': a {m.kind} material has no specular or "
+                                 f"coat tint to vary")
         lists = (programs, emission_programs, normal_programs,
                  [m.fac_program for m in materials], [m.roughness_program for m in materials],
-                 [m.height_program for m in materials])
+                 [m.height_program for m in materials], [m.tint_program for m in materials])
         textured = any(p is not None for progs in lists for p in progs)
         (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
-         height_programs) = lists if textured else (None,) * len(lists)
+         height_programs, tint_programs) = lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -601,7 +620,7 @@ class Materials:
                    programs, emission_programs, normal_programs,
                    np.array([float(m.normal_strength) for m in materials]), *medium,
                    fac_programs=fac_programs, roughness_programs=roughness_programs,
-                   height_programs=height_programs,
+                   height_programs=height_programs, tint_programs=tint_programs,
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
@@ -621,9 +640,10 @@ class Materials:
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness, height), each a list with one Program or None per row."""
+        roughness, height, tint), each a list with one Program or None per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
-                self.fac_programs, self.roughness_programs, self.height_programs)
+                self.fac_programs, self.roughness_programs, self.height_programs,
+                self.tint_programs)
 
     def __len__(self):
         return len(self.kind)
@@ -1124,8 +1144,8 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        colour, emission, normal, fac, roughness, height = materials.program_lists()
-        return uv, pack(colour, emission, names.index, normal, fac, roughness, height)
+        colour, emission, normal, fac, roughness, height, tint = materials.program_lists()
+        return uv, pack(colour, emission, names.index, normal, fac, roughness, height, tint)
 
 
 def _corner_coordinates(m, t) -> np.ndarray:

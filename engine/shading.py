@@ -192,22 +192,24 @@ class Program:
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
-#   colour, emission, normal, fac, roughness, height (k, 3) int64 per material: that
-#   input's program as first instruction (-1: none), end, result register.
-SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height")
+#   colour, emission, normal, fac, roughness, height, tint (k, 3) int64 per material: that
+#   input's program as first instruction (-1: none), end, result register. tint: the
+#   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint.
+SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
 def pack(colour_programs: list, emission_programs: list | None, uv_index,
          normal_programs: list | None = None, fac_programs: list | None = None,
-         roughness_programs: list | None = None,
-         height_programs: list | None = None) -> ProgramTable:
-    """Pack the materials' colour, emission, normal-map, mix-factor, roughness and bump
-    height programs (one per material, or None) into a ProgramTable; each program's UV map
-    names become scene-wide map indices through `uv_index(name)`."""
+         roughness_programs: list | None = None, height_programs: list | None = None,
+         tint_programs: list | None = None) -> ProgramTable:
+    """Pack the materials' colour, emission, normal-map, mix-factor, roughness, bump
+    height and tint programs (one per material, or None) into a ProgramTable; each
+    program's UV map names become scene-wide map indices through `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
-                                       fac_programs, roughness_programs, height_programs)]
+                                       fac_programs, roughness_programs, height_programs,
+                                       tint_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -822,6 +824,13 @@ def emission_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
 def normal_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
     """The colour feeding material mat's Normal Map node at the hit, or c without one."""
     return result_at(pt.normal, mat, f, u, v, pt, uv, reg, c0, c1, c2)
+
+
+@njit(**INLINE)
+def tint_at(mat, f, u, v, pt, uv, reg, c0, c1, c2):
+    """Material mat's Specular Tint (a coat's mix: its Coat Tint) at the hit: its tint
+    program's result (negative channels 0) or the constant c."""
+    return result_at(pt.tint, mat, f, u, v, pt, uv, reg, c0, c1, c2)
 
 
 @njit(**INLINE)

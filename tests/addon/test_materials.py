@@ -879,8 +879,8 @@ def test_principled_coat_is_a_layer_over_its_lobes(fresh, core):
 
 def test_principled_sheen_is_a_layer_over_the_coat(fresh, core):
     """Sheen Weight, Roughness and Tint make a sheen layer over the coat (Cycles' first
-    layer); a weight above 1 scales the tint (the same closure); a textured tint is its
-    mean, warned. The Sheen BSDF is the same lobe alone (Ashikhmin warned)."""
+    layer); a weight above 1 scales the tint (the same closure), a textured one too. The
+    Sheen BSDF is the same lobe alone (Ashikhmin warned)."""
     mat, node = node_material("Velvet", "ShaderNodeBsdfPrincipled", **{
         "Sheen Weight": 0.7, "Sheen Roughness": 0.3, "Sheen Tint": (1.0, 0.8, 0.6, 1.0),
         "Coat Weight": 0.5})
@@ -901,8 +901,11 @@ def test_principled_sheen_is_a_layer_over_the_coat(fresh, core):
     assert spec.kwargs["second"].kwargs["colour"] == pytest.approx((2.0, 1.6, 1.2))
     checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
     mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Sheen Tint"])
-    _, warnings = convert(mat)
-    assert len(warnings) == 1 and "'Sheen Tint'" in warnings[0], warnings
+    spec, warnings = convert(mat)
+    assert warnings == []
+    program = spec.kwargs["second"].kwargs["colour_program"]
+    got = core.shading.evaluate(program, (0.1, 0.1, 0.1))[program.out:program.out + 3]
+    assert any(np.allclose(got, 2.0 * np.array(c)) for c in ((0.8,) * 3, (0.2,) * 3)), got
     dust, dust_node = node_material("Dust", "ShaderNodeBsdfSheen", Roughness=0.4,
                                     Color=(0.5, 0.6, 0.7, 1.0))
     spec, warnings = convert(dust)

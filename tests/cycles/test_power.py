@@ -580,6 +580,21 @@ def _dielectric_specular_tint_white(scene, settings):
     return scene, settings
 
 
+def _tints_as_their_means(scene, settings):
+    """Every textured Specular and Coat Tint its mean (before their programs)."""
+    scene.programs = scene.programs._replace(tint=np.full_like(scene.programs.tint, -1))
+    return scene, settings
+
+
+def _sheen_as_its_means(scene, settings):
+    """Textured sheen colours and roughness their means (textured_tints textures nothing
+    else's colour or roughness)."""
+    pt = scene.programs
+    scene.programs = pt._replace(colour=np.full_like(pt.colour, -1),
+                                 roughness=np.full_like(pt.roughness, -1))
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -697,6 +712,8 @@ INJECTIONS = {
     "specular_tint_white": ("specular_tint", _specular_tint_white, None),
     "dielectric_specular_tint_white": ("specular_tint_dielectric",
                                        _dielectric_specular_tint_white, None),
+    "tints_as_their_means": ("textured_tints", _tints_as_their_means, None),
+    "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

@@ -697,6 +697,47 @@ def specular_tint_dielectric():
         _sphere(mat, (-0.63 + 0.42 * i, 0.0, 0.2), 0.2, f"Ball{i}")
 
 
+def _checker_on(mat, socket, colour1, colour2, scale=4.0):
+    """`mat` whose shader's input `socket` is a Checker Texture on the UV map: colour1 and
+    colour2 (RGBA) in squares."""
+    tree = mat.node_tree
+    node = next(n for n in tree.nodes if socket in n.inputs)
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = colour1
+    checker.inputs["Color2"].default_value = colour2
+    checker.inputs["Scale"].default_value = scale
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], checker.inputs["Vector"])
+    tree.links.new(checker.outputs["Color"], node.inputs[socket])
+    return mat
+
+
+def textured_tints():
+    """Tints and sheen that vary over the surface (issue 14, point 1: every Principled input
+    linkable), each from a Checker on the UV map: a velvet whose Sheen Tint and Sheen
+    Roughness vary, a Sheen BSDF whose Color and Roughness vary, a coat whose Coat Tint
+    varies (red and green squares), and a partly metallic ball whose Specular Tint varies
+    (its metal and dielectric lobes both; large squares: the tints' effect is small)."""
+    _box()
+    velvet = _principled("Velvet", **{"Base Color": (0.05, 0.02, 0.08, 1.0),
+                                      "Roughness": 0.7, "Sheen Weight": 1.0})
+    _checker_on(velvet, "Sheen Tint", (1.0, 0.6, 0.2, 1.0), (0.3, 0.6, 1.0, 1.0))
+    _checker_on(velvet, "Sheen Roughness", (0.15, 0.15, 0.15, 1.0), (0.9, 0.9, 0.9, 1.0), 2.0)
+    dust = bs.material("Dust", "ShaderNodeBsdfSheen")
+    _checker_on(dust, "Color", (0.9, 0.9, 0.2, 1.0), (0.2, 0.9, 0.9, 1.0))
+    _checker_on(dust, "Roughness", (0.2, 0.2, 0.2, 1.0), (0.8, 0.8, 0.8, 1.0), 2.0)
+    lacquer = _principled("Lacquer", **{"Base Color": (0.8, 0.8, 0.8, 1.0), "Roughness": 0.5,
+                                        "Coat Weight": 1.0, "Coat Roughness": 0.1})
+    _checker_on(lacquer, "Coat Tint", (0.9, 0.2, 0.2, 1.0), (0.2, 0.9, 0.2, 1.0), 1.5)
+    steel = _principled("Steel", **{"Base Color": (0.7, 0.7, 0.7, 1.0), "Roughness": 0.2,
+                                    "Metallic": 0.6})
+    _checker_on(steel, "Specular Tint", (1.0, 0.2, 0.1, 1.0), (0.1, 0.4, 3.0, 1.0), 1.5)
+    for i, mat in enumerate((velvet, dust, lacquer, steel)):
+        obj = bpy.data.objects.new(f"Ball{i}", _uv_sphere_mesh(f"Ball{i}", 0.2))
+        obj.location = (-0.63 + 0.42 * i, 0.0, 0.2)
+        obj.data.materials.append(mat)
+        bpy.context.scene.collection.objects.link(obj)
+
+
 def _with_volume(mat, shader, **inputs):
     """`mat` with a `shader` volume node on its Material Output's Volume."""
     tree = mat.node_tree
@@ -1901,6 +1942,7 @@ _add(Variant("bump", bump, max_bounces=8, samples=2048, cycles_samples=4096))
 _add(Variant("specular_tint", specular_tint, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("specular_tint_dielectric", specular_tint_dielectric, max_bounces=8, samples=1024,
              cycles_samples=2048))
+_add(Variant("textured_tints", textured_tints, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
