@@ -1229,9 +1229,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
     loop, sample light, sample BSDF. Returns (paths that go on, shadow rays queued)."""
     if PROFILE:
         c_loop = _cycles()
-    # int64, not the literal 0: the stages compiled apart (scatter_in_medium) would
-    # otherwise compile once more for a literal argument.
-    out = n_shadow = np.int64(0)
+    out = n_shadow = np.int64(0)  # a literal 0 would compile scatter_in_medium twice
     for i in range(m):
         row = paths.live[i]
         f = prim[i]
