@@ -25,8 +25,8 @@ Fallbacks:
     transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes,
     and a Sheen Weight > 0 (or textured) Cycles' microfiber sheen over that.
     Specular Tint bends the metal's F82 Fresnel and scales the dielectric and glass
-    Fresnel's F0 (Cycles' generalized Schlick). Inputs Specula does not render (Subsurface, Anisotropic, Thin Film,
-    Diffuse Roughness) warn when used.
+    Fresnel's F0 (Cycles' generalized Schlick). Inputs Specula does not render
+    (Subsurface, Anisotropic, Thin Film, Diffuse Roughness) warn when used.
   * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).

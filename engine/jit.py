@@ -9,11 +9,16 @@ Python: the same image, about two orders of magnitude slower (README, "Platforms
 
 from __future__ import annotations
 
+import glob
+import hashlib
+import os
+
 try:
     from llvmlite import ir
     from numba import njit, types
-    from numba.core import cgutils
+    from numba.core import caching, cgutils, config
     from numba.extending import intrinsic
+    from numba.misc.appdirs import AppDirs
     NUMBA = True
 except ImportError:  # pragma: no cover - exercised on platforms without numba
     NUMBA = False
@@ -41,4 +46,87 @@ JIT = dict(ALLOCATING, _nrt=False)
 # arrays cost ~100 ns a call, measured, more than the rest of a light sample).
 INLINE = dict(JIT, inline="always")
 
-__all__ = ["ALLOCATING", "INLINE", "JIT", "NUMBA", "cgutils", "intrinsic", "ir", "njit", "types"]
+
+ENGINE_DIR = os.path.dirname(os.path.abspath(__file__))
+
+
+def _sources_hash() -> str:
+    h = hashlib.sha256()
+    for path in sorted(glob.glob(os.path.join(ENGINE_DIR, "*.py"))):
+        with open(path, "rb") as f:
+            h.update(f.read())
+    return h.hexdigest()[:8]
+
+
+# 8 hex digits of the core's sources as imported: a changed formula anywhere gets new kernels
+# (specialise.py names each plan's kernel with it) and a new cache folder (below).
+SOURCE_HASH = _sources_hash()
+
+
+def cache_root() -> str:
+    """Where the core's compiled functions are cached: beside numba's own user-wide cache
+    (NUMBA_CACHE_DIR where set), in a folder named by the core's sources."""
+    if not NUMBA:
+        return None
+    base = config.CACHE_DIR or AppDirs(appname="numba", appauthor=False).user_cache_dir
+    return os.path.join(base, f"specula-{SOURCE_HASH}")
+
+
+if NUMBA:
+    class EngineCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
+        """numba's cache for the core's own functions, found by the core's sources and not
+        by the folder they were installed in: numba's locators name the cache after the
+        source folder, so the same core installed twice (Blender 4.2 and 5.0 beside each
+        other, or reinstalled) compiled every kernel again, the generic one taking minutes.
+        Entries still carry numba's stamp (the source file's content hash) and version."""
+
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            self._cache_path = cache_root()
+
+        def get_cache_path(self):
+            return self._cache_path
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if os.path.dirname(os.path.abspath(py_file)) != ENGINE_DIR:
+                return None  # not the core's (a test's own compiled helper)
+            return super().from_function(py_func, py_file)  # None where not writable
+
+    if EngineCacheLocator not in caching.CacheImpl._locator_classes:
+        caching.CacheImpl._locator_classes.insert(0, EngineCacheLocator)
+
+
+# Cache folders of other sources (older versions, a developer's earlier edits) kept beside
+# this one's: the most recently used this many, so that switching back is free; the rest
+# are removed.
+KEPT_CACHES = 6
+
+
+def prune_caches(root: str | None = None, keep: int = KEPT_CACHES) -> list:
+    """Mark this core's cache folder used and remove all but the `keep` most recently used
+    other `specula-*` folders beside it; returns the removed paths. Never raises (a cache
+    another process is reading, or a read-only folder, is left as it is)."""
+    import shutil
+    import time
+    root = root or cache_root()
+    if root is None:
+        return []
+    parent, own = os.path.dirname(root), os.path.basename(root)
+    try:
+        if os.path.isdir(root):
+            now = time.time()
+            os.utime(root, (now, now))
+        others = [e for e in os.scandir(parent)
+                  if e.name.startswith("specula-") and e.name != own and e.is_dir()]
+    except OSError:
+        return []
+    removed = []
+    for entry in sorted(others, key=lambda e: e.stat().st_mtime, reverse=True)[keep:]:
+        shutil.rmtree(entry.path, ignore_errors=True)
+        removed.append(entry.path)
+    return removed
+
+__all__ = ["ALLOCATING", "INLINE", "JIT", "NUMBA", "SOURCE_HASH", "cache_root", "cgutils",
+           "intrinsic", "ir", "njit", "prune_caches", "types"]

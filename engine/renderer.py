@@ -25,7 +25,7 @@ from . import kernels
 from .accel import Accel
 from .camera import CameraModel
 from .film import Film, Pass
-from .jit import NUMBA
+from .jit import NUMBA, prune_caches
 from .lights import LightSampler
 from .plan import Plan, make_plan
 from .scene import Camera, Material, RenderSettings, Scene, SceneBuilder, World
@@ -481,7 +481,8 @@ def warm_up() -> None:
     """Load the generic kernel now (from numba's cache, or compile it on the first run
     ever) by rendering a 4x3 image of one emissive triangle with it. The add-on calls it in
     the background when it registers, so a render can start with it while the kernel made
-    for its scene loads or compiles."""
+    for its scene loads or compiles. Then the cache folders of other core sources are
+    pruned (jit.prune_caches)."""
     b = SceneBuilder()
     m = b.add_material(Material.diffuse("warm-up", (0.5, 0.5, 0.5), emission=(1, 1, 1)))
     b.add_mesh("warm-up", np.array([[-1.0, -1, -2], [1, -1, -2], [0, 1, -2]]),
@@ -489,3 +490,4 @@ def warm_up() -> None:
     camera = Camera(use_dof=True, fstop=1.0, focus_distance=2.0)
     render(b.build(camera, World((0.1, 0.1, 0.1))),
            RenderSettings(width=4, height=3, samples=2, threads=1, kernel="generic"))
+    prune_caches()

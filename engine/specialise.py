@@ -11,26 +11,13 @@ checks only the stamp of the file that defines a function, not of the functions 
 
 from __future__ import annotations
 
-import glob
-import hashlib
-import os
 import types
 
+from . import jit
 from .jit import njit
 
-_SOURCES = sorted(glob.glob(os.path.join(os.path.dirname(os.path.abspath(__file__)), "*.py")))
-
-
-def _source_hash() -> str:
-    h = hashlib.sha256()
-    for path in _SOURCES:
-        with open(path, "rb") as f:
-            h.update(f.read())
-    return h.hexdigest()[:8]
-
-
-# 8 hex digits of the core's sources as imported: a changed formula anywhere gets new kernels.
-SOURCE_HASH = _source_hash()
+# (jit.SOURCE_HASH: 8 hex digits of the core's sources as imported.)
+SOURCE_HASH = jit.SOURCE_HASH
 
 
 def specialise(functions: dict, namespace: dict, constants: dict, tag: str,

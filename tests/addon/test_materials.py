@@ -823,7 +823,8 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Anisotropic", 0.5), ("Thin Film Thickness", 300.0),
+    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Anisotropic", 0.5),
+    ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")

@@ -517,3 +517,56 @@ def test_without_numba_the_same_functions_run_as_python(tmp_path):
         out[jit] = np.array(json.loads(run.stdout.strip().splitlines()[-1]))
     np.testing.assert_allclose(out["1"], out["0"], rtol=1e-12, atol=1e-15)
     assert out["0"].max() > 0
+
+
+# ----------------------------------------------------------------- the kernels' cache
+def test_a_copy_of_the_core_elsewhere_finds_the_same_kernel_cache(tmp_path):
+    """numba names its cache after the source folder, so the same core installed in two
+    places (the extension in Blender 4.2 and in 5.0, a reinstall) compiled every kernel
+    again: minutes for the generic one. The core's own locator (jit.EngineCacheLocator)
+    finds them by the sources instead: a copy of engine/ elsewhere sees the same cache
+    folder and the same kernel files."""
+    import shutil
+    import subprocess
+    import sys
+
+    from engine import jit, kernels
+
+    shutil.copytree(jit.ENGINE_DIR, tmp_path / "engine",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from engine import jit, kernels; "
+            "k = kernels.Kernel(kernels.generic_constants()); "
+            "print(jit.ENGINE_DIR); print(k.shade._cache._cache_path); print(k._marker())")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
+                         text=True, timeout=300, check=True).stdout.split("\n")
+    here = kernels.Kernel(kernels.generic_constants())
+    assert out[0] == str(tmp_path / "engine")  # the copy ran, not this checkout
+    assert out[1] == here.shade._cache._cache_path == jit.cache_root()
+    assert out[2] == here._marker()
+
+
+def test_old_cache_folders_are_pruned(tmp_path):
+    """Cache folders of other sources beside this one's: the most recently used few stay,
+    this one is marked used, the rest go; folders that are not the core's are left."""
+    import os
+    import time
+
+    from engine import jit
+
+    root = tmp_path / "specula-0000mine"
+    root.mkdir()
+    now = time.time()
+    for i in range(jit.KEPT_CACHES + 3):
+        old = tmp_path / f"specula-{i:08x}"
+        old.mkdir()
+        (old / "kernel.nbc").write_bytes(b"x")
+        os.utime(old, (now - 1000 * (i + 1), now - 1000 * (i + 1)))
+    (tmp_path / "numba-other").mkdir()
+    os.utime(root, (now - 10 ** 6, now - 10 ** 6))
+    removed = jit.prune_caches(str(root))
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert sorted(os.path.basename(p) for p in removed) == \
+        [f"specula-{i:08x}" for i in range(jit.KEPT_CACHES, jit.KEPT_CACHES + 3)]
+    assert left == sorted(["numba-other", "specula-0000mine"] +
+                          [f"specula-{i:08x}" for i in range(jit.KEPT_CACHES)])
+    assert root.stat().st_mtime > now - 60  # marked used
