@@ -77,6 +77,7 @@ class ExportedScene:
     warnings: list = field(default_factory=list)
     lights: list = field(default_factory=list)  # keyword dicts for core.Light
     environment: dict | None = None  # keyword arguments for core.World's map, if any
+    world_volume: dict | None = None  # the world's Volume (core.World.volume), if any
 
     @property
     def num_triangles(self):
@@ -301,6 +302,10 @@ class _Exporter:
         self.out.camera = camera_settings(self.scene, self.depsgraph, self.warn)
         self.out.world_colour = world_colour(self.scene.world, self.warn)
         self.out.environment = world_environment(self.scene.world, self.warn)
+        volume, notes = materials.world_volume(self.scene.world, self._image_means)
+        self.out.world_volume = volume
+        for note in notes:
+            self.warn(note)
         return self.out
 
     def geometry(self, inst, obj):
@@ -723,7 +728,8 @@ def to_core(exported: ExportedScene, core):
                                                      exported.materials))
     for spec in exported.lights:
         builder.add_light(core.Light(**spec))
-    world = core.World(exported.world_colour, **(exported.environment or {}))
+    world = core.World(exported.world_colour, **(exported.environment or {}),
+                       volume=exported.world_volume)
     scene = builder.build(core.Camera(**exported.camera), world)
     return scene, list(builder.warnings)
 

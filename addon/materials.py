@@ -520,17 +520,19 @@ class _Constants:
 
 
 class _Reader:
-    """Reads one material, collecting warnings that name it."""
+    """Reads one material (or a world's volume: `label` "world"), collecting warnings that
+    name it."""
 
-    def __init__(self, material, image_cache=None):
+    def __init__(self, material, image_cache=None, label="material"):
         self.material = material
+        self.label = label
         self.warnings = []
         self.constants = _Constants({} if image_cache is None else image_cache)
         self.normal_map = None  # set by normal(): the shader's tangent-space normal map
 
     def warn(self, text):
         """Record a warning once (a Principled BSDF's lobes read the same inputs)."""
-        text = f"material '{self.material.name}': {text}"
+        text = f"{self.label} '{self.material.name}': {text}"
         if text not in self.warnings:
             self.warnings.append(text)
 
@@ -1148,6 +1150,22 @@ class _Reader:
             "base_colour": base, **_with(program), **self.roughness(node),
             "ior": self.ior(node), "specular_ior_level": level,
             **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)})})
+
+
+def world_volume(world, image_cache=None):
+    """(the world's Volume as MEDIUM_KEYS keywords, or None; warnings naming the world):
+    read as a material's Volume is, from the World Output's Volume input."""
+    tree = None if world is None else world.node_tree
+    if tree is None or not (bpy.app.version >= (5, 0) or world.use_nodes):
+        return None, []
+    out = tree.get_output_node('CYCLES')
+    sock = None if out is None else out.inputs.get("Volume")
+    link = None if sock is None else live_link(sock)
+    if link is None:
+        return None, []
+    reader = _Reader(world, image_cache, label="world")
+    medium = reader.volume(link)
+    return (medium if _is_medium(medium) else None), reader.warnings
 
 
 def convert(material, image_cache=None):

@@ -127,9 +127,10 @@ MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
                                             "sheen_ltc specular_tint")
-# caustics: caustics.CausticData (n_light 0 without light tracing).
+# caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
+# volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
-                                    "caustics")
+                                    "caustics camera_media")
 # One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
 # current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
 # last BSDF sample (inf: delta or camera), the passes, and, for the weight against light
@@ -232,6 +233,9 @@ def generate_camera_rays(pixels, sample, seed, centred, sc, paths):
             paths.dir32[i, j] = dj
             paths.d64[i, j] = dj
         paths.tmax32[i] = min(tmax, 3e38)
+        if HAS_VOLUMES:  # in the media around the camera (media.enclosing)
+            for j in range(media.MEDIA_STACK):
+                paths.media[i, j] = sc.camera_media[j]
         if DEBUG:
             _debug_mark(paths, i, 1, paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2])
 

@@ -29,7 +29,8 @@ from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, P
                          SceneData, ShadowRays)
 from .jit import INLINE
 from .lights import BOUND_COLUMNS, COLUMNS, Emitters
-from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX
+from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX, enclosing
+from .plan import entered_media
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
 from .shading import MAX_REGISTERS, SLOTS, ProgramTable
@@ -245,9 +246,15 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         caustics = caustic_data(settings.width * settings.height, emitters)
     elif generic:
         caustics = no_caustic_data()
+    camera = cam.data()
+    camera_media = np.full(MEDIA_STACK, -1, np.int64)
+    if plan.volumes:
+        camera_media = enclosing(camera.position, scene.vertices, scene.material_index,
+                                 entered_media(scene), scene.world_medium)
     return c_contiguous(SceneData(
-        geometry, materials, em, np.asarray(scene.world.colour, np.float64), cam.data(),
-        PixelFilter(settings.filter_type, settings.filter_width).table(), caustics))
+        geometry, materials, em, np.asarray(scene.world.colour, np.float64), camera,
+        PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
+        camera_media))
 
 
 def c_contiguous(data):

@@ -20,8 +20,8 @@ channels at once (the channel sampled is one of three strategies, combined by th
 heuristic). Emission adds its integral along the segment, sigma_e (1 - T) / sigma_t
 (Cycles' volume_emission_integrate).
 
-A path starts outside every medium (Cycles traces the camera's own stack; a camera inside
-a volume is not supported).
+A camera path starts in the media around the camera (`enclosing`, as Cycles'
+volume_stack_init finds them) and in the world's volume, which fills all space.
 """
 
 from __future__ import annotations
@@ -58,6 +58,40 @@ def medium_table(absorption, scattering, anisotropy, emission) -> np.ndarray:
     t[:, ANISOTROPY] = g
     t[:, EMISSION:EMISSION + 3] = np.asarray(emission, np.float64)
     return t
+
+
+def enclosing(point, vertices, material_index, rows, world_row=-1) -> np.ndarray:
+    """The volume stack (MEDIA_STACK material rows, -1 empty) of a path starting at
+    `point`: the world's volume (`world_row`, -1 for none), then every medium of `rows`
+    (materials whose medium a path can enter) whose mesh a ray from the point along +z
+    leaves through a back face before entering it through a front one (Cycles'
+    integrator_volume_stack_init, keyed by material rather than object). vertices (t, 3,
+    3) and material_index (t,): the scene's triangles, in the point's frame."""
+    stack = [int(world_row)] if world_row >= 0 else []
+    chosen = np.isin(material_index, np.asarray(rows, np.int64))
+    v = np.asarray(vertices, np.float64)[chosen]
+    mats = np.asarray(material_index)[chosen]
+    if len(v):
+        p = np.asarray(point, np.float64)
+        e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+        # Moller-Trumbore against the direction (0, 0, 1): d x e2 = (-e2y, e2x, 0).
+        pv = np.stack([-e2[:, 1], e2[:, 0], np.zeros(len(v))], axis=1)
+        det = np.einsum("ij,ij->i", e1, pv)
+        safe = np.where(np.abs(det) > 1e-300, det, 1.0)
+        s = p - v[:, 0]
+        u = np.einsum("ij,ij->i", s, pv) / safe
+        q = np.cross(s, e1)
+        w, t = q[:, 2] / safe, np.einsum("ij,ij->i", e2, q) / safe
+        hit = (np.abs(det) > 1e-300) & (u >= 0) & (w >= 0) & (u + w <= 1) & (t > 0)
+        leaving = np.cross(e1, e2)[:, 2] > 0  # the face's front looks along the ray
+        enclosed = set()
+        for k in np.flatnonzero(hit)[np.argsort(t[hit], kind="stable")]:
+            mat = int(mats[k])
+            if not leaving[k]:
+                enclosed.add(mat)
+            elif mat not in enclosed and mat not in stack and len(stack) < MEDIA_STACK:
+                stack.append(mat)
+    return np.array(stack + [-1] * (MEDIA_STACK - len(stack)), np.int64)
 
 
 def has_medium(rows: np.ndarray) -> np.ndarray:

@@ -179,6 +179,20 @@ class Plan:
         return d
 
 
+def entered_media(scene: Scene, medium=None) -> list:
+    """The materials (top rows) on the scene's triangles whose medium a path can enter:
+    only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
+    medium is its own row's, entered through any transmitting component."""
+    m = scene.materials
+    medium = m.medium if medium is None else medium
+    if medium is None:
+        return []
+    return [int(top) for top in np.unique(scene.material_index)
+            if has_medium(medium[top:top + 1])[0]
+            and bool(np.any(np.isin(m.kind[m.reachable([top])],
+                                    (GLASS, ROUGH_GLASS, TRANSPARENT, BOUNDARY))))]
+
+
 def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     used = scene.materials.reachable(np.unique(scene.material_index))
     kinds = set(scene.materials.kind[used].tolist())
@@ -201,14 +215,11 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     specular = bool(kinds & {MIRROR, METAL, GLASS})
     normal_maps = scene.programs is not None and bool(np.any(
         (scene.programs.normal[used, 0] >= 0) | (scene.programs.height[used, 0] >= 0)))
-    # Only a transmitting surface lets a path into its medium (Cycles: the same); a mix's
-    # medium is its own row's, entered through any transmitting component.
     m = scene.materials
     medium = m.medium  # (built from the materials' fields: once)
-    entered = [top for top in np.unique(scene.material_index)
-               if medium is not None and has_medium(medium[top:top + 1])[0]
-               and bool(np.any(np.isin(m.kind[m.reachable([top])],
-                                       (GLASS, ROUGH_GLASS, TRANSPARENT, BOUNDARY))))]
+    entered = entered_media(scene, medium)
+    if scene.world_medium >= 0:  # every path starts in the world's volume
+        entered.append(scene.world_medium)
     volumes = bool(entered)
     scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)

@@ -783,14 +783,29 @@ class World:
     """Background: escaped rays take radiance `colour` (colour x strength in Blender), or,
     with `environment` (H, W, 3) float radiance (strength applied, row 0 at the bottom),
     an equirectangular map looked up in the frame `texture_from_world` (3, 3), which is
-    importance-sampled as a light."""
+    importance-sampled as a light. `volume`: the world's Volume, a homogeneous medium
+    filling all space (Material.boundary's medium keywords: absorption, scattering,
+    anisotropy, volume_emission), or None; every path starts in it, as in Cycles, where it
+    also dims distant light to nothing and the background to black unless it scatters."""
 
     colour: tuple = (0.0, 0.0, 0.0)
     environment: np.ndarray | None = None
     texture_from_world: np.ndarray | None = None
+    volume: dict | None = None
+
+    def medium(self) -> Material | None:
+        """The world's volume as a material row (none around it), or None."""
+        if not self.volume:
+            return None
+        m = Material.boundary("world volume", **self.volume)
+        if not (max(m.absorption) > 0 or max(m.scattering) > 0 or max(m.volume_emission) > 0):
+            return None
+        return m
 
     def validate(self) -> None:
         _colour(self.colour, "world colour")
+        if self.volume:
+            Materials.from_list([self.medium() or Material("world")])  # its values
         if self.environment is not None:
             env = np.asarray(self.environment)
             if env.ndim != 3 or env.shape[2] != 3 or env.shape[0] < 1 or env.shape[1] < 1:
@@ -950,6 +965,8 @@ class Scene:
     uv: np.ndarray | None = None
     programs: ProgramTable | None = None
     tangents: np.ndarray | None = None
+    # The world volume's row of `materials` (World.volume; on no triangle), or -1.
+    world_medium: int = -1
 
     def __post_init__(self):
         if self.terminator_offset is None:
@@ -1061,12 +1078,14 @@ class SceneBuilder:
         camera.validate()
         world = world or World()
         world.validate()
-        materials = Materials.from_list(self._materials)
+        world_medium = world.medium()
+        given = self._materials + ([world_medium] if world_medium is not None else [])
+        materials = Materials.from_list(given)
         meshes = self._meshes
         for name, _, _, _, _, mi, _ in meshes:
-            if len(mi) and (mi.min() < 0 or mi.max() >= len(materials)):
+            if len(mi) and (mi.min() < 0 or mi.max() >= max(len(self._materials), 1)):
                 raise ValueError(f"object '{name}': material index out of range "
-                                 f"0..{len(materials) - 1}")
+                                 f"0..{max(len(self._materials), 1) - 1}")
         counts = [len(m[2]) for m in meshes]
         total = sum(counts)
         # Recentre before embree's float32 cast so far-from-origin scenes keep precision:
@@ -1104,7 +1123,8 @@ class SceneBuilder:
                              else np.zeros((0, 3))),
             shared_triangles=(np.concatenate([m[2] + o for m, o in zip(meshes, offsets)])
                               .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)),
-            uv=uv, programs=programs, tangents=self._gathered_tangents(materials, counts))
+            uv=uv, programs=programs, tangents=self._gathered_tangents(materials, counts),
+            world_medium=len(given) - 1 if world_medium is not None else -1)
 
     def _gathered_tangents(self, materials: Materials, counts):
         """The scene's (t, 3, 4) tangents where some material has a normal map, else None.

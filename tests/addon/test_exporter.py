@@ -345,6 +345,37 @@ def test_world_background_colour_times_strength(fresh):
     assert export(fresh).world_colour == (0.0, 0.0, 0.0)
 
 
+def test_world_volume_is_read_as_a_materials_volume(fresh, core):
+    """The World Output's Volume: a homogeneous medium in every path's stack (its
+    coefficients as a material's Volume gives them); a node Specula cannot render is
+    named with the world; no Volume, or one of nothing, is none."""
+    world = bpy.data.worlds.new("Hazy")
+    if bpy.app.version < (5, 0):
+        world.use_nodes = True
+    tree = world.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    fresh.world = world
+    assert export(fresh).world_volume is None
+    scatter = tree.nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Color"].default_value = (0.5, 0.8, 1.0, 1.0)
+    scatter.inputs["Density"].default_value = 0.2
+    scatter.inputs["Anisotropy"].default_value = 0.4
+    link = tree.links.new(scatter.outputs[0], out.inputs["Volume"])
+    exp = export(fresh)
+    assert exp.world_volume["scattering"] == pytest.approx((0.1, 0.16, 0.2))
+    assert exp.world_volume["anisotropy"] == pytest.approx(0.4)
+    cube_object()
+    scene, _ = exporter.to_core(export(fresh), core)
+    assert scene.world_medium >= 0
+    assert scene.materials.medium[scene.world_medium, 3:6] == pytest.approx((0.1, 0.16, 0.2))
+    tree.links.remove(link)
+    odd = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    tree.links.new(odd.outputs[0], out.inputs["Volume"])
+    exp = export(fresh)
+    assert exp.world_volume is None
+    assert any("world 'Hazy'" in w and odd.name in w for w in exp.warnings), exp.warnings
+
+
 def test_resolution_percentage(fresh):
     fresh.render.resolution_x, fresh.render.resolution_y = 640, 480
     fresh.render.resolution_percentage = 50

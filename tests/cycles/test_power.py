@@ -604,6 +604,27 @@ def _sheen_as_its_means(scene, settings):
     return scene, settings
 
 
+@contextmanager
+def _camera_outside_media():
+    """Camera paths start outside every mesh's medium (before the camera's volume stack:
+    only the world's volume)."""
+    from engine import kernels
+
+    enclosing = kernels.enclosing
+
+    def outside(point, vertices, material_index, rows, world_row=-1):
+        return enclosing(point, vertices, material_index, [], world_row)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(kernels, "enclosing", outside)
+        yield
+
+
+def _world_volume_ignored(scene, settings):
+    scene.world_medium = -1
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -680,6 +701,8 @@ INJECTIONS = {
     "scattering_plus_10_percent": ("fog_point_light", _media_scaled("scattering", 1.1), None),
     "phase_isotropic": ("fog_point_light", _media_scaled("anisotropy", 0.0), None),
     "anisotropy_negated": ("scattering_media", _media_scaled("anisotropy", -1.0), None),
+    "camera_outside_media": ("camera_in_fog", None, _camera_outside_media),
+    "world_volume_ignored": ("world_fog", _world_volume_ignored, None),
     "mix_factor_reversed": ("mixed_shaders", _mix_factor_reversed, None),
     "textured_mix_factor_as_its_mean": ("mixed_shaders", _mix_factors_as_their_means, None),
     "alpha_as_its_mean": ("alpha_cutouts", _mix_factors_as_their_means, None),

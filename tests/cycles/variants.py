@@ -827,6 +827,44 @@ def fog_point_light():
     scene.collection.objects.link(obj)
 
 
+def camera_in_fog():
+    """The camera inside a volume (issue 14, point 3; Cycles' volume_stack_init): a
+    Volume-only cube of thin fog (Volume Scatter forward + Volume Absorption) enclosing the
+    box, the camera and a clay ball, lit by the ceiling emitter. Camera paths start in the
+    fog; leaving its cube they leave it."""
+    _box()
+    _cube("Fog", (0.0, -1.0, 0.75), (2.6, 4.4, 2.0), _fog(
+        "Fog", {"Color": (0.8, 0.8, 0.8, 1.0), "Density": 0.25, "Anisotropy": 0.3},
+        {"Color": (0.6, 0.7, 0.9, 1.0), "Density": 0.1}))
+    _sphere(bs.diffuse("Clay", (0.8, 0.6, 0.4)), (0.2, 0.1, 0.3), 0.3, "Clay")
+
+
+def world_fog():
+    """A world Volume (issue 14, point 3): homogeneous fog filling all space (Volume Scatter
+    backward + bluish Volume Absorption on the World Output's Volume), the box lit by its
+    ceiling emitter and a point light; every path starts in the world's volume, the black
+    background stays black and the light dims with distance."""
+    scene = _box()
+    tree = scene.world.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    add = tree.nodes.new("ShaderNodeAddShader")
+    scatter = tree.nodes.new("ShaderNodeVolumeScatter")
+    scatter.inputs["Density"].default_value, scatter.inputs["Anisotropy"].default_value = \
+        0.3, -0.2
+    absorb = tree.nodes.new("ShaderNodeVolumeAbsorption")
+    absorb.inputs["Color"].default_value = (0.7, 0.8, 0.95, 1.0)
+    absorb.inputs["Density"].default_value = 0.15
+    tree.links.new(scatter.outputs[0], add.inputs[0])
+    tree.links.new(absorb.outputs[0], add.inputs[1])
+    tree.links.new(add.outputs[0], out.inputs["Volume"])
+    _sphere(bs.diffuse("Clay", (0.8, 0.6, 0.4)), (-0.3, 0.1, 0.3), 0.3, "Clay")
+    light = bpy.data.lights.new("Lamp", "POINT")
+    light.energy, light.shadow_soft_size = 20.0, 0.1
+    obj = bpy.data.objects.new("Lamp", light)
+    obj.location = (0.4, -0.3, 0.8)
+    scene.collection.objects.link(obj)
+
+
 def _mix_of(name, node, first, second, fac=None):
     """A material whose surface is a `node` (Mix or Add Shader) of two shader nodes, each
     given as (bl_idname, {input: value})."""
@@ -1916,7 +1954,7 @@ for _setup in (rough_glass_roughness, rough_glass_tinted, rough_metal, coloured_
                mixed_shaders, alpha_cutouts, transparent_limit, view_factors):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Scattering media (issue 14, point 3): paths through fog are long and noisy in both.
-for _setup in (scattering_media, fog_point_light):
+for _setup in (scattering_media, fog_point_light, camera_in_fog, world_fog):
     _add(Variant(_setup.__name__, _setup, max_bounces=8, samples=512, cycles_samples=1024))
 # Roughness varying in squares: 10% more roughness shows at |z| 10.6 at these samples,
 # only 5.6 at rough glass' 512 / 1024 (measured): four times those, for a clear margin.

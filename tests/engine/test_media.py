@@ -233,3 +233,36 @@ def test_a_scattering_medium_plans_its_stages():
     _fog_box(b, absorption=SIGMA)
     absorbing = make_plan(b.build(cam, World((1, 1, 1))), scenes.settings())
     assert absorbing.volumes and not absorbing.kernel_constants(False)["HAS_SCATTERING"]
+
+
+def _box_triangles(lo, hi, flip=False):
+    v, t = scenes.closed_box(lo, hi)
+    tri = np.asarray(v, np.float64)[np.asarray(t)]
+    return tri[:, ::-1] if flip else tri
+
+
+def test_the_camera_starts_in_the_media_around_it():
+    """media.enclosing, as Cycles' volume_stack_init: the world's volume first, then each
+    medium whose mesh a ray along +z leaves before entering; nested boxes both, a box
+    beside or above the camera (entered first along the ray) not, a box the ray misses
+    not, and no medium twice."""
+    from engine.media import enclosing
+
+    outer = _box_triangles((-4, -4, -4), (4, 4, 4))
+    inner = _box_triangles((-1, -1, -1), (1, 1, 1))
+    above = _box_triangles((-1, -1, 2), (1, 1, 3))
+    aside = _box_triangles((5, 5, -1), (6, 6, 1))
+    tri = np.concatenate([outer, inner, above, aside])
+    mats = np.repeat([3, 5, 7, 9], 12)
+    empty = [-1] * MEDIA_STACK
+    # (in the order the ray leaves them; the stack's order does not matter)
+    assert list(enclosing((0, 0, 0), tri, mats, [3, 5, 7, 9])) == [5, 3] + empty[2:]
+    assert list(enclosing((0, 0, 1.5), tri, mats, [3, 5, 7, 9])) == [3] + empty[1:]
+    assert list(enclosing((0, 0, 0), tri, mats, [5], world_row=11)) == [11, 5] + empty[2:]
+    assert list(enclosing((0, 0, 10), tri, mats, [3, 5, 7, 9])) == empty
+    # Two boxes of one material around the camera: it is in that medium once.
+    twice = np.concatenate([inner, _box_triangles((-2, -2, -2), (2, 2, 2))])
+    assert list(enclosing((0, 0, 0), twice, np.full(24, 4), [4])) == [4] + empty[1:]
+    # A box whose faces point inwards is entered along the ray, not left: not around it.
+    assert list(enclosing((0, 0, 0), _box_triangles((-1, -1, -1), (1, 1, 1), flip=True),
+                          np.full(12, 4), [4])) == empty
