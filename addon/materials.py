@@ -1023,11 +1023,6 @@ class _Reader:
         kwargs = {"emission": emission} if max(emission) > 0 else {}
         if kwargs and program is not None:
             kwargs["emission_program"] = program
-        coat = enabled_input(node, "Coat Weight")
-        if kwargs and coat is not None and (live_link(coat) is not None
-                                            or coat.default_value > 0):
-            self.warn(f"node '{node.name}' emission under its coat is rendered undimmed by "
-                      f"the coat (Cycles dims it by the coat's reflectance and tint)")
         multiscatter = self.multiscatter(node)
         tint = self.specular_tint(node)
 

@@ -120,13 +120,16 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # whether a glass has a Fresnel (k,) bool (not the Refraction BSDF) and how its colour
 # tints it (k,) int (scene.Materials); with sheen, which mixes are sheen layers (k,) bool,
 # each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32);
-# the Principled BSDF's Specular Tint on its dielectric Fresnel (k, 3; white elsewhere).
+# the Principled BSDF's Specular Tint on its dielectric Fresnel (k, 3; white elsewhere);
+# each row's layer dimming its emission's share under a sheen or coat (k,) and that share
+# (k, 3) (scene.Materials.emission_root, emission_share).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength medium mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
-                                            "sheen_ltc specular_tint")
+                                            "sheen_ltc specular_tint emission_root "
+                                            "emission_share")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty).
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
@@ -370,9 +373,21 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     """Cycles' Principled coat `mat` of Coat Weight `weight` at a hit along d. Its lobe
     (the mix's second component) weighs `weight`; what is below (the first) weighs
     1 - weight x A, A the coat lobe's albedo at the view about its normal as Cycles
-    estimates it (closure_layering_weight), times the tint's (bsdf.coat_layering). The
-    lobe is chosen with probability weight x A, which leaves what is below the tint's
-    weight alone. Returns (component, u's remainder, its weight (3))."""
+    estimates it (closure_layering_weight), times the tint's (coat_weights). The lobe is
+    chosen with probability weight x A, which leaves what is below the tint's weight
+    alone. Returns (component, u's remainder, its weight (3))."""
+    mt = sc.materials
+    albedo, a0, a1, a2 = coat_weights(f, bu, bv, dx, dy, dz, mat, weight, sc, paths)
+    p = weight * albedo
+    if u < p:
+        return mt.mix_components[mat, 1], u / p, 1.0 / albedo, 1.0 / albedo, 1.0 / albedo
+    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
+
+
+def coat_weights(f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
+    """The coat `mat` (Coat Weight `weight`) at a hit along d: (A, the coat lobe's albedo
+    at the view about its normal (its Coat Normal's) as Cycles estimates it; the tint's
+    attenuation of what is below, 3 values: bsdf.coat_layering)."""
     mt = sc.materials
     g = sc.geometry
     coat = mt.mix_components[mat, 1]
@@ -392,21 +407,27 @@ def coat_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     if HAS_TEXTURES:  # the Coat Tint may vary
         tint = shading.tint_at(mat, f, u_b, v_b, mt.programs, g.uv, paths.svm, tint[0],
                                tint[1], tint[2])
-    albedo, a0, a1, a2 = bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), coat, mt.layers,
-                                            roughness, mt.coat_ior[mat], weight, tint)
-    p = weight * albedo
-    if u < p:
-        return coat, u / p, 1.0 / albedo, 1.0 / albedo, 1.0 / albedo
-    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), a0, a1, a2
+    return bsdf.coat_layering(-(dx * mx + dy * my + dz * mz), coat, mt.layers, roughness,
+                              mt.coat_ior[mat], weight, tint)
 
 
 def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
     """Cycles' Principled sheen `mat` of Sheen Weight `weight` at a hit along d: its lobe
     (the mix's second component, bsdf.eval_sheen, which carries its tint and albedo)
-    weighs `weight`; what is below keeps 1 - A, A = weight x the largest channel of tint
-    x albedo at the view (closure_layering_weight). The lobe is chosen with probability
-    A, which leaves what is below its weight. Returns (component, u's remainder, the
-    choice's weight)."""
+    weighs `weight`; what is below keeps 1 - A (sheen_weight). The lobe is chosen with
+    probability A, which leaves what is below its weight. Returns (component, u's
+    remainder, the choice's weight)."""
+    mt = sc.materials
+    p = sheen_weight(f, bu, bv, dx, dy, dz, mat, weight, sc, paths)
+    if u < p:
+        return mt.mix_components[mat, 1], u / p, weight / p
+    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), 1.0
+
+
+def sheen_weight(f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
+    """A, what the sheen `mat` (Sheen Weight `weight`) takes at a hit along d: weight x
+    the largest channel of tint x albedo at the view (closure_layering_weight), at most
+    1."""
     mt = sc.materials
     g = sc.geometry
     lobe = mt.mix_components[mat, 1]
@@ -423,11 +444,48 @@ def sheen_layer(u, f, bu, bv, dx, dy, dz, mat, weight, sc, paths):
         t0, t1, t2 = shading.colour_at(lobe, f, u_b, v_b, mt.programs, g.uv, paths.svm, t0,
                                        t1, t2)
     _, _, albedo = bsdf.sheen_ltc(mt.sheen_ltc, -(dx * sx + dy * sy + dz * sz), roughness)
-    tint = max(t0, max(t1, t2))
-    p = min(weight * tint * albedo, 1.0)
-    if u < p:
-        return lobe, u / p, weight / p
-    return mt.mix_components[mat, 0], (u - p) / (1.0 - p), 1.0
+    return min(weight * max(t0, max(t1, t2)) * albedo, 1.0)
+
+
+def under_layers(mat, f, u, v, dx, dy, dz, l0, l1, l2, full, sc, paths):
+    """Emission l of material row `mat` at a hit along d (or the light point a shadow ray
+    along d reaches) with its share under a Principled BSDF's sheen and coat dimmed by
+    them there: Cycles' "emission (attenuated by sheen and coat)". A coat's tint dims it
+    always; the layers' albedo (each layer leaving what is below it its layering weight:
+    sheen_weight, coat_weights) only with probability `full`: Cycles evaluates the
+    emission of a light sample and of a path ending at the hit (its bounce limit, or
+    Russian roulette deciding before the surface is shaded) with no room for closures,
+    so no sheen or coat lobe is made and nothing is layered under them; the tint is
+    applied all the same."""
+    mt = sc.materials
+    layer = mt.emission_root[mat]
+    if layer < 0:
+        return l0, l1, l2
+    g = sc.geometry
+    if HAS_TEXTURES:  # a layer's weight may read the geometry (as choose_closure)
+        front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
+        sx, sy, sz = shading_normal(f, u, v, 1.0 if front else -1.0, sc)
+        shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
+    d0 = d1 = d2 = kept = 1.0  # the tint's (per channel) and the albedo's
+    while mt.kind[layer] == MIX:
+        fac = mt.mix_fac[layer]
+        if HAS_TEXTURES:
+            fac = shading.fac_at(layer, f, u, v, mt.programs, g.uv, paths.svm, fac)
+        if HAS_COATS and mt.coat_ior[layer] > 0.0:
+            albedo, a0, a1, a2 = coat_weights(f, u, v, dx, dy, dz, layer, fac, sc, paths)
+            kept *= 1.0 - fac * albedo
+            d0, d1, d2 = d0 * a0, d1 * a1, d2 * a2
+        elif HAS_SHEEN and mt.sheen_layer[layer]:
+            if full > 0.0:
+                kept *= 1.0 - sheen_weight(f, u, v, dx, dy, dz, layer, fac, sc, paths)
+        else:
+            break
+        layer = mt.mix_components[layer, 0]
+    k = 1.0 - full + full * kept
+    d0, d1, d2 = d0 * k, d1 * k, d2 * k
+    s = mt.emission_share
+    return (l0 * (1.0 - s[mat, 0] + s[mat, 0] * d0), l1 * (1.0 - s[mat, 1] + s[mat, 1] * d1),
+            l2 * (1.0 - s[mat, 2] + s[mat, 2] * d2))
 
 
 def sheen_normal(f, u, v, sign, sx, sy, sz, lobe, sc, paths):
@@ -654,10 +712,13 @@ def glass_tints_at(x, c, textured, sc):
     return r[0], r[1], r[2], t[0], t[1], t[2]
 
 
-def handle_emission(i, row, depth, x, sc, paths, mis):
+def handle_emission(i, row, depth, x, sc, paths, mis, max_bounces):
     """Emission of the hit triangle (two-sided), MIS-weighted against light sampling after
     soft bounces, and against light tracing at the end of a diffuse -> specular chain
-    from the camera (caustics.py)."""
+    from the camera (caustics.py). Under a Principled sheen or coat it is dimmed as Cycles
+    dims it (under_layers) for a path that goes on, with the chance that Cycles' would
+    (its Russian roulette's, before this surface's own weights; none past the bounce
+    limit)."""
     e = sc.materials.emission
     le0, le1, le2 = e[x.mat, 0], e[x.mat, 1], e[x.mat, 2]
     if not max(le0, max(le1, le2)) > 0:  # (a textured emission's constant is > 0 too)
@@ -665,6 +726,12 @@ def handle_emission(i, row, depth, x, sc, paths, mis):
     if HAS_TEXTURES:
         le0, le1, le2 = shading.emission_at(x.mat, x.f, x.u, x.v, sc.materials.programs,
                                             sc.geometry.uv, paths.svm, le0, le1, le2)
+    if (HAS_COATS or HAS_SHEEN) and sc.materials.emission_root[x.mat] >= 0:
+        t = paths.throughput
+        full = 0.0 if depth > max_bounces else 1.0 if depth < ROULETTE_MIN_BOUNCE else min(
+            math.sqrt(max(t[i, 0], max(t[i, 1], t[i, 2]))), 1.0)
+        le0, le1, le2 = under_layers(np.int64(x.mat), np.int64(x.f), x.u, x.v, -x.wox,
+                                     -x.woy, -x.woz, le0, le1, le2, full, sc, paths)
     w = 1.0
     if mis:
         em = sc.emitters
@@ -760,6 +827,12 @@ def sample_emitter(x, u_sel, ua, ub, sc, paths):
         light_scale = em.scale[e]
         if HAS_TEXTURES and pdf > 0.0:
             q0, q1, q2 = textured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths)
+        f = em.triangle_of_entry[e]
+        if (HAS_COATS or HAS_SHEEN) and pdf > 0.0 and \
+                sc.materials.emission_root[sc.geometry.material_index[f]] >= 0:
+            _, b1, b2 = sampling.uniform_triangle(ua, ub)
+            q0, q1, q2 = under_layers(np.int64(sc.geometry.material_index[f]), np.int64(f),
+                                      b1, b2, wx, wy, wz, q0, q1, q2, 0.0, sc, paths)
     elif HAS_ENVIRONMENT and e == em.env_entry and e >= 0:
         wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_environment(ua, ub, em.environment)
     elif HAS_LIGHT_OBJECTS:
@@ -1262,7 +1335,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         if depth == 0 and not (HAS_TRANSPARENCY and (k == TRANSPARENT or k == BOUNDARY)):
             write_passes(row, x, sc, paths)
         if HAS_EMISSION:
-            handle_emission(i, row, depth, x, sc, paths, mis)
+            handle_emission(i, row, depth, x, sc, paths, mis, max_bounces)
         if HAS_MIXES:  # after the emission, which is the whole mix's
             for j in range(3):
                 paths.throughput[i, j] *= weight[j]
@@ -1396,7 +1469,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
-    coat_layer, sheen_layer, sheen_normal,
+    coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, shading_normal,
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, glass_tints_at, specular_tint_at, metal_edge_at,
@@ -1414,6 +1487,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
 # which it shares with sample_light, are compiled once too: with both inlined, the medium's
 # scattering vertex held a second copy of light sampling and compiling the generic kernel
 # grew by a third.
+# under_layers (only emissions under a Principled sheen or coat) likewise.
 STAGES.update({f.__name__: (f, JIT) for f in (
-    perturbed_normal, scatter_in_medium, sample_emitter, generate_camera_rays, shade,
+    perturbed_normal, scatter_in_medium, sample_emitter, under_layers,
+    generate_camera_rays, shade,
     accumulate_unoccluded, cross_transparent, all_finite)})

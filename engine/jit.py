@@ -12,6 +12,8 @@ from __future__ import annotations
 import glob
 import hashlib
 import os
+import shutil
+import time
 
 try:
     from llvmlite import ir
@@ -108,8 +110,6 @@ def prune_caches(root: str | None = None, keep: int = KEPT_CACHES) -> list:
     """Mark this core's cache folder used and remove all but the `keep` most recently used
     other `specula-*` folders beside it; returns the removed paths. Never raises (a cache
     another process is reading, or a read-only folder, is left as it is)."""
-    import shutil
-    import time
     root = root or cache_root()
     if root is None:
         return []

@@ -235,7 +235,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.sheen_layer if plan.sheen or generic else None,
                               m.sheen_parent if plan.sheen or generic else None,
                               sheen_table() if plan.sheen or generic else None,
-                              m.specular_tint)
+                              m.specular_tint, m.emission_root, m.emission_share)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)

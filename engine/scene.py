@@ -160,10 +160,11 @@ class Material:
           and components[0] what lies below, dimmed by the coat's albedo at the view as
           Cycles estimates it, 1 - fac x A(cos_o) (bsdf.coat_layering), and by its tint,
           mix(1, coat_tint^(1 / cos_t), fac), cos_t the view's cosine refracted into the
-          coat. Emission below a coat is taken undimmed (Cycles dims it the same way; the
-          exporter warns). A mix with sheen_layer is Cycles' Principled sheen
-          (Material.sheened): components[1] is a sheen lobe of weight fac (the Sheen
-          Weight) and what lies below keeps 1 - max(fac x colour x albedo(cos_o)) of it.
+          coat. Emission below a coat (the mix's own: a Principled BSDF's) is dimmed the
+          same way at the view (Materials.emission_root). A mix with sheen_layer is
+          Cycles' Principled sheen (Material.sheened): components[1] is a sheen lobe of
+          weight fac (the Sheen Weight) and what lies below keeps 1 - max(fac x colour x
+          albedo(cos_o)) of it.
         - sheen: Cycles' microfiber sheen (the Sheen BSDF, and the Principled BSDF's sheen
           lobe): `colour` x its albedo at the view x a linearly transformed cosine of
           `roughness` (bsdf.eval_sheen, Zeltner et al. 2022).
@@ -445,8 +446,34 @@ def _mixed_emission(m: Material) -> np.ndarray:
         return own
     a, b = (_mixed_emission(c) for c in m.components)
     if m.coat_ior > 0 or m.sheen_layer:  # the layer's lobe emits nothing; what is below
-        return own + a  # is taken undimmed
+        return own + a  # (dimmed at each hit: _emission_parts)
     return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
+
+
+def _emission_parts(m: Material) -> tuple:
+    """m's emission as (the part no layer dims (3,), the part under a sheen or coat (3,),
+    the path of component choices from m down to the top layer mix over it, or None):
+    what lies under a layer (a Principled BSDF's emission, its own on the layer mix) is
+    dimmed by it and every layer under it. Where a plain mix holds two layered emissions,
+    the second is taken undimmed."""
+    own = np.asarray(m.emission, np.float64)
+    zero = np.zeros(3)
+    if m.kind != "mix":
+        return own, zero, None
+    a = _emission_parts(m.components[0])
+    if m.coat_ior > 0 or m.sheen_layer:  # the layer's lobe emits nothing
+        return zero, own + a[0] + a[1], ()
+    b = _emission_parts(m.components[1])
+    f, s = m.fac, m.scale
+    rest = own + s * ((1.0 - f) * a[0] + f * b[0])
+    layered = s * ((1.0 - f) * a[1] + f * b[1])
+    if a[2] is not None and b[2] is not None:
+        return rest + s * f * b[1], s * (1.0 - f) * a[1], (0,) + a[2]
+    if a[2] is not None:
+        return rest, layered, (0,) + a[2]
+    if b[2] is not None:
+        return rest, layered, (1,) + b[2]
+    return rest, zero, None
 
 
 def _emits(m: Material, textured_only=False) -> bool:
@@ -514,6 +541,11 @@ class Materials:
     coat_tint: np.ndarray | None = None
     sheen_layer: np.ndarray | None = None  # (k,) bool, Material.sheen_layer
     sheen_parent: np.ndarray | None = None  # (k,) int: a sheen lobe's layer row, else -1
+    # An emission under a Principled BSDF's sheen or coat is dimmed by them at the view, as
+    # Cycles dims it: per row the top layer (a sheen or coat mix row) whose layers dim the
+    # share (k, 3) of its emission that lies under them (-1 and 0: none).
+    emission_root: np.ndarray | None = None
+    emission_share: np.ndarray | None = None
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     specular_tint: np.ndarray | None = None  # (k, 3), Material.specular_tint
@@ -524,7 +556,8 @@ class Materials:
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
-        materials, components = _flatten_mixes(list(materials))
+        given = list(materials)
+        materials, components = _flatten_mixes(given)
         m = cls._rows(materials)
         fac = np.array([float(x.fac) if x.kind == "mix" else 0.0 for x in materials])
         scale = np.array([float(x.scale) if x.kind == "mix" else 1.0 for x in materials])
@@ -539,9 +572,22 @@ class Materials:
         components = np.array(components, np.int64).reshape(-1, 2)
         parent = np.full(len(materials), -1, np.int64)
         parent[components[sheen, 1]] = np.flatnonzero(sheen)
-        return dataclasses.replace(m, mix_components=components, mix_fac=fac, mix_scale=scale,
-                                   coat_ior=coat_ior, coat_tint=tint, sheen_layer=sheen,
-                                   sheen_parent=parent)
+        m = dataclasses.replace(m, mix_components=components, mix_fac=fac, mix_scale=scale,
+                                coat_ior=coat_ior, coat_tint=tint, sheen_layer=sheen,
+                                sheen_parent=parent)
+        root, share = np.full(len(materials), -1, np.int64), np.zeros((len(materials), 3))
+        for i, top in enumerate(given):
+            rest, layered, path = _emission_parts(top)
+            if path is None:
+                continue
+            r = i
+            for step in path:
+                r = int(components[r, step])
+            total = rest + layered
+            rows = m.reachable([i])
+            root[rows] = r
+            share[rows] = np.divide(layered, total, out=np.zeros(3), where=total > 0)
+        return dataclasses.replace(m, emission_root=root, emission_share=share)
 
     def reachable(self, rows) -> np.ndarray:
         """`rows` and every mix component below them (the materials a hit can shade with)."""

@@ -65,10 +65,10 @@ def _one_bounce_fewer(scene, settings):
     return scene, dataclasses.replace(settings, max_bounces=settings.max_bounces - 1)
 
 
-def front_only_emission(i, row, depth, x, sc, paths, mis):
+def front_only_emission(i, row, depth, x, sc, paths, mis, max_bounces):
     """handle_emission for front faces only."""
     if x.front:
-        original_handle_emission(i, row, depth, x, sc, paths, mis)  # noqa: F821
+        original_handle_emission(i, row, depth, x, sc, paths, mis, max_bounces)  # noqa: F821
 
 
 def front_only_triangle(e, px, py, pz, ua, ub, em):
@@ -625,6 +625,13 @@ def _world_volume_ignored(scene, settings):
     return scene, settings
 
 
+def _emission_undimmed(scene, settings):
+    """Emission under a Principled sheen or coat undimmed by them (before under_layers)."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, emission_share=np.zeros_like(m.emission_share))
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -745,6 +752,7 @@ INJECTIONS = {
     "dielectric_specular_tint_white": ("specular_tint_dielectric",
                                        _dielectric_specular_tint_white, None),
     "tints_as_their_means": ("textured_tints", _tints_as_their_means, None),
+    "emission_undimmed": ("emission_under_layers", _emission_undimmed, None),
     "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),

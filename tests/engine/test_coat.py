@@ -3,6 +3,8 @@ layer of weight w over the rest, which keeps 1 - w x A of the light at the view 
 estimate of the coat's albedo: the smooth Fresnel F for a smooth coat) and the tint over
 the path through the coat (bsdf.coat_layering)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -54,6 +56,26 @@ def test_a_smooth_coat_reflects_its_fresnel_and_dims_what_is_below(weight):
     assert np.all(z < 4.0), (px.mean(axis=0), expected, z)
     undimmed = weight * f + below
     assert np.max(np.abs(px.mean(axis=0) - undimmed) / se) > 8.0  # red, the brightest
+
+
+def test_an_emission_under_a_coat_is_dimmed_by_it():
+    """A Principled emission E under a smooth coat (IOR 1.5, F = 0.04 head-on, weight w),
+    over a black base, under a ceiling of radiance 1, seen head-on: the coat reflects
+    w F of the ceiling and lets out E (1 - w F) mix(1, tint, w), as Cycles dims it
+    (integrator.under_layers); an emission dimmed by the tint alone is rejected."""
+    emission, w = np.array([0.5, 1.0, 2.0]), 0.8
+    base = Material.diffuse("black", (0.0, 0.0, 0.0))
+    lacquer = Material.coated("glowing", base, w, roughness=0.0, ior=1.5, tint=tuple(TINT))
+    img = _pane_under_a_glowing_ceiling(dataclasses.replace(lacquer, emission=tuple(emission)),
+                                        samples=64)
+    f = fresnel_dielectric(1.0, 1.5, True)[0]
+    tinted = emission * (1.0 - w + w * TINT)
+    expected = w * f + (1.0 - w * f) * tinted
+    px = img.combined[..., :3].reshape(-1, 3)
+    se = px.std(axis=0, ddof=1) / np.sqrt(px.shape[0])
+    assert np.all(np.abs(px.mean(axis=0) - expected) < 4.0 * se + 1e-9), \
+        (px.mean(axis=0), expected, se)
+    assert np.max(np.abs(px.mean(axis=0) - (w * f + tinted)) / (se + 1e-12)) > 8.0
 
 
 def test_a_coat_plans_as_a_mix_and_its_lobe_as_compensated_ggx():

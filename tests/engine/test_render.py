@@ -116,10 +116,10 @@ def test_film_replicate_estimate_matches_numpy(monkeypatch):
     assert np.allclose(est.variance, v, rtol=1e-4)
 
 
-def poisoned_handle_emission(i, row, depth, x, sc, paths, mis):
+def poisoned_handle_emission(i, row, depth, x, sc, paths, mis, max_bounces):
     """handle_emission, then NaN in the first path's radiance (compiled into a one-off
     kernel: its globals are integrator.py's)."""
-    original_handle_emission(i, row, depth, x, sc, paths, mis)  # noqa: F821
+    original_handle_emission(i, row, depth, x, sc, paths, mis, max_bounces)  # noqa: F821
     if i == 0:
         paths.radiance[row, 0] = np.nan
         if DEBUG:  # noqa: F821
