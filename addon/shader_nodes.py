@@ -23,7 +23,7 @@ WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 # Node kinds whose output varies over a surface: a chain with none of them is a constant.
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
-           "ShaderNodeVertexColor")
+           "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -555,6 +555,38 @@ def _n_checker(c, node, out):
     return (reg + 3, "VALUE") if out.identifier == "Fac" else (reg, "RGBA")
 
 
+def _texture_vector(c, node):
+    """A procedural texture's Vector: its link, or unlinked the Generated coordinates
+    (Cycles' default)."""
+    vec = enabled_input(node, "Vector")
+    if vec is not None and live_link(vec) is not None:
+        return c.input(vec, "VECTOR")
+    return c.program.uv(c.sh.GENERATED)
+
+
+def _n_noise(c, node, out):
+    """Noise Texture: every dimension and fractal type, Distortion and Normalize."""
+    nz = core.load().noise
+    d = int(node.noise_dimensions[0])
+    co = _texture_vector(c, node) if d > 1 else c.program.const([0.0, 0.0, 0.0])
+    w = enabled_input(node, "W")
+    w = c.input(w, "VALUE") if w is not None else c.program.const([0.0])
+    # (Offset and Gain are unavailable to some fractal types: found by iterating.)
+    inputs = [c.input(enabled_input(node, name), "VALUE") for name in (
+        "Scale", "Detail", "Roughness", "Lacunarity", "Offset", "Gain", "Distortion")]
+    kind = nz.NOISE_TYPES.index(getattr(node, "noise_type", "FBM"))
+    colour = out.identifier == "Color"
+    reg = c.program.emit(c.sh.OP_NOISE, 4, a=co, b=w, c=int(colour), params=[
+        *inputs, d, kind, int(getattr(node, "normalize", True))])
+    return (reg, "RGBA") if colour else (reg + 3, "VALUE")
+
+
+def _n_gradient(c, node, out):
+    kind = core.load().noise.GRADIENT_TYPES.index(node.gradient_type)
+    reg = c.program.emit(c.sh.OP_GRADIENT, 4, a=_texture_vector(c, node), d=kind)
+    return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
+
+
 def _n_color_ramp(c, node, out):
     """Color Ramp as Cycles bakes it: a table of RAMP_TABLE_SIZE entries from Blender's own
     ramp evaluation, looked up (linearly unless Constant) at the factor."""
@@ -623,6 +655,8 @@ NODES = {
     "ShaderNodeGamma": _n_gamma,
     "ShaderNodeBrightContrast": _n_bright_contrast,
     "ShaderNodeTexChecker": _n_checker,
+    "ShaderNodeTexNoise": _n_noise,
+    "ShaderNodeTexGradient": _n_gradient,
     "ShaderNodeValToRGB": _n_color_ramp,
     "ShaderNodeHueSaturation": _n_hue_saturation,
     "ShaderNodeVectorMath": _n_vector_math,

@@ -726,12 +726,13 @@ def handle_emission(i, row, depth, x, sc, paths, mis, max_bounces):
     if HAS_TEXTURES:
         le0, le1, le2 = shading.emission_at(x.mat, x.f, x.u, x.v, sc.materials.programs,
                                             sc.geometry.uv, paths.svm, le0, le1, le2)
-    if (HAS_COATS or HAS_SHEEN) and sc.materials.emission_root[x.mat] >= 0:
-        t = paths.throughput
-        full = 0.0 if depth > max_bounces else 1.0 if depth < ROULETTE_MIN_BOUNCE else min(
-            math.sqrt(max(t[i, 0], max(t[i, 1], t[i, 2]))), 1.0)
-        le0, le1, le2 = under_layers(np.int64(x.mat), np.int64(x.f), x.u, x.v, -x.wox,
-                                     -x.woy, -x.woz, le0, le1, le2, full, sc, paths)
+    if HAS_COATS or HAS_SHEEN:
+        if sc.materials.emission_root[x.mat] >= 0:
+            t = paths.throughput
+            full = 0.0 if depth > max_bounces else 1.0 if depth < ROULETTE_MIN_BOUNCE else \
+                min(math.sqrt(max(t[i, 0], max(t[i, 1], t[i, 2]))), 1.0)
+            le0, le1, le2 = under_layers(np.int64(x.mat), np.int64(x.f), x.u, x.v, -x.wox,
+                                         -x.woy, -x.woz, le0, le1, le2, full, sc, paths)
     w = 1.0
     if mis:
         em = sc.emitters
@@ -827,12 +828,13 @@ def sample_emitter(x, u_sel, ua, ub, sc, paths):
         light_scale = em.scale[e]
         if HAS_TEXTURES and pdf > 0.0:
             q0, q1, q2 = textured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths)
-        f = em.triangle_of_entry[e]
-        if (HAS_COATS or HAS_SHEEN) and pdf > 0.0 and \
-                sc.materials.emission_root[sc.geometry.material_index[f]] >= 0:
-            _, b1, b2 = sampling.uniform_triangle(ua, ub)
-            q0, q1, q2 = under_layers(np.int64(sc.geometry.material_index[f]), np.int64(f),
-                                      b1, b2, wx, wy, wz, q0, q1, q2, 0.0, sc, paths)
+        if HAS_COATS or HAS_SHEEN:
+            f = em.triangle_of_entry[e]
+            if pdf > 0.0 and sc.materials.emission_root[sc.geometry.material_index[f]] >= 0:
+                _, b1, b2 = sampling.uniform_triangle(ua, ub)
+                q0, q1, q2 = under_layers(np.int64(sc.geometry.material_index[f]),
+                                          np.int64(f), b1, b2, wx, wy, wz, q0, q1, q2, 0.0,
+                                          sc, paths)
     elif HAS_ENVIRONMENT and e == em.env_entry and e >= 0:
         wx, wy, wz, dist, q0, q1, q2, pdf = lights.sample_environment(ua, ub, em.environment)
     elif HAS_LIGHT_OBJECTS:

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import noise
 from .fresnel import fresnel_dielectric
 from .jit import ALLOCATING, INLINE, JIT, njit
 
@@ -59,6 +60,12 @@ OP_FRESNEL = 17     # reg[out] = Fresnel node of IOR reg[a], normal reg[b:b+3] (
 OP_LAYER_WEIGHT = 18  # reg[out] Fresnel, reg[out+1] Facing of Layer Weight: blend reg[a],
 #                     normal reg[b:b+3] (b < 0: the hit's)
 OP_COLOUR_SPACE = 19  # reg[out:out+3] = conversion d (CONVERSIONS) of reg[a:a+3]
+OP_NOISE = 20       # reg[out:out+3] Color, reg[out+3] Fac of Cycles' Noise Texture at vector
+#                     reg[a:a+3] and W reg[b]; params[p:p+7] the registers of Scale, Detail,
+#                     Roughness, Lacunarity, Offset, Gain and Distortion, then its
+#                     dimensions, type (noise.NOISE_TYPES) and normalize; c: Color is read
+OP_GRADIENT = 21    # reg[out:out+3] Color, reg[out+3] Fac of the Gradient Texture of type d
+#                     (noise.GRADIENT_TYPES) at reg[a:a+3]
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -615,6 +622,19 @@ def node_checker(ins, reg):
     reg[out + 3] = 1.0 if first else 0.0
 
 
+@njit(**JIT)
+def node_noise(ins, reg, params):
+    """Cycles' Noise Texture (noise.noise_texture) at the scaled vector and W."""
+    a, p, out = ins[2], ins[7], ins[1]
+    scale = reg[int(params[p])]
+    value, g, b = noise.noise_texture(
+        int(params[p + 7]), int(params[p + 8]), params[p + 9] != 0.0, reg[a] * scale,
+        reg[a + 1] * scale, reg[a + 2] * scale, reg[ins[3]] * scale, reg[int(params[p + 1])],
+        reg[int(params[p + 2])], reg[int(params[p + 3])], reg[int(params[p + 4])],
+        reg[int(params[p + 5])], reg[int(params[p + 6])], ins[4] != 0)
+    reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = value, g, b, value
+
+
 @njit(**INLINE)
 def node_ramp(ins, reg, params):
     """Cycles' rgb_ramp_lookup: the table at fac clamped to [0, 1], linear between entries
@@ -800,6 +820,12 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_fresnel(ins, reg)
         elif op == OP_LAYER_WEIGHT:
             node_layer_weight(ins, reg)
+        elif op == OP_NOISE:
+            node_noise(ins, reg, pt.params)
+        elif op == OP_GRADIENT:
+            a = ins[2]
+            g = noise.gradient(ins[5], reg[a], reg[a + 1], reg[a + 2])
+            reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = g, g, g, g
         elif op == OP_COLOUR_SPACE:
             a = ins[2]
             reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],

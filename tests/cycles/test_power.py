@@ -317,6 +317,17 @@ def _colour_and_value_swapped():
 
 
 @contextmanager
+def _noise_types_rotated():
+    """Each Noise Texture rendered as the next fractal type, and each Gradient Texture as
+    the next gradient."""
+    nz = renderers.core().noise
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(nz, "NOISE_TYPES", nz.NOISE_TYPES[1:] + nz.NOISE_TYPES[:1])
+        mp.setattr(nz, "GRADIENT_TYPES", nz.GRADIENT_TYPES[1:] + nz.GRADIENT_TYPES[:1])
+        yield
+
+
+@contextmanager
 def _hsv_read_as_hsl():
     """Separate and Combine Color's HSV mode converted as HSL."""
     shading = renderers.core().shading
@@ -725,6 +736,7 @@ INJECTIONS = {
     "colour_alpha_opaque": ("colour_attributes", None, _colour_alpha_opaque),
     "colour_and_value_swapped": ("blend_modes", None, _colour_and_value_swapped),
     "hsv_read_as_hsl": ("blend_modes", None, _hsv_read_as_hsl),
+    "noise_types_rotated": ("procedural_textures", None, _noise_types_rotated),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
     "emission_strength_as_its_mean": ("emission_strength_texture", _emission_as_its_mean,
                                       None),

@@ -1239,6 +1239,85 @@ def blend_modes():
         _blend_card(f"C{mode}", (x, 0.0, -0.33), mode, odd, False)
 
 
+def _glowing_card(name, centre, size, feed):
+    """An emitting card (strength 1, UV mapped) whose colour is the socket `feed(tree)`
+    returns."""
+    mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
+    tree = mat.node_tree
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    tree.links.new(feed(tree), emission.inputs["Color"])
+    _quad_uvs(_card(name, centre, size, mat))
+
+
+def _noise_feed(dimensions, kind, output="Factor", **inputs):
+    """A feed for _glowing_card: a Noise Texture (on Generated coordinates, unlinked) of
+    `dimensions` and fractal `kind`, its W the card's Generated x, through Math Absolute
+    where it is the Factor (some fractals go below 0, which would be negative light)."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexNoise")
+        node.noise_dimensions, node.noise_type = dimensions, kind
+        for key, value in inputs.items():
+            if key == "normalize":
+                node.normalize = value
+            else:
+                node.inputs[key].default_value = value
+        if dimensions in ("1D", "4D"):
+            split = tree.nodes.new("ShaderNodeSeparateXYZ")
+            tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"],
+                           split.inputs[0])
+            tree.links.new(split.outputs["X"], node.inputs["W"])
+        if output == "Color":
+            return node.outputs["Color"]
+        absolute = tree.nodes.new("ShaderNodeMath")
+        absolute.operation = "ABSOLUTE"
+        tree.links.new(node.outputs["Fac"], absolute.inputs[0])
+        return absolute.outputs[0]
+    return feed
+
+
+def _gradient_feed(kind):
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexGradient")
+        node.gradient_type = kind
+        mapping = tree.nodes.new("ShaderNodeMapping")  # Generated [0, 1] -> [-1, 1]
+        mapping.inputs["Location"].default_value = (-1.0, -1.0, -1.0)
+        mapping.inputs["Scale"].default_value = (2.0, 2.0, 2.0)
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"],
+                       mapping.inputs["Vector"])
+        tree.links.new(mapping.outputs["Vector"], node.inputs["Vector"])
+        return node.outputs["Color"]
+    return feed
+
+
+def procedural_textures():
+    """Procedural textures (issue 14, point 1: a new node is one new function): Noise
+    Textures of every dimension and fractal type (fBM, normalized or not and with a
+    fractional detail; multifractal, hybrid and ridged multifractal, hetero terrain;
+    distortion; the Color output), and every Gradient Texture type, on emitting cards seen
+    head-on by an orthographic camera: each pixel is the texture itself."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    noises = [("3D", "FBM", "Factor", {}),
+              ("3D", "FBM", "Color", {"Distortion": 0.6, "Detail": 4.5}),
+              ("3D", "FBM", "Factor", {"normalize": False, "Detail": 3.5, "Roughness": 0.7}),
+              ("2D", "MULTIFRACTAL", "Factor", {"Detail": 3.0, "Scale": 3.0}),
+              ("4D", "RIDGED_MULTIFRACTAL", "Factor", {"Offset": 1.0, "Gain": 2.0,
+                                                        "Detail": 4.0}),
+              ("1D", "HYBRID_MULTIFRACTAL", "Factor", {"Offset": 0.5, "Gain": 1.5,
+                                                        "Scale": 8.0}),
+              ("3D", "HETERO_TERRAIN", "Factor", {"Offset": 0.7, "Detail": 2.5})]
+    for i, (d, kind, output, inputs) in enumerate(noises):
+        _glowing_card(f"N{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.27), (0.5, 0.5),
+                      _noise_feed(d, kind, output, **inputs))
+    kinds = ("LINEAR", "QUADRATIC", "EASING", "DIAGONAL", "SPHERICAL", "QUADRATIC_SPHERE",
+             "RADIAL")
+    for i, kind in enumerate(kinds):
+        _glowing_card(f"G{kind}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, -0.3), (0.5, 0.5),
+                      _gradient_feed(kind))
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -2008,6 +2087,8 @@ _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
              cycles_samples=128))
+_add(Variant("procedural_textures", procedural_textures, resolution=(224, 64), max_bounces=0,
+             samples=64, cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))

@@ -1,0 +1,310 @@
+"""Procedural textures as Cycles computes them: Perlin noise and its fractals (the Noise
+Texture node), and the Gradient Texture.
+
+Cycles' Noise Texture (kernel/svm/noisetex.h, fractal_noise.h, noise.h; Perlin's improved
+noise as Open Shading Language has it) hashes each lattice corner's integer coordinates
+with Bob Jenkins' lookup3 (util/hash.h), takes one of a few gradients by the hash's low
+bits, blends the corners' dot products with the quintic fade, and scales the result to
+about [-1, 1] by a factor per dimension. Its fractals add, multiply or ridge octaves of it
+at `lacunarity` times the frequency and `roughness` times the amplitude; Distortion moves
+the point by noise at seeded offsets first, and the Color output is the same fractal at two
+more seeded offsets. The hashes are exact (32-bit wrap-around on int64); the arithmetic is
+float64 where Cycles' is float32, which moves values by about 1e-7.
+
+A point has up to four coordinates (x, y, z, w); `d` (1-4) says how many are read: 1D reads
+w alone, as Cycles' 1D noise reads the W input.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .jit import JIT, njit
+
+NOISE_TYPES = ("MULTIFRACTAL", "RIDGED_MULTIFRACTAL", "HYBRID_MULTIFRACTAL", "FBM",
+               "HETERO_TERRAIN")
+GRADIENT_TYPES = ("LINEAR", "QUADRATIC", "EASING", "DIAGONAL", "SPHERICAL",
+                  "QUADRATIC_SPHERE", "RADIAL")
+MASK = 0xFFFFFFFF
+# The factors that map each dimension's Perlin noise to about [-1, 1] (found by the OSL
+# developers; Cycles' noise_scale1..4).
+NOISE_SCALE = (0.25, 0.6616, 0.9820, 0.8344)
+
+
+# ----------------------------------------------------------------- lookup3 (32-bit)
+@njit(**JIT)
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & MASK
+
+
+@njit(**JIT)
+def _final(a, b, c):
+    c = ((c ^ b) - _rot(b, 14)) & MASK
+    a = ((a ^ c) - _rot(c, 11)) & MASK
+    b = ((b ^ a) - _rot(a, 25)) & MASK
+    c = ((c ^ b) - _rot(b, 16)) & MASK
+    a = ((a ^ c) - _rot(c, 4)) & MASK
+    b = ((b ^ a) - _rot(a, 14)) & MASK
+    c = ((c ^ b) - _rot(b, 24)) & MASK
+    return c
+
+
+@njit(**JIT)
+def _mix(a, b, c):
+    a = ((a - c) & MASK) ^ _rot(c, 4)
+    c = (c + b) & MASK
+    b = ((b - a) & MASK) ^ _rot(a, 6)
+    a = (a + c) & MASK
+    c = ((c - b) & MASK) ^ _rot(b, 8)
+    b = (b + a) & MASK
+    a = ((a - c) & MASK) ^ _rot(c, 16)
+    c = (c + b) & MASK
+    b = ((b - a) & MASK) ^ _rot(a, 19)
+    a = (a + c) & MASK
+    c = ((c - b) & MASK) ^ _rot(b, 4)
+    b = (b + a) & MASK
+    return a, b, c
+
+
+@njit(**JIT)
+def hash_uint(n, kx, ky, kz, kw):
+    """Cycles' hash_uint / hash_uint2 / 3 / 4 of the first n keys (each taken mod 2^32)."""
+    a = b = c = (0xDEADBEEF + (n << 2) + 13) & MASK
+    if n == 4:
+        a, b, c = _mix((a + kx) & MASK, (b + ky) & MASK, (c + kz) & MASK)
+        return _final((a + kw) & MASK, b, c)
+    if n >= 3:
+        c = (c + kz) & MASK
+    if n >= 2:
+        b = (b + ky) & MASK
+    return _final((a + kx) & MASK, b, c)
+
+
+# ----------------------------------------------------------------- Perlin noise
+@njit(**JIT)
+def _fade(t):
+    return t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
+
+
+@njit(**JIT)
+def _grad(d, h, x, y, z, w):
+    """The gradient the hash h picks, dotted with the offset to the corner (Cycles' grad1
+    .. grad4)."""
+    if d == 1:
+        h &= 15
+        g = 1.0 + (h & 7)
+        return -g * x if h & 8 else g * x
+    if d == 2:
+        h &= 7
+        u, v = (x, 2.0 * y) if h < 4 else (y, 2.0 * x)
+        return (-u if h & 1 else u) + (-v if h & 2 else v)
+    if d == 3:
+        h &= 15
+        u = x if h < 8 else y
+        v = y if h < 4 else (x if h == 12 or h == 14 else z)
+        return (-u if h & 1 else u) + (-v if h & 2 else v)
+    h &= 31
+    u = x if h < 24 else y
+    v = y if h < 16 else z
+    s = z if h < 8 else w
+    return (-u if h & 1 else u) + (-v if h & 2 else v) + (-s if h & 4 else s)
+
+
+@njit(**JIT)
+def perlin(d, x, y, z, w):
+    """Perlin noise of dimension d at (x, y, z, w) (1D: at x), unscaled: the corners'
+    gradients blended by the quintic fade, multilinearly."""
+    fx, fy, fz, fw = math.floor(x), math.floor(y), math.floor(z), math.floor(w)
+    kx, ky, kz, kw = int(fx), int(fy), int(fz), int(fw)
+    rx, ry, rz, rw = x - fx, y - fy, z - fz, w - fw
+    ux, uy, uz, uw = _fade(rx), _fade(ry), _fade(rz), _fade(rw)
+    total = 0.0
+    for corner in range(1 << d):
+        bx, by, bz, bw = corner & 1, (corner >> 1) & 1, (corner >> 2) & 1, (corner >> 3) & 1
+        h = hash_uint(d, (kx + bx) & MASK, (ky + by) & MASK, (kz + bz) & MASK,
+                      (kw + bw) & MASK)
+        g = _grad(d, h, rx - bx, ry - by, rz - bz, rw - bw)
+        weight = ux if bx else 1.0 - ux
+        if d >= 2:
+            weight *= uy if by else 1.0 - uy
+        if d >= 3:
+            weight *= uz if bz else 1.0 - uz
+        if d >= 4:
+            weight *= uw if bw else 1.0 - uw
+        total += weight * g
+    return total
+
+
+@njit(**JIT)
+def _wrapped(p):
+    """A coordinate repeated every 100000 (Cycles: against float precision), nudged by
+    half a cell beyond 1e6."""
+    if abs(p) < 100000.0:
+        return p
+    return p - 100000.0 * math.trunc(p / 100000.0) + (0.5 if abs(p) >= 1000000.0 else 0.0)
+
+
+@njit(**JIT)
+def snoise(d, x, y, z, w):
+    """Signed noise in about [-1, 1] (Cycles' snoise_1d .. snoise_4d; 1D reads x)."""
+    return NOISE_SCALE[d - 1] * perlin(d, _wrapped(x), _wrapped(y), _wrapped(z),
+                                       _wrapped(w))
+
+
+# ----------------------------------------------------------------- fractals
+@njit(**JIT)
+def fractal(kind, d, x, y, z, w, detail, roughness, lacunarity, offset, gain, normalize):
+    """Cycles' noise_select: the fractal `kind` (NOISE_TYPES index) of snoise over
+    floor(detail) + 1 octaves, the remainder of detail blending one more."""
+    octaves = int(detail)
+    rmd = detail - math.floor(detail)
+    if kind == 3:  # FBM
+        fscale, amp, maxamp, total = 1.0, 1.0, 0.0, 0.0
+        for _ in range(octaves + 1):
+            total += snoise(d, fscale * x, fscale * y, fscale * z, fscale * w) * amp
+            maxamp += amp
+            amp *= roughness
+            fscale *= lacunarity
+        if rmd != 0.0:
+            t = snoise(d, fscale * x, fscale * y, fscale * z, fscale * w)
+            total2 = total + t * amp
+            if normalize:
+                a = 0.5 * total / maxamp + 0.5
+                return a + rmd * (0.5 * total2 / (maxamp + amp) + 0.5 - a)
+            return total + rmd * (total2 - total)
+        return 0.5 * total / maxamp + 0.5 if normalize else total
+    if kind == 0:  # MULTIFRACTAL
+        value, pwr = 1.0, 1.0
+        for _ in range(octaves + 1):
+            value *= pwr * snoise(d, x, y, z, w) + 1.0
+            pwr *= roughness
+            x, y, z, w = x * lacunarity, y * lacunarity, z * lacunarity, w * lacunarity
+        if rmd != 0.0:
+            value *= rmd * pwr * snoise(d, x, y, z, w) + 1.0
+        return value
+    if kind == 4:  # HETERO_TERRAIN
+        pwr = roughness
+        value = offset + snoise(d, x, y, z, w)
+        x, y, z, w = x * lacunarity, y * lacunarity, z * lacunarity, w * lacunarity
+        for _ in range(1, octaves + 1):
+            value += (snoise(d, x, y, z, w) + offset) * pwr * value
+            pwr *= roughness
+            x, y, z, w = x * lacunarity, y * lacunarity, z * lacunarity, w * lacunarity
+        if rmd != 0.0:
+            value += rmd * ((snoise(d, x, y, z, w) + offset) * pwr * value)
+        return value
+    if kind == 2:  # HYBRID_MULTIFRACTAL
+        pwr, value, weight = 1.0, 0.0, 1.0
+        i = 0
+        while weight > 0.001 and i <= octaves:
+            weight = min(weight, 1.0)
+            signal = (snoise(d, x, y, z, w) + offset) * pwr
+            pwr *= roughness
+            value += weight * signal
+            weight *= gain * signal
+            x, y, z, w = x * lacunarity, y * lacunarity, z * lacunarity, w * lacunarity
+            i += 1
+        if rmd != 0.0 and weight > 0.001:
+            value += rmd * min(weight, 1.0) * ((snoise(d, x, y, z, w) + offset) * pwr)
+        return value
+    # RIDGED_MULTIFRACTAL
+    pwr = roughness
+    signal = offset - abs(snoise(d, x, y, z, w))
+    signal *= signal
+    value, weight = signal, 1.0
+    for _ in range(1, octaves + 1):
+        x, y, z, w = x * lacunarity, y * lacunarity, z * lacunarity, w * lacunarity
+        weight = min(max(signal * gain, 0.0), 1.0)
+        signal = offset - abs(snoise(d, x, y, z, w))
+        signal *= signal * weight
+        value += signal * pwr
+        pwr *= roughness
+    return value
+
+
+# ----------------------------------------------------------------- the seeded offsets
+def _hash_to_float(*floats) -> float:
+    """Cycles' hash_float(2)_to_float of float32 keys: their bits hashed, as a float32 in
+    [0, 1]."""
+    bits = [int(np.float32(f).view(np.uint32)) for f in floats]
+    n = len(bits)
+    h = hash_uint.py_func(n, *(bits + [0] * (4 - n))) if hasattr(hash_uint, "py_func") \
+        else hash_uint(n, *(bits + [0] * (4 - n)))
+    return float(np.float32(h) * (np.float32(1.0) / np.float32(0xFFFFFFFF)))
+
+
+def _offsets() -> np.ndarray:
+    """(4, 6, 4): per dimension d - 1, the offsets Cycles adds for seeds 0-5
+    (random_float_offset .. random_float4_offset: each component 100 + 100 x a hash of
+    (seed, component); 1D: of the seed alone), in float32 as Cycles has them."""
+    out = np.zeros((4, 6, 4))
+    for seed in range(6):
+        out[0, seed, 0] = np.float32(100.0) + np.float32(_hash_to_float(seed)) * np.float32(100)
+        for d in range(2, 5):
+            for j in range(d):
+                out[d - 1, seed, j] = np.float32(100.0) + \
+                    np.float32(_hash_to_float(seed, j)) * np.float32(100.0)
+    return out
+
+
+OFFSETS = _offsets()
+
+
+@njit(**JIT)
+def noise_texture(d, kind, normalize, x, y, z, w, detail, roughness, lacunarity, offset,
+                  gain, distortion, colour):
+    """Cycles' Noise Texture at the scaled point (x, y, z, w) (1D reads w): (Fac, and with
+    `colour` the Color's other two channels). Distortion moves the point by signed noise
+    at seeded offsets, a coordinate at a time; Color's green and blue are the fractal at
+    two more seeded offsets."""
+    detail = min(max(detail, 0.0), 15.0)
+    roughness = max(roughness, 0.0)
+    if d == 1:
+        x, y, z, w = w, 0.0, 0.0, 0.0
+    o = OFFSETS[d - 1]
+    if distortion != 0.0:
+        if d == 1:
+            x += snoise(1, x + o[0, 0], 0.0, 0.0, 0.0) * distortion
+        else:
+            dx = snoise(d, x + o[0, 0], y + o[0, 1], z + o[0, 2], w + o[0, 3]) * distortion
+            dy = snoise(d, x + o[1, 0], y + o[1, 1], z + o[1, 2], w + o[1, 3]) * distortion
+            dz = dw = 0.0
+            if d >= 3:
+                dz = snoise(d, x + o[2, 0], y + o[2, 1], z + o[2, 2], w + o[2, 3]) * distortion
+            if d == 4:
+                dw = snoise(d, x + o[3, 0], y + o[3, 1], z + o[3, 2], w + o[3, 3]) * distortion
+            x, y, z, w = x + dx, y + dy, z + dz, w + dw
+    value = fractal(kind, d, x, y, z, w, detail, roughness, lacunarity, offset, gain,
+                    normalize)
+    if not colour:
+        return value, value, value
+    first = d  # the seeds after distortion's
+    g = fractal(kind, d, x + o[first, 0], y + o[first, 1], z + o[first, 2], w + o[first, 3],
+                detail, roughness, lacunarity, offset, gain, normalize)
+    b = fractal(kind, d, x + o[first + 1, 0], y + o[first + 1, 1], z + o[first + 1, 2],
+                w + o[first + 1, 3], detail, roughness, lacunarity, offset, gain, normalize)
+    return value, g, b
+
+
+@njit(**JIT)
+def gradient(kind, x, y, z):
+    """Cycles' Gradient Texture (kind: GRADIENT_TYPES index), clamped to [0, 1]."""
+    if kind == 0:
+        f = x
+    elif kind == 1:
+        r = max(x, 0.0)
+        f = r * r
+    elif kind == 2:
+        r = min(max(x, 0.0), 1.0)
+        t = r * r
+        f = 3.0 * t - 2.0 * t * r
+    elif kind == 3:
+        f = (x + y) * 0.5
+    elif kind == 6:
+        f = math.atan2(y, x) / (2.0 * math.pi) + 0.5
+    else:
+        r = max(0.999999 - math.sqrt(x * x + y * y + z * z), 0.0)
+        f = r * r if kind == 5 else r
+    return min(max(f, 0.0), 1.0)

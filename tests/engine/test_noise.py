@@ -1,0 +1,57 @@
+"""Procedural textures (engine/noise.py); their agreement with Cycles' own is
+tests/cycles' procedural_textures (every noise dimension and fractal type, every gradient)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from engine import noise
+
+
+@pytest.mark.parametrize("d", [1, 2, 3, 4])
+def test_perlin_noise_is_zero_on_the_lattice_and_continuous_across_cells(d, rng):
+    """Gradient noise: each corner's gradient dotted with a zero offset there, and cells
+    that meet at a face agree on it (the quintic fade's value and slope)."""
+    for point in rng.integers(-50, 50, (20, 4)):
+        assert noise.perlin(d, *map(float, point)) == 0.0
+    for point in rng.uniform(-20.0, 20.0, (50, 4)):
+        edge = point.copy()
+        edge[0] = math.floor(edge[0]) + 1.0
+        below, above = edge.copy(), edge.copy()
+        below[0] -= 1e-9
+        above[0] += 1e-9
+        assert abs(noise.perlin(d, *below) - noise.perlin(d, *above)) < 1e-7
+
+
+def test_signed_noise_stays_within_its_scaled_range(rng):
+    for d in (1, 2, 3, 4):
+        values = [noise.snoise(d, *p) for p in rng.uniform(-100.0, 100.0, (4000, 4))]
+        assert max(abs(v) for v in values) <= 1.05, d
+        assert np.std(values) > 0.1  # (not a constant)
+
+
+def test_one_octave_of_normalized_fbm_is_signed_noise_remapped_to_0_1(rng):
+    fbm = noise.NOISE_TYPES.index("FBM")
+    for p in rng.uniform(-10.0, 10.0, (30, 4)):
+        got = noise.fractal(fbm, 3, *p, 0.0, 0.5, 2.0, 0.0, 1.0, True)
+        assert got == pytest.approx(0.5 * noise.snoise(3, *p) + 0.5, abs=1e-15)
+
+
+def test_a_fractional_detail_blends_toward_the_next_octave(rng):
+    """Detail 1.25 is a quarter of the way from 1 octave to 2 (unnormalized fBM)."""
+    fbm = noise.NOISE_TYPES.index("FBM")
+    for p in rng.uniform(-10.0, 10.0, (30, 4)):
+        one, two, mid = (noise.fractal(fbm, 2, *p, detail, 0.5, 2.0, 0.0, 1.0, False)
+                         for detail in (1.0, 2.0, 1.25))
+        assert mid == pytest.approx(one + 0.25 * (two - one), abs=1e-12)
+
+
+@pytest.mark.parametrize("kind, point, want", [
+    ("LINEAR", (0.3, 0.9, 0.0), 0.3), ("LINEAR", (1.7, 0.0, 0.0), 1.0),
+    ("QUADRATIC", (0.5, 0.0, 0.0), 0.25), ("EASING", (0.5, 0.0, 0.0), 0.5),
+    ("DIAGONAL", (0.2, 0.6, 0.0), 0.4), ("RADIAL", (0.0, 1.0, 0.0), 0.75),
+    ("SPHERICAL", (0.6, 0.0, 0.0), 0.399999), ("QUADRATIC_SPHERE", (0.0, 0.0, 2.0), 0.0)])
+def test_gradient_texture_types(kind, point, want):
+    assert noise.gradient(noise.GRADIENT_TYPES.index(kind), *point) == \
+        pytest.approx(want, abs=1e-9)
