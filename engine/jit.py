@@ -65,22 +65,30 @@ def _sources_hash() -> str:
 SOURCE_HASH = _sources_hash()
 
 
+# The core's package as imported ("engine" from a checkout, "bl_ext.user_default.specula.
+# bundled.engine" as an extension, "specula.bundled.engine" as a legacy add-on): numba's
+# cache entries name their module, and load only where it imports by that name.
+PACKAGE = __name__.rpartition(".")[0]
+
+
 def cache_root() -> str:
     """Where the core's compiled functions are cached: beside numba's own user-wide cache
-    (NUMBA_CACHE_DIR where set), in a folder named by the core's sources."""
+    (NUMBA_CACHE_DIR where set), in a folder named by the core's sources and package."""
     if not NUMBA:
         return None
     base = config.CACHE_DIR or AppDirs(appname="numba", appauthor=False).user_cache_dir
-    return os.path.join(base, f"specula-{SOURCE_HASH}")
+    package = hashlib.sha256(PACKAGE.encode()).hexdigest()[:6]
+    return os.path.join(base, f"specula-{SOURCE_HASH}-{package}")
 
 
 if NUMBA:
     class EngineCacheLocator(caching._SourceFileBackedLocatorMixin, caching._CacheLocator):
-        """numba's cache for the core's own functions, found by the core's sources and not
-        by the folder they were installed in: numba's locators name the cache after the
-        source folder, so the same core installed twice (Blender 4.2 and 5.0 beside each
-        other, or reinstalled) compiled every kernel again, the generic one taking minutes.
-        Entries still carry numba's stamp (the source file's content hash) and version."""
+        """numba's cache for the core's own functions, found by the core's sources and
+        package name, not by the folder they were installed in: numba's locators name the
+        cache after the source folder, so the same extension installed twice (Blender 4.2
+        and 5.0 beside each other, or reinstalled) compiled every kernel again, the
+        generic one taking minutes. Entries still carry numba's stamp (the source file's
+        content hash) and version."""
 
         def __init__(self, py_func, py_file):
             self._py_file = py_file

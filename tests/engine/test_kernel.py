@@ -7,6 +7,7 @@ generic kernel and switch at a pass boundary. All the statistical and known-answ
 (furnace, invisible glass, the Cycles comparisons' power tests) then hold for both.
 """
 
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -520,29 +521,50 @@ def test_without_numba_the_same_functions_run_as_python(tmp_path):
 
 
 # ----------------------------------------------------------------- the kernels' cache
-def test_a_copy_of_the_core_elsewhere_finds_the_same_kernel_cache(tmp_path):
+def test_a_copy_of_the_core_elsewhere_loads_the_same_kernels(tmp_path):
     """numba names its cache after the source folder, so the same core installed in two
     places (the extension in Blender 4.2 and in 5.0, a reinstall) compiled every kernel
     again: minutes for the generic one. The core's own locator (jit.EngineCacheLocator)
-    finds them by the sources instead: a copy of engine/ elsewhere sees the same cache
-    folder and the same kernel files."""
+    finds them by the sources and the package name instead: a copy of engine/ elsewhere
+    loads this checkout's kernels, compiling none; a copy imported under another package
+    name has a cache of its own (numba's entries load only where their module imports
+    by name: the extension's cache from a checkout's failed with "No module named
+    'engine'")."""
     import shutil
     import subprocess
     import sys
 
-    from engine import jit, kernels
+    from engine import jit
 
-    shutil.copytree(jit.ENGINE_DIR, tmp_path / "engine",
-                    ignore=shutil.ignore_patterns("__pycache__"))
-    code = ("import sys; sys.path.insert(0, sys.argv[1]); from engine import jit, kernels; "
-            "k = kernels.Kernel(kernels.generic_constants()); "
-            "print(jit.ENGINE_DIR); print(k.shade._cache._cache_path); print(k._marker())")
-    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True,
-                         text=True, timeout=300, check=True).stdout.split("\n")
-    here = kernels.Kernel(kernels.generic_constants())
-    assert out[0] == str(tmp_path / "engine")  # the copy ran, not this checkout
-    assert out[1] == here.shade._cache._cache_path == jit.cache_root()
-    assert out[2] == here._marker()
+    box = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(), World((0, 0, 0)))
+    st = scenes.settings(width=8, height=6, samples=1, kernel="specialised")
+    render(box, st)  # this checkout's kernel for the box, compiled or loaded
+    for folder in ("copy", "vendor"):
+        shutil.copytree(jit.ENGINE_DIR, tmp_path / folder / "engine",
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "vendor" / "__init__.py").write_text("")
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]); sys.path.insert(0, sys.argv[2]); "
+        "import engine, importlib; from tests import scenes; "
+        "vendor = importlib.import_module('vendor.engine'); "
+        "print(engine.jit.ENGINE_DIR); print(engine.jit.cache_root()); "
+        "print(vendor.jit.cache_root()); "
+        "box = scenes.cornell_box(spheres=False).build(scenes.cornell_camera(), "
+        "engine.World((0, 0, 0))); "
+        "r = engine.render(box, scenes.settings(width=8, height=6, samples=1, "
+        "kernel='specialised')); "
+        "(k,) = engine.kernels._ready.values(); "
+        "print(sum(k.shade.stats.cache_hits.values()), "
+        "sum(k.shade.stats.cache_misses.values()))")
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "copy"), str(tmp_path)],
+                         capture_output=True, text=True, timeout=600,
+                         cwd=os.path.dirname(jit.ENGINE_DIR))
+    assert out.returncode == 0, out.stderr[-3000:]
+    lines = out.stdout.split("\n")
+    assert lines[0] == str(tmp_path / "copy" / "engine")  # the copy ran, not this checkout
+    assert lines[1] == jit.cache_root() != lines[2]
+    hits, misses = map(int, lines[3].split())
+    assert hits >= 1 and misses == 0, lines[3]
 
 
 def test_old_cache_folders_are_pruned(tmp_path):
