@@ -23,7 +23,8 @@ WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 # Node kinds whose output varies over a surface: a chain with none of them is a constant.
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
-           "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient")
+           "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
+           "ShaderNodeTexWave", "ShaderNodeTexMagic")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -587,6 +588,25 @@ def _n_gradient(c, node, out):
     return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
 
 
+def _n_wave(c, node, out):
+    """Wave Texture: bands and rings in every direction, every profile, distortion."""
+    nz = core.load().noise
+    inputs = [c.input(enabled_input(node, name), "VALUE") for name in (
+        "Scale", "Distortion", "Detail", "Detail Scale", "Detail Roughness", "Phase Offset")]
+    reg = c.program.emit(c.sh.OP_WAVE, 4, a=_texture_vector(c, node), params=[
+        *inputs, nz.WAVE_TYPES.index(node.wave_type), nz.WAVE_BANDS.index(node.bands_direction),
+        nz.WAVE_RINGS.index(node.rings_direction), nz.WAVE_PROFILES.index(node.wave_profile)])
+    return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
+
+
+def _n_magic(c, node, out):
+    reg = c.program.emit(c.sh.OP_MAGIC, 4, a=_texture_vector(c, node),
+                         b=c.input(enabled_input(node, "Scale"), "VALUE"),
+                         c=c.input(enabled_input(node, "Distortion"), "VALUE"),
+                         d=int(node.turbulence_depth))
+    return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
+
+
 def _n_color_ramp(c, node, out):
     """Color Ramp as Cycles bakes it: a table of RAMP_TABLE_SIZE entries from Blender's own
     ramp evaluation, looked up (linearly unless Constant) at the factor."""
@@ -657,6 +677,8 @@ NODES = {
     "ShaderNodeTexChecker": _n_checker,
     "ShaderNodeTexNoise": _n_noise,
     "ShaderNodeTexGradient": _n_gradient,
+    "ShaderNodeTexWave": _n_wave,
+    "ShaderNodeTexMagic": _n_magic,
     "ShaderNodeValToRGB": _n_color_ramp,
     "ShaderNodeHueSaturation": _n_hue_saturation,
     "ShaderNodeVectorMath": _n_vector_math,

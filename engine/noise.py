@@ -308,3 +308,75 @@ def gradient(kind, x, y, z):
         r = max(0.999999 - math.sqrt(x * x + y * y + z * z), 0.0)
         f = r * r if kind == 5 else r
     return min(max(f, 0.0), 1.0)
+
+
+WAVE_TYPES = ("BANDS", "RINGS")
+WAVE_BANDS = ("X", "Y", "Z", "DIAGONAL")
+WAVE_RINGS = ("X", "Y", "Z", "SPHERICAL")
+WAVE_PROFILES = ("SIN", "SAW", "TRI")
+
+
+@njit(**JIT)
+def wave(kind, bands, rings, profile, x, y, z, distortion, detail, dscale, droughness,
+         phase):
+    """Cycles' Wave Texture (svm_wave) at the scaled point: bands along an axis or the
+    diagonal, or rings about an axis or the origin, 20 per unit, shifted by `phase` and
+    distorted by normalized fBM noise (lacunarity 2); a sine, saw or triangle profile."""
+    x, y, z = (x + 0.000001) * 0.999999, (y + 0.000001) * 0.999999, (z + 0.000001) * 0.999999
+    if kind == 0:
+        n = (x * 20.0 if bands == 0 else y * 20.0 if bands == 1 else z * 20.0 if bands == 2
+             else (x + y + z) * 10.0)
+    else:
+        rx, ry, rz = (0.0 if rings == 0 else x), (0.0 if rings == 1 else y), \
+            (0.0 if rings == 2 else z)
+        n = math.sqrt(rx * rx + ry * ry + rz * rz) * 20.0
+    n += phase
+    if distortion != 0.0:
+        fbm = fractal(3, 3, x * dscale, y * dscale, z * dscale, 0.0,
+                      min(max(detail, 0.0), 15.0), droughness, 2.0, 0.0, 1.0, True)
+        n += distortion * (fbm * 2.0 - 1.0)
+    if profile == 0:
+        return 0.5 + 0.5 * math.sin(n - 0.5 * math.pi)
+    n /= 2.0 * math.pi
+    if profile == 1:
+        return n - math.floor(n)
+    return abs(n - math.floor(n + 0.5)) * 2.0
+
+
+@njit(**JIT)
+def _fmod(p, m):
+    return p - m * math.trunc(p / m)
+
+
+@njit(**JIT)
+def magic(x, y, z, scale, depth, distortion):
+    """Cycles' Magic Texture (svm_magic): sines and cosines of the point folded into
+    each other `depth` times, as an RGB colour about 0.5."""
+    px, py, pz = _fmod(x, 2.0 * math.pi), _fmod(y, 2.0 * math.pi), _fmod(z, 2.0 * math.pi)
+    a = math.sin((px + py + pz) * 5.0 * scale)
+    b = math.cos((-px + py - pz) * 5.0 * scale)
+    c = -math.cos((-px - py + pz) * 5.0 * scale)
+    if depth > 0:
+        a, b, c = a * distortion, b * distortion, c * distortion
+        b = -math.cos(a - b + c) * distortion
+        if depth > 1:
+            a = math.cos(a - b - c) * distortion
+        if depth > 2:
+            c = math.sin(-a - b - c) * distortion
+        if depth > 3:
+            a = -math.cos(-a + b - c) * distortion
+        if depth > 4:
+            b = -math.sin(-a + b + c) * distortion
+        if depth > 5:
+            b = -math.cos(-a + b + c) * distortion
+        if depth > 6:
+            a = math.cos(a + b + c) * distortion
+        if depth > 7:
+            c = math.sin(a + b - c) * distortion
+        if depth > 8:
+            a = -math.cos(-a - b + c) * distortion
+        if depth > 9:
+            b = -math.sin(a - b + c) * distortion
+    if distortion != 0.0:
+        a, b, c = a / (2.0 * distortion), b / (2.0 * distortion), c / (2.0 * distortion)
+    return 0.5 - a, 0.5 - b, 0.5 - c

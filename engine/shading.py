@@ -66,6 +66,12 @@ OP_NOISE = 20       # reg[out:out+3] Color, reg[out+3] Fac of Cycles' Noise Text
 #                     dimensions, type (noise.NOISE_TYPES) and normalize; c: Color is read
 OP_GRADIENT = 21    # reg[out:out+3] Color, reg[out+3] Fac of the Gradient Texture of type d
 #                     (noise.GRADIENT_TYPES) at reg[a:a+3]
+OP_WAVE = 22        # reg[out:out+3] Color, reg[out+3] Fac of the Wave Texture at reg[a:a+3];
+#                     params[p:p+6] the registers of Scale, Distortion, Detail, Detail Scale,
+#                     Detail Roughness and Phase Offset, then its type, bands and rings
+#                     directions and profile (noise.WAVE_*)
+OP_MAGIC = 23       # reg[out:out+3] Color, reg[out+3] Fac of the Magic Texture at reg[a:a+3],
+#                     scale reg[b], distortion reg[c], depth d
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -635,6 +641,18 @@ def node_noise(ins, reg, params):
     reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = value, g, b, value
 
 
+@njit(**JIT)
+def node_wave(ins, reg, params):
+    """Cycles' Wave Texture (noise.wave) at the vector times Scale."""
+    a, p, out = ins[2], ins[7], ins[1]
+    scale = reg[int(params[p])]
+    f = noise.wave(int(params[p + 6]), int(params[p + 7]), int(params[p + 8]),
+                   int(params[p + 9]), reg[a] * scale, reg[a + 1] * scale, reg[a + 2] * scale,
+                   reg[int(params[p + 1])], reg[int(params[p + 2])], reg[int(params[p + 3])],
+                   reg[int(params[p + 4])], reg[int(params[p + 5])])
+    reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = f, f, f, f
+
+
 @njit(**INLINE)
 def node_ramp(ins, reg, params):
     """Cycles' rgb_ramp_lookup: the table at fac clamped to [0, 1], linear between entries
@@ -826,6 +844,14 @@ def run(first, end, pt, uv, f, u, v, reg):
             a = ins[2]
             g = noise.gradient(ins[5], reg[a], reg[a + 1], reg[a + 2])
             reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = g, g, g, g
+        elif op == OP_WAVE:
+            node_wave(ins, reg, pt.params)
+        elif op == OP_MAGIC:
+            a = ins[2]
+            r, g, b = noise.magic(reg[a], reg[a + 1], reg[a + 2], reg[ins[3]], ins[5],
+                                  reg[ins[4]])
+            reg[out], reg[out + 1], reg[out + 2] = r, g, b
+            reg[out + 3] = (r + g + b) / 3.0
         elif op == OP_COLOUR_SPACE:
             a = ins[2]
             reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],

@@ -317,13 +317,14 @@ def _colour_and_value_swapped():
 
 
 @contextmanager
-def _noise_types_rotated():
-    """Each Noise Texture rendered as the next fractal type, and each Gradient Texture as
-    the next gradient."""
+def _texture_types_rotated():
+    """Each Noise Texture rendered as the next fractal type, each Gradient Texture as the
+    next gradient and each Wave Texture with the next profile."""
     nz = renderers.core().noise
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(nz, "NOISE_TYPES", nz.NOISE_TYPES[1:] + nz.NOISE_TYPES[:1])
-        mp.setattr(nz, "GRADIENT_TYPES", nz.GRADIENT_TYPES[1:] + nz.GRADIENT_TYPES[:1])
+        for name in ("NOISE_TYPES", "GRADIENT_TYPES", "WAVE_PROFILES"):
+            kinds = getattr(nz, name)
+            mp.setattr(nz, name, kinds[1:] + kinds[:1])
         yield
 
 
@@ -736,7 +737,7 @@ INJECTIONS = {
     "colour_alpha_opaque": ("colour_attributes", None, _colour_alpha_opaque),
     "colour_and_value_swapped": ("blend_modes", None, _colour_and_value_swapped),
     "hsv_read_as_hsl": ("blend_modes", None, _hsv_read_as_hsl),
-    "noise_types_rotated": ("procedural_textures", None, _noise_types_rotated),
+    "texture_types_rotated": ("procedural_textures", None, _texture_types_rotated),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
     "emission_strength_as_its_mean": ("emission_strength_texture", _emission_as_its_mean,
                                       None),

@@ -1289,14 +1289,39 @@ def _gradient_feed(kind):
     return feed
 
 
+def _wave_feed(kind, direction, profile, output="Color", **inputs):
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexWave")
+        node.wave_type, node.wave_profile = kind, profile
+        if kind == "BANDS":
+            node.bands_direction = direction
+        else:
+            node.rings_direction = direction
+        for key, value in inputs.items():
+            node.inputs[key].default_value = value
+        return node.outputs[output]
+    return feed
+
+
+def _magic_feed(depth, output="Color", **inputs):
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexMagic")
+        node.turbulence_depth = depth
+        for key, value in inputs.items():
+            node.inputs[key].default_value = value
+        return node.outputs[output]
+    return feed
+
+
 def procedural_textures():
     """Procedural textures (issue 14, point 1: a new node is one new function): Noise
     Textures of every dimension and fractal type (fBM, normalized or not and with a
     fractional detail; multifractal, hybrid and ridged multifractal, hetero terrain;
-    distortion; the Color output), and every Gradient Texture type, on emitting cards seen
-    head-on by an orthographic camera: each pixel is the texture itself."""
+    distortion; the Color output), every Gradient Texture type, and Wave (bands and rings,
+    every profile, distortion) and Magic Textures, on emitting cards seen head-on by an
+    orthographic camera: each pixel is the texture itself."""
     scene = bs.new_scene()
-    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 96))
     cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
     bs.black_world(scene)
     noises = [("3D", "FBM", "Factor", {}),
@@ -1309,13 +1334,24 @@ def procedural_textures():
                                                         "Scale": 8.0}),
               ("3D", "HETERO_TERRAIN", "Factor", {"Offset": 0.7, "Detail": 2.5})]
     for i, (d, kind, output, inputs) in enumerate(noises):
-        _glowing_card(f"N{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.27), (0.5, 0.5),
+        _glowing_card(f"N{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.55), (0.5, 0.5),
                       _noise_feed(d, kind, output, **inputs))
     kinds = ("LINEAR", "QUADRATIC", "EASING", "DIAGONAL", "SPHERICAL", "QUADRATIC_SPHERE",
              "RADIAL")
     for i, kind in enumerate(kinds):
-        _glowing_card(f"G{kind}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, -0.3), (0.5, 0.5),
+        _glowing_card(f"G{kind}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.0), (0.5, 0.5),
                       _gradient_feed(kind))
+    others = [_wave_feed("BANDS", "X", "SIN", Scale=1.5),
+              _wave_feed("BANDS", "DIAGONAL", "SAW", Scale=1.0, Distortion=4.0, Detail=3.0),
+              _wave_feed("RINGS", "SPHERICAL", "TRI", "Fac", Scale=1.2),
+              _wave_feed("RINGS", "Z", "SIN", Scale=0.8, Distortion=6.0, Detail=2.5,
+                         **{"Detail Scale": 2.0, "Detail Roughness": 0.7,
+                            "Phase Offset": 1.0}),
+              _magic_feed(2, Scale=3.0),
+              _magic_feed(5, Scale=2.0, Distortion=2.5),
+              _magic_feed(8, "Fac", Scale=4.0, Distortion=1.5)]
+    for i, feed in enumerate(others):
+        _glowing_card(f"W{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, -0.55), (0.5, 0.5), feed)
 
 
 def _refraction(name, colour, roughness, ior=1.45):
@@ -2087,7 +2123,7 @@ _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
              cycles_samples=128))
-_add(Variant("procedural_textures", procedural_textures, resolution=(224, 64), max_bounces=0,
+_add(Variant("procedural_textures", procedural_textures, resolution=(224, 96), max_bounces=0,
              samples=64, cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,

@@ -55,3 +55,18 @@ def test_a_fractional_detail_blends_toward_the_next_octave(rng):
 def test_gradient_texture_types(kind, point, want):
     assert noise.gradient(noise.GRADIENT_TYPES.index(kind), *point) == \
         pytest.approx(want, abs=1e-9)
+
+
+def test_wave_profiles_and_magic_are_bounded(rng):
+    """Wave's sine, saw and triangle profiles stay in [0, 1]; Magic is 0.5 where its
+    distortion is 0 at depth 0 (sin and cos divided by nothing, then 0.5 - them)."""
+    for p in rng.uniform(-5.0, 5.0, (200, 3)):
+        for profile in range(3):
+            for kind in range(2):
+                f = noise.wave(kind, 3, 3, profile, *p, 2.0, 2.0, 1.0, 0.5, 0.3)
+                assert 0.0 <= f <= 1.0
+        r, g, b = noise.magic(*p, 1.0, 0, 0.0)
+        assert (r, g, b) == pytest.approx((0.5 - math.sin((p.sum()) * 5.0),
+                                           0.5 - math.cos((-p[0] + p[1] - p[2]) * 5.0),
+                                           0.5 + math.cos((-p[0] - p[1] + p[2]) * 5.0)),
+                                          abs=1e-9)
