@@ -52,19 +52,17 @@ def _final(a, b, c):
 
 
 @njit(**JIT)
+def _step(x, y, z, k):
+    """One line of lookup3's mix: x -= y; x ^= rot(y, k); y += z."""
+    return ((x - y) & MASK) ^ _rot(y, k), (y + z) & MASK
+
+
+@njit(**JIT)
 def _mix(a, b, c):
-    a = ((a - c) & MASK) ^ _rot(c, 4)
-    c = (c + b) & MASK
-    b = ((b - a) & MASK) ^ _rot(a, 6)
-    a = (a + c) & MASK
-    c = ((c - b) & MASK) ^ _rot(b, 8)
-    b = (b + a) & MASK
-    a = ((a - c) & MASK) ^ _rot(c, 16)
-    c = (c + b) & MASK
-    b = ((b - a) & MASK) ^ _rot(a, 19)
-    a = (a + c) & MASK
-    c = ((c - b) & MASK) ^ _rot(b, 4)
-    b = (b + a) & MASK
+    for k1, k2, k3 in ((4, 6, 8), (16, 19, 4)):
+        a, c = _step(a, c, b, k1)
+        b, a = _step(b, a, c, k2)
+        c, b = _step(c, b, a, k3)
     return a, b, c
 
 

@@ -270,37 +270,35 @@ def _generated_as_object():
 
 
 @contextmanager
+def _colour_attributes_read(change):
+    """The exporter's colour attributes (RGB, or alpha in the first channel) as
+    `change(values, alpha)` makes them."""
+    from addon import exporter
+
+    read = exporter._colour_attribute
+
+    def patched(mesh, name, tri_verts, tri_loops, alpha=False):
+        values = read(mesh, name, tri_verts, tri_loops, alpha)
+        return None if values is None else change(values, alpha)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_colour_attribute", patched)
+        yield
+
+
 def _colour_attributes_encoded():
     """The exporter reads colour attributes as stored sRGB, not decoded to linear."""
-    from addon import exporter
-
-    colour_attribute = exporter._colour_attribute
-
-    def encoded(mesh, name, tri_verts, tri_loops, alpha=False):
-        rgb = colour_attribute(mesh, name, tri_verts, tri_loops, alpha)
-        return None if rgb is None or alpha else np.maximum(rgb, 0.0) ** (1.0 / 2.2)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(exporter, "_colour_attribute", encoded)
-        yield
+    return _colour_attributes_read(
+        lambda rgb, alpha: rgb if alpha else np.maximum(rgb, 0.0) ** (1.0 / 2.2))
 
 
-@contextmanager
 def _colour_alpha_opaque():
     """The exporter reads every colour attribute's alpha as 1."""
-    from addon import exporter
-
-    colour_attribute = exporter._colour_attribute
-
-    def opaque(mesh, name, tri_verts, tri_loops, alpha=False):
-        out = colour_attribute(mesh, name, tri_verts, tri_loops, alpha)
-        if out is not None and alpha:
-            out[..., 0] = 1.0
-        return out
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(exporter, "_colour_attribute", opaque)
-        yield
+    def opaque(values, alpha):
+        if alpha:
+            values[..., 0] = 1.0
+        return values
+    return _colour_attributes_read(opaque)
 
 
 @contextmanager
