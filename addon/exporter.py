@@ -117,10 +117,11 @@ def _uv_maps(mesh, tri_loops) -> dict:
     return maps
 
 
-def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None) -> dict:
+def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -> dict:
     """Per-corner (t, 3, 3) values of the maps named in `spaces`: Object, the vertex in the
     object's own space; Generated, the mesh's texture space as Cycles' mesh_texture_space
-    maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis); colour attributes
+    maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis); Normal, the corner
+    normals (`normals`, object space; a flat face's are its own); colour attributes
     (shading.COLOUR_ATTRIBUTE), linear RGB, per corner or per point (a mesh without the
     attribute has no map: it reads 0 there, warned, as Cycles' missing attribute)."""
     sh = core.load().shading
@@ -134,6 +135,8 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None) -> dict:
                     out[name] = colours
     if sh.OBJECT in spaces:
         out[sh.OBJECT] = co[tri_verts]
+    if sh.NORMAL in spaces and normals is not None:
+        out[sh.NORMAL] = normals.astype(np.float32)
     if sh.GENERATED in spaces:
         loc = np.array(mesh.texspace_location, np.float32)
         size = np.array(mesh.texspace_size, np.float32)
@@ -213,7 +216,7 @@ def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None, spaces=(
     maps = _uv_maps(mesh, tri_loops) if uv else {}
     if uv:
         maps.update(_texture_spaces(mesh, co.reshape(-1, 3), tri_verts.reshape(-1, 3), spaces,
-                                    tri_loops))
+                                    tri_loops, normals))
     return MeshData(co.reshape(-1, 3).astype(np.float64), tri_verts.reshape(-1, 3).astype(np.int64),
                     mat_index, normals.astype(np.float64), smooth, material_lut, maps, tangents)
 
@@ -286,7 +289,7 @@ class _Exporter:
         self.textured = bool(programs)
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
-                              if name in (sh.GENERATED, sh.OBJECT)
+                              if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA))})
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
@@ -508,14 +511,6 @@ def _background_node(world):
     return node if node.bl_idname == "ShaderNodeBackground" else None
 
 
-def _euler_xyz(rx, ry, rz):
-    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
-    x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return z @ y @ x
-
-
 def world_environment(world, warn):
     """The world's equirectangular Environment Texture as keyword arguments of the core's
     World (environment = image x strength, texture_from_world = a Mapping node's rotation),
@@ -562,7 +557,8 @@ def world_environment(world, warn):
     if vector is not None and vector.is_linked:
         mapping = vector.links[0].from_node
         if mapping.bl_idname == "ShaderNodeMapping":
-            r = _euler_xyz(*mapping.inputs["Rotation"].default_value[:3])
+            r = np.array(core.load().shading.euler_rotation(
+                *(float(a) for a in mapping.inputs["Rotation"].default_value[:3])))
             # POINT and VECTOR rotate the lookup vector; TEXTURE applies the inverse.
             rotation = r.T if mapping.vector_type == "TEXTURE" else r
         elif mapping.bl_idname != "ShaderNodeTexCoord":

@@ -498,12 +498,33 @@ class _Constants:
                                 if k.to_socket == out), None)
                 return None if through is None else self.input(through)
             fn = NODE_CONSTANTS.get(node.bl_idname)
-            return fn(self, node, out) if fn is not None else self.pass_through(node, out)
+            if fn is not None:
+                return fn(self, node, out)
+            v = self.folded(node, out)
+            return v if v is not None else self.pass_through(node, out)
         except (ArithmeticError, ValueError):  # e.g. Power overflowing: not a usable constant
             self.notes.append(f"node '{node.name}' ({_label(node)}) has no finite value")
             return None
         finally:
             self.depth -= 1
+
+    def folded(self, node, out):
+        """A node the kernel evaluates (Map Range, Curves ...) on inputs that do not vary:
+        its program run once, so the constant is exact and the kernel's own functions make
+        it. None for a node that reads the surface, or one no program can hold."""
+        if node.bl_idname not in shader_nodes.NODES or node.bl_idname in shader_nodes.VARYING \
+                or any(shader_nodes.varies(s) for s in node.inputs if s.enabled):
+            return None
+        compiler = shader_nodes.Compiler({})
+        try:
+            reg, kind = compiler.output(out)
+        except shader_nodes.Unsupported:
+            return None
+        compiler.program.out = reg
+        values = core.load().shading.evaluate(compiler.program)
+        if shader_nodes.WIDTHS.get(kind) == 3:
+            return tuple(float(x) for x in values[reg:reg + 3])
+        return float(values[reg])
 
     def pass_through(self, node, out):
         """An unknown node that adjusts a linked input of its output's type (Hue/Saturation,

@@ -24,7 +24,7 @@ WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
-           "ShaderNodeTexWave", "ShaderNodeTexMagic")
+           "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -393,12 +393,25 @@ def _n_image(c, node, out):
 
 
 def _n_tex_coord(c, node, out):
-    spaces = {"UV": "", "Generated": c.sh.GENERATED, "Object": c.sh.OBJECT}
-    if out.name not in spaces or node.from_instancer or \
-            out.name == "Object" and node.object is not None:
-        raise Unsupported(f"texture coordinate '{node.name}' output {out.name}"
-                          + (" of another object" if out.name == "Object" else ""))
-    return c.program.uv(spaces[out.name]), "VECTOR"
+    """Texture Coordinate: UV, Generated, Object (of the shaded object), Normal, Camera,
+    Window and Reflection (Cycles' svm_node_tex_coord)."""
+    sh, p = c.sh, c.program
+    name = out.name
+    if node.from_instancer or name == "Object" and node.object is not None:
+        raise Unsupported(f"texture coordinate '{node.name}' output {name}"
+                          + (" of another object" if name == "Object" else " from the instancer"))
+    if name in ("Normal", "Reflection") and not c.view_dependent:
+        raise Unsupported(f"texture coordinate '{node.name}' output {name} in an emission")
+    maps = {"UV": "", "Generated": sh.GENERATED, "Object": sh.OBJECT, "Camera": sh.CAMERA}
+    if name in maps:
+        return p.uv(maps[name]), "VECTOR"
+    if name == "Normal":
+        return p.emit(sh.OP_FACING, 3, a=p.uv(sh.NORMAL)), "VECTOR"
+    if name == "Window":
+        return p.emit(sh.OP_PROJECT, 3, a=p.uv(sh.WINDOW)), "VECTOR"
+    if name == "Reflection":
+        return p.emit(sh.OP_REFLECTION, 3), "VECTOR"
+    raise Unsupported(f"texture coordinate '{node.name}' output {name}")
 
 
 def _n_color_attribute(c, node, out):
@@ -417,26 +430,17 @@ def _n_uv_map(c, node, out):
 
 
 def _n_mapping(c, node, out):
+    """Mapping: every type, every input linkable (Location is unused by Vector and Normal,
+    as in Cycles)."""
     kind = node.vector_type
-    values = {}
-    for name in ("Location", "Rotation", "Scale"):
-        s = enabled_input(node, name)
-        if s is not None and live_link(s) is not None:
-            raise Unsupported(f"mapping '{node.name}' with a linked {name}")
-        values[name] = np.array(s.default_value[:3] if s is not None else (0, 0, 0), float)
-    rot = np.array(mathutils.Euler(values["Rotation"], "XYZ").to_matrix())
-    loc, scale = values["Location"], values["Scale"]
-    if kind in ("POINT", "VECTOR"):
-        m = rot @ np.diag(scale)
-        t = loc if kind == "POINT" else np.zeros(3)
-    elif kind == "TEXTURE" and np.all(scale != 0):
-        m = np.diag(1.0 / scale) @ rot.T
-        t = -m @ loc
-    else:
+    if kind not in c.sh.MAPPINGS:
         raise Unsupported(f"mapping '{node.name}' type {kind}")
-    vec = c.input(enabled_input(node, "Vector"), "VECTOR")
-    return c.program.emit(c.sh.OP_MAPPING, 3, a=vec,
-                          params=np.hstack([m, t[:, None]]).ravel()), "VECTOR"
+    vec, loc, rot, scale = (c.input(enabled_input(node, name), "VECTOR")
+                            if enabled_input(node, name) is not None
+                            else c.program.const([0.0, 0.0, 0.0])
+                            for name in ("Vector", "Location", "Rotation", "Scale"))
+    return c.program.emit(c.sh.OP_VECTOR_MAPPING, 3, a=vec, b=loc, c=rot, d=scale,
+                          e=c.sh.MAPPINGS.index(kind)), "VECTOR"
 
 
 def _n_value(c, node, out):
@@ -607,6 +611,17 @@ def _n_magic(c, node, out):
     return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
 
 
+def _n_white_noise(c, node, out):
+    """White Noise Texture: every dimension. Its Vector unlinked is the socket's own value
+    (Cycles gives this node no default coordinates)."""
+    d = int(node.noise_dimensions[0])
+    w = enabled_input(node, "W")
+    w = c.input(w, "VALUE") if w is not None else c.program.const([0.0])
+    reg = c.program.emit(c.sh.OP_WHITE_NOISE, 4, a=c.input(enabled_input(node, "Vector"),
+                                                          "VECTOR"), b=w, d=d)
+    return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
+
+
 def _n_color_ramp(c, node, out):
     """Color Ramp as Cycles bakes it: a table of RAMP_TABLE_SIZE entries from Blender's own
     ramp evaluation, looked up (linearly unless Constant) at the factor."""
@@ -617,6 +632,58 @@ def _n_color_ramp(c, node, out):
     reg = c.program.emit(c.sh.OP_RAMP, 4, a=fac, b=n, c=int(ramp.interpolation != "CONSTANT"),
                          params=table)
     return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
+
+
+def _n_map_range(c, node, out):
+    """Map Range: float and vector, every interpolation type, Clamp."""
+    vector = node.data_type == "FLOAT_VECTOR"
+    if node.data_type not in ("FLOAT", "FLOAT_VECTOR"):
+        raise Unsupported(f"map range '{node.name}' of {node.data_type}")
+    kind, width = ("VECTOR", 3) if vector else ("VALUE", 1)
+    suffix = "_FLOAT3" if vector else ""
+    names = ["Vector" if vector else "Value"] + [
+        n.replace(" ", "_") + suffix if vector else n
+        for n in ("From Min", "From Max", "To Min", "To Max", "Steps")]
+    sockets = {s.identifier: s for s in node.inputs}
+    regs = [c.input(sockets[n], kind) for n in names]
+    reg = c.program.emit(c.sh.OP_MAP_RANGE, width, *regs[:5], params=[
+        regs[5], c.sh.MAP_RANGES.index(node.interpolation_type), int(node.clamp), width])
+    return reg, kind
+
+
+def _n_clamp(c, node, out):
+    value, lo, hi = (c.input(node.inputs[n], "VALUE") for n in ("Value", "Min", "Max"))
+    return c.program.emit(c.sh.OP_CLAMP, 1, a=value, b=lo, c=hi,
+                          d=int(node.clamp_type == "RANGE")), "VALUE"
+
+
+def _n_curves(c, node, out):
+    """RGB Curves, Vector Curves and Float Curve as Cycles bakes them (its
+    curvemapping_color_to_array / float_to_array): a table of RAMP_TABLE_SIZE + 1 entries
+    over the range from the curves' first to last points (RGB: each channel's curve after
+    the combined one), from Blender's own curve evaluation."""
+    mapping = node.mapping
+    mapping.update()
+    rgb, single = node.bl_idname == "ShaderNodeRGBCurve", node.bl_idname == "ShaderNodeFloatCurve"
+    curves = list(mapping.curves)[:1 if single else (4 if rgb else 3)]
+    lo = min(cm.points[0].location[0] for cm in curves)
+    hi = max(cm.points[-1].location[0] for cm in curves)
+    n = c.sh.RAMP_TABLE_SIZE
+    table = []
+    for i in range(n + 1):
+        t = lo + i / n * (hi - lo)
+        if rgb:
+            t = mapping.evaluate(curves[3], t)
+        values = [mapping.evaluate(curves[0 if single else j], t) for j in range(3)]
+        table.extend(values + [1.0])
+    kind = "VALUE" if single else ("RGBA" if rgb else "VECTOR")
+    width = 1 if single else 3
+    value = c.input(enabled_input(node, "Value" if single else ("Color" if rgb else "Vector")),
+                    kind)
+    fac = c.input(node.inputs[0], "VALUE")
+    return c.program.emit(c.sh.OP_CURVES, width, a=value, b=fac, c=n + 1,
+                          d=int(mapping.extend == "EXTRAPOLATED"), e=width,
+                          params=[lo, hi] + table), kind
 
 
 def _n_hue_saturation(c, node, out):
@@ -679,6 +746,12 @@ NODES = {
     "ShaderNodeTexGradient": _n_gradient,
     "ShaderNodeTexWave": _n_wave,
     "ShaderNodeTexMagic": _n_magic,
+    "ShaderNodeTexWhiteNoise": _n_white_noise,
+    "ShaderNodeMapRange": _n_map_range,
+    "ShaderNodeClamp": _n_clamp,
+    "ShaderNodeRGBCurve": _n_curves,
+    "ShaderNodeVectorCurve": _n_curves,
+    "ShaderNodeFloatCurve": _n_curves,
     "ShaderNodeValToRGB": _n_color_ramp,
     "ShaderNodeHueSaturation": _n_hue_saturation,
     "ShaderNodeVectorMath": _n_vector_math,

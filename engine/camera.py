@@ -78,6 +78,24 @@ class CameraModel:
                           self.position, self.forward)
 
 
+def view_maps(model: CameraModel, corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The per-corner values of Texture Coordinate's Camera and Window outputs
+    (shading.CAMERA, WINDOW) at `corners` (t, 3, 3), recentred as the scene's vertices:
+    the camera-space position, and homogeneous coordinates (X, Y, W) whose X / W, Y / W is
+    the position in the frame from 0 at its bottom left to 1 at its top right (Cycles'
+    worldtondc: the whole frame, shift included, whatever region is rendered). Perspective:
+    W is the depth, and (x / z - shift) / half + 1, halved, is the frame position (as
+    `project` finds the raster); orthographic: W = 1."""
+    local = (corners - model.position) @ model.world_from_camera
+    x, y, z = local[..., 0], local[..., 1], local[..., 2]
+    cam = model.cam
+    sx, sy = cam.shift_x * 2 * model.fit_half, cam.shift_y * 2 * model.fit_half
+    w = np.ones_like(z) if cam.type == "ORTHO" else z
+    window = np.stack([(x + (model.half_x - sx) * w) / (2 * model.half_x),
+                       (y + (model.half_y - sy) * w) / (2 * model.half_y), w], axis=-1)
+    return local, window
+
+
 @njit(**INLINE)
 def raster_to_plane(rx, ry, cam):
     """Raster position in pixels (row 0 at the bottom) -> viewplane point at z = 1

@@ -23,7 +23,7 @@ import numpy as np
 from . import integrator, light_tracing, specialise
 from .bsdf import layer_tables, sheen_table
 from .caustics import caustic_data, no_caustic_data
-from .camera import CameraModel
+from .camera import CameraModel, view_maps
 from .film import BACKGROUND_DEPTH, PixelFilter
 from .integrator import (PLAN_CONSTANTS, STAGE_NAMES, Geometry, MaterialTable, Paths,
                          SceneData, ShadowRays)
@@ -33,7 +33,7 @@ from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX, enclosing
 from .plan import entered_media
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
-from .shading import MAX_REGISTERS, SLOTS, ProgramTable
+from .shading import CAMERA, MAX_REGISTERS, SLOTS, VIEW_MAPS, ProgramTable
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -202,6 +202,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     uv = programs = None
     if scene.programs is not None and (plan.textures or generic):
         uv, programs = scene.uv, scene.programs
+        fill_view_maps(scene, cam)
     elif generic:  # no material has a program
         uv = np.zeros((1, 1, 3, 3), np.float32)
         none = np.full((len(scene.materials), 3), -1, np.int64)
@@ -255,6 +256,18 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         geometry, materials, em, np.asarray(scene.world.colour, np.float64), camera,
         PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
         camera_media))
+
+
+def fill_view_maps(scene, cam: CameraModel) -> None:
+    """Write the camera's maps (Texture Coordinate's Camera and Window) into the scene's
+    maps for this render's camera and frame (a render at another size or with another
+    camera writes them again)."""
+    names = [n for n in VIEW_MAPS if n in scene.uv_names]
+    if not names:
+        return
+    local, window = view_maps(cam, scene.vertices)
+    for name in names:
+        scene.uv[scene.uv_names.index(name)] = local if name == CAMERA else window
 
 
 def c_contiguous(data):

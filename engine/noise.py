@@ -378,3 +378,50 @@ def magic(x, y, z, scale, depth, distortion):
     if distortion != 0.0:
         a, b, c = a / (2.0 * distortion), b / (2.0 * distortion), c / (2.0 * distortion)
     return 0.5 - a, 0.5 - b, 0.5 - c
+
+
+# ----------------------------------------------------------------- white noise
+@njit(**JIT)
+def float_bits(x):
+    """The bits of x rounded to float32, as an integer (C's __float_as_uint), without an
+    array to view: sign, biased exponent and mantissa put together (subnormals, zeros,
+    infinities and NaN included)."""
+    f = float(np.float32(x))
+    sign = 0x80000000 if math.copysign(1.0, f) < 0.0 else 0
+    f = abs(f)
+    if f != f:
+        return 0x7FC00000
+    if f == math.inf:
+        return sign | 0x7F800000
+    if f == 0.0:
+        return sign
+    m, e = math.frexp(f)  # f = m 2^e, m in [0.5, 1)
+    if e + 126 <= 0:  # subnormal: f / 2^-149 is the mantissa
+        return sign | int(f * 2.0 ** 149)
+    return sign | ((e + 126) << 23) | int((m * 2.0 - 1.0) * 8388608.0)
+
+
+@njit(**JIT)
+def _hash_floats(n, x, y, z, w):
+    """Cycles' hash_float(n)_to_float: the float32 bits of the first n keys hashed, in
+    [0, 1] (uint_to_float_incl)."""
+    h = hash_uint(n, float_bits(x), float_bits(y), float_bits(z), float_bits(w))
+    return float(np.float32(h)) * 2.0 ** -32
+
+
+@njit(**JIT)
+def white_noise(d, x, y, z, w):
+    """Cycles' White Noise Texture (svm_node_tex_white_noise) of dimension d (1D reads w):
+    its Color (r, g, b); its Value is r. Each channel hashes the point with a channel
+    number or its coordinates reordered, as util/hash.h's hash_float*_to_float3."""
+    if d == 1:
+        return (_hash_floats(1, w, 0.0, 0.0, 0.0), _hash_floats(2, w, 1.0, 0.0, 0.0),
+                _hash_floats(2, w, 2.0, 0.0, 0.0))
+    if d == 2:
+        return (_hash_floats(2, x, y, 0.0, 0.0), _hash_floats(3, x, y, 1.0, 0.0),
+                _hash_floats(3, x, y, 2.0, 0.0))
+    if d == 3:
+        return (_hash_floats(3, x, y, z, 0.0), _hash_floats(4, x, y, z, 1.0),
+                _hash_floats(4, x, y, z, 2.0))
+    return (_hash_floats(4, x, y, z, w), _hash_floats(4, z, x, w, y),
+            _hash_floats(4, w, z, y, x))

@@ -20,7 +20,7 @@ import numpy as np
 
 from .jit import ALLOCATING, JIT, njit
 from .media import medium_table
-from .shading import Program, ProgramTable, map_label, pack
+from .shading import VIEW_MAPS, Program, ProgramTable, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
@@ -987,7 +987,9 @@ class Scene:
         fill several times faster with a vertex shared by its triangles copied once
     uv : (maps, t, 3, 3) float32 per-corner texture coordinates of the UV maps (w = 0) and
         the Generated and Object coordinates (shading.GENERATED, OBJECT) the colour
-        programs read, or None without programs
+        programs read, or None without programs; the camera's maps (shading.VIEW_MAPS)
+        are zeros until a render fills them (kernels.scene_data)
+    uv_names : the names of `uv`'s maps, in order
     programs : the materials' shading.ProgramTable, or None without textured materials
     tangents : (t, 3, 4) float32 per-corner world-space tangents and bitangent signs for
         normal maps (zeros where a mesh has none), or None without normal maps
@@ -1011,6 +1013,7 @@ class Scene:
     uv: np.ndarray | None = None
     programs: ProgramTable | None = None
     tangents: np.ndarray | None = None
+    uv_names: list = field(default_factory=list)
     # The world volume's row of `materials` (World.volume; on no triangle), or -1.
     world_medium: int = -1
 
@@ -1154,7 +1157,7 @@ class SceneBuilder:
         if not smooth_all.any():
             norms = None
         offsets = np.cumsum([0] + [len(m[1]) for m in meshes])
-        uv, programs = self._programs(materials, counts)
+        uv, programs, uv_names = self._programs(materials, counts)
         return Scene(
             vertices=verts, origin=origin, normals=norms, smooth=smooth_all,
             material_index=(np.concatenate([m[5] for m in meshes]) if meshes
@@ -1169,7 +1172,8 @@ class SceneBuilder:
                              else np.zeros((0, 3))),
             shared_triangles=(np.concatenate([m[2] + o for m, o in zip(meshes, offsets)])
                               .astype(np.int32) if meshes else np.zeros((0, 3), np.int32)),
-            uv=uv, programs=programs, tangents=self._gathered_tangents(materials, counts),
+            uv=uv, programs=programs, uv_names=uv_names,
+            tangents=self._gathered_tangents(materials, counts),
             world_medium=len(given) - 1 if world_medium is not None else -1)
 
     def _gathered_tangents(self, materials: Materials, counts):
@@ -1187,11 +1191,12 @@ class SceneBuilder:
         return out
 
     def _programs(self, materials: Materials, counts) -> tuple:
-        """The scene's (uv, ProgramTable) for the materials' colour programs, (None, None)
-        without any: the UV maps the programs read, gathered over every mesh (a mesh
-        without one of them gets coordinates 0 there, as in Cycles, and a warning)."""
+        """The scene's (uv, ProgramTable, map names) for the materials' colour programs,
+        (None, None, []) without any: the maps the programs read, gathered over every mesh
+        (a mesh without one of them gets coordinates 0 there, as in Cycles, and a warning;
+        the camera's maps are left to the render)."""
         if materials.colour_programs is None:
-            return None, None
+            return None, None, []
         progs = [[p for p in pair if p is not None] for pair in
                  zip(*materials.program_lists())]
         names = sorted({n for pair in progs for p in pair for n in p.uv_maps}) or [""]
@@ -1202,6 +1207,8 @@ class SceneBuilder:
                 if uv_name in maps:
                     uv[j, start:start + count] = maps[uv_name]
                     continue
+                if uv_name in VIEW_MAPS:
+                    continue
                 users = [materials.names[k] for k in np.unique(mi)
                          if any(uv_name in p.uv_maps for p in progs[k])]
                 if users:
@@ -1211,7 +1218,8 @@ class SceneBuilder:
                     warnings.warn(msg, stacklevel=3)
             start += count
         colour, emission, normal, fac, roughness, height, tint = materials.program_lists()
-        return uv, pack(colour, emission, names.index, normal, fac, roughness, height, tint)
+        return uv, pack(colour, emission, names.index, normal, fac, roughness, height,
+                        tint), names
 
 
 def _corner_coordinates(m, t) -> np.ndarray:

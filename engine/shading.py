@@ -72,6 +72,23 @@ OP_WAVE = 22        # reg[out:out+3] Color, reg[out+3] Fac of the Wave Texture a
 #                     directions and profile (noise.WAVE_*)
 OP_MAGIC = 23       # reg[out:out+3] Color, reg[out+3] Fac of the Magic Texture at reg[a:a+3],
 #                     scale reg[b], distortion reg[c], depth d
+OP_VECTOR_MAPPING = 24  # reg[out:out+3] = Mapping node of type e (MAPPINGS) of vector reg[a:a+3]
+#                     by location reg[b:b+3], Euler XYZ rotation reg[c:c+3], scale reg[d:d+3]
+OP_REFLECTION = 25  # reg[out:out+3] = Texture Coordinate's Reflection: the view direction
+#                     mirrored about the shading normal (world space)
+OP_FACING = 26      # reg[out:out+3] = reg[a:a+3] normalised, negated on a back face (the
+#                     Normal output, from the map NORMAL)
+OP_PROJECT = 27     # reg[out:out+3] = (reg[a] / reg[a+2], reg[a+1] / reg[a+2], 0) (the Window
+#                     output, from the homogeneous map WINDOW; 0 where reg[a+2] is 0)
+OP_WHITE_NOISE = 28  # reg[out:out+3] Color, reg[out+3] Value of Cycles' White Noise Texture
+#                     of dimension d at vector reg[a:a+3] and W reg[b]
+OP_CURVES = 29      # reg[out:out+e] = RGB / Vector Curves (e = 3), Float Curve (e = 1) of
+#                     reg[a:a+e] by factor reg[b]: c table entries at params[p+2:] over the
+#                     range params[p:p+2]; d: extrapolate
+OP_MAP_RANGE = 30   # reg[out:out+w] = Map Range of reg[a:], from reg[b:] .. reg[c:] to
+#                     reg[d:] .. reg[e:]; params[p:p+4]: the Steps register, type
+#                     (MAP_RANGES), clamp, w
+OP_CLAMP = 31       # reg[out] = Clamp of reg[a] to reg[b] .. reg[c]; d: Range (else Min Max)
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -82,6 +99,15 @@ GENERATED, OBJECT = "\x00generated", "\x00object"
 COLOUR_ATTRIBUTE = "\x00colour:"
 # ... and its alpha, the map of this prefix and the name (alpha in the first channel).
 COLOUR_ALPHA = "\x00alpha:"
+# Texture Coordinate's Normal reads the map NORMAL: the corners' shading normals in the
+# object's own space (OP_FACING normalises and orients them). Its Camera and Window outputs
+# read maps the renderer fills from the camera (camera.view_maps), since they depend on the
+# render's camera and frame: CAMERA, the corner in camera space (+z ahead, +y up), and
+# WINDOW, homogeneous coordinates whose division (OP_PROJECT) is the frame's normalised
+# position (0..1 from the bottom left). Interpolating either over a triangle is exact: both
+# are linear in the position.
+NORMAL, CAMERA, WINDOW = "\x00normal", "\x00camera", "\x00window"
+VIEW_MAPS = (CAMERA, WINDOW)
 
 
 def map_label(name: str) -> str:
@@ -90,6 +116,8 @@ def map_label(name: str) -> str:
         return "Generated coordinates"
     if name == OBJECT:
         return "Object coordinates"
+    if name == NORMAL:
+        return "normals"
     for prefix in (COLOUR_ATTRIBUTE, COLOUR_ALPHA):
         if name.startswith(prefix):
             attribute = name[len(prefix):]
@@ -102,6 +130,10 @@ BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE"
           "LIGHTEN", "EXCLUSION", "OVERLAY", "DODGE", "BURN", "SOFT_LIGHT", "LINEAR_LIGHT",
           "HUE", "SATURATION", "COLOR", "VALUE")
 HUE = BLENDS.index("HUE")
+# Types of OP_VECTOR_MAPPING (the Mapping node's, svm_mapping in kernel/svm/mapping_util.h).
+MAPPINGS = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+# Types of OP_MAP_RANGE (the Map Range node's interpolation types).
+MAP_RANGES = ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP")
 # Conversions of OP_COLOUR_SPACE (Separate and Combine Color's modes; util/color.h).
 CONVERSIONS = ("RGB_TO_HSV", "RGB_TO_HSL", "HSV_TO_RGB", "HSL_TO_RGB")
 # Operations of OP_MATH (Cycles' svm_math, kernel/svm/math_util.h).
@@ -612,6 +644,74 @@ def node_mapping(ins, reg, params):
         reg[out + j] = params[q] * x + params[q + 1] * y + params[q + 2] * z + params[q + 3]
 
 
+@njit(**JIT)
+def euler_rotation(x, y, z):
+    """The rotation matrix (rows) of Euler angles x, y, z applied in XYZ order (Blender's
+    default rotation mode; Cycles' euler_to_transform)."""
+    cx, cy, cz = math.cos(x), math.cos(y), math.cos(z)
+    sx, sy, sz = math.sin(x), math.sin(y), math.sin(z)
+    return ((cy * cz, sy * sx * cz - cx * sz, sy * cx * cz + sx * sz),
+            (cy * sz, sy * sx * sz + cx * cz, sy * cx * sz - sx * cz),
+            (-sy, cy * sx, cy * cx))
+
+
+@njit(**JIT)
+def _safe_divide(a, b):
+    return a / b if b != 0.0 else 0.0
+
+
+@njit(**JIT)
+def node_vector_mapping(ins, reg):
+    """Cycles' Mapping node (svm_mapping) with every input a register: Point, rotate the
+    scaled vector and move it; Texture, the inverse (a zero scale gives 0 on its axis);
+    Vector, rotate the scaled vector; Normal, rotate the vector divided by the scale and
+    normalise."""
+    a, b, c, d, kind, out = ins[2], ins[3], ins[4], ins[5], ins[6], ins[1]
+    m = euler_rotation(reg[c], reg[c + 1], reg[c + 2])
+    if kind == 1:  # TEXTURE: R^T (v - location) / scale
+        wx, wy, wz = reg[a] - reg[b], reg[a + 1] - reg[b + 1], reg[a + 2] - reg[b + 2]
+        for j in range(3):
+            reg[out + j] = _safe_divide(m[0][j] * wx + m[1][j] * wy + m[2][j] * wz,
+                                        reg[d + j])
+        return
+    if kind == 3:  # NORMAL
+        wx, wy, wz = (_safe_divide(reg[a], reg[d]), _safe_divide(reg[a + 1], reg[d + 1]),
+                      _safe_divide(reg[a + 2], reg[d + 2]))
+    else:
+        wx, wy, wz = reg[a] * reg[d], reg[a + 1] * reg[d + 1], reg[a + 2] * reg[d + 2]
+    x, y, z = (m[0][0] * wx + m[0][1] * wy + m[0][2] * wz,
+               m[1][0] * wx + m[1][1] * wy + m[1][2] * wz,
+               m[2][0] * wx + m[2][1] * wy + m[2][2] * wz)
+    if kind == 0:  # POINT
+        x, y, z = x + reg[b], y + reg[b + 1], z + reg[b + 2]
+    elif kind == 3:
+        x, y, z = _safe_normalize(x, y, z)
+    reg[out], reg[out + 1], reg[out + 2] = x, y, z
+
+
+@njit(**JIT)
+def node_view_coordinates(ins, reg):
+    """Texture Coordinate's outputs made from the hit's geometry or a view map's value:
+    Reflection (Cycles' svm_texco_reflection: -reflect(wi, N) = 2 (N.wi) N - wi), Normal
+    (the interpolated object-space normal normalised, negated on a back face as sd->N is)
+    and Window (the homogeneous map divided through; Cycles' transform_perspective)."""
+    op, a, out, g = ins[0], ins[2], ins[1], GEOMETRY
+    if op == OP_REFLECTION:
+        nx, ny, nz = reg[g], reg[g + 1], reg[g + 2]
+        ix, iy, iz = reg[g + 3], reg[g + 4], reg[g + 5]
+        d = 2.0 * (nx * ix + ny * iy + nz * iz)
+        reg[out], reg[out + 1], reg[out + 2] = d * nx - ix, d * ny - iy, d * nz - iz
+    elif op == OP_FACING:
+        sign = -1.0 if reg[g + 6] != 0.0 else 1.0
+        x, y, z = _safe_normalize(reg[a], reg[a + 1], reg[a + 2])
+        reg[out], reg[out + 1], reg[out + 2] = sign * x, sign * y, sign * z
+    else:  # OP_PROJECT
+        w = reg[a + 2]
+        reg[out] = reg[a] / w if w != 0.0 else 0.0
+        reg[out + 1] = reg[a + 1] / w if w != 0.0 else 0.0
+        reg[out + 2] = 0.0
+
+
 @njit(**INLINE)
 def node_checker(ins, reg):
     """Cycles' Checker Texture (kernel/svm/checker.h) at reg[a:a+3] with scale reg[d]."""
@@ -653,18 +753,83 @@ def node_wave(ins, reg, params):
     reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = f, f, f, f
 
 
-@njit(**INLINE)
-def node_ramp(ins, reg, params):
-    """Cycles' rgb_ramp_lookup: the table at fac clamped to [0, 1], linear between entries
-    unless the ramp is Constant."""
-    n, p, out = ins[3], ins[7], ins[1]
-    f = min(max(reg[ins[2]], 0.0), 1.0) * (n - 1) if math.isfinite(reg[ins[2]]) else 0.0
+@njit(**JIT)
+def ramp_lookup(params, p, n, f, j, interpolate, extrapolate):
+    """Channel j of Cycles' rgb_ramp_lookup in the table of n RGBA entries at params[p:]
+    at f: clamped to [0, 1] (NaN reads the first entry), linear between entries when
+    `interpolate`; with `extrapolate`, outside [0, 1] the end entries' slope continues."""
+    if extrapolate and (f < 0.0 or f > 1.0):
+        if f < 0.0:
+            t0, t1, f = params[p + j], params[p + 4 + j], -f
+        else:
+            t0, t1, f = params[p + 4 * (n - 1) + j], params[p + 4 * (n - 2) + j], f - 1.0
+        return t0 + (t0 - t1) * f * (n - 1)
+    f = min(max(f, 0.0), 1.0) * (n - 1) if math.isfinite(f) else 0.0
     i = min(max(int(f), 0), n - 1)
     t = f - i
+    r = params[p + 4 * i + j]
+    if interpolate and t > 0.0:
+        r = (1.0 - t) * r + t * params[p + 4 * (i + 1) + j]
+    return r
+
+
+@njit(**INLINE)
+def node_ramp(ins, reg, params):
+    """Cycles' Color Ramp (svm_node_rgb_ramp): the table at the factor, linear between
+    entries unless the ramp is Constant."""
     for j in range(4):
-        r = params[p + 4 * i + j]
-        if ins[4] != 0 and t > 0.0:
-            r = (1.0 - t) * r + t * params[p + 4 * (i + 1) + j]
+        reg[ins[1] + j] = ramp_lookup(params, ins[7], ins[3], reg[ins[2]], j, ins[4] != 0, False)
+
+
+@njit(**JIT)
+def node_curves(ins, reg, params):
+    """Cycles' RGB Curves, Vector Curves (svm_node_curves: channel j of the table at the
+    input's channel j) and Float Curve (svm_node_curve, one channel): the input's position
+    in the curves' range [params[p], params[p+1]] looked up (extrapolated if the curves
+    are), mixed with the input by the factor."""
+    a, fac, n, out, p = ins[2], reg[ins[3]], ins[4], ins[1], ins[7]
+    lo, hi = params[p], params[p + 1]
+    for j in range(ins[6]):
+        x = reg[a + j]
+        y = ramp_lookup(params, p + 2, n, (x - lo) / (hi - lo) if hi != lo else 0.0, j, True,
+                        ins[5] != 0)
+        reg[out + j] = (1.0 - fac) * x + fac * y
+
+
+@njit(**JIT)
+def clamp_range(x, lo, hi, swap):
+    """x clamped to [lo, hi] (Cycles' clamp: min(max(x, lo), hi)); with `swap`, a range
+    given high to low is turned round first (the Clamp node's Range type)."""
+    if swap and lo > hi:
+        lo, hi = hi, lo
+    return min(max(x, lo), hi)
+
+
+@njit(**JIT)
+def node_map_range(ins, reg, params):
+    """Cycles' Map Range (svm_node_map_range, svm_node_vector_map_range) per component:
+    Linear, Stepped, Smooth Step and Smoother Step, the result clamped to the target range
+    (Linear and Stepped, when asked). A float's empty source range gives 0, a vector's the
+    target minimum (its safe division)."""
+    p, out = ins[7], ins[1]
+    steps_reg, kind, clamp, width = (int(params[p]), int(params[p + 1]), params[p + 2] != 0.0,
+                                     int(params[p + 3]))
+    for j in range(width):
+        x, lo, hi = reg[ins[2] + j], reg[ins[3] + j], reg[ins[4] + j]
+        to_lo, to_hi = reg[ins[5] + j], reg[ins[6] + j]
+        t = (x - lo) / (hi - lo) if hi != lo else 0.0
+        if kind == 1:  # STEPPED
+            steps = reg[steps_reg + j]
+            t = math.floor(t * (steps + 1.0)) / steps if steps > 0.0 else 0.0
+        elif kind >= 2:
+            t = min(max(t, 0.0), 1.0)
+            t = t * t * (3.0 - 2.0 * t) if kind == 2 else t * t * t * (t * (t * 6.0 - 15.0)
+                                                                       + 10.0)
+        r = to_lo + t * (to_hi - to_lo) if hi != lo or width == 3 else 0.0
+        # A float's clamp is a Clamp node after it (Cycles' MapRangeNode::expand), whatever
+        # the type; a vector's applies to Linear and Stepped only.
+        if clamp and (width == 1 or kind < 2):
+            r = clamp_range(r, to_lo, to_hi, True)
         reg[out + j] = r
 
 
@@ -852,6 +1017,20 @@ def run(first, end, pt, uv, f, u, v, reg):
                                   reg[ins[4]])
             reg[out], reg[out + 1], reg[out + 2] = r, g, b
             reg[out + 3] = (r + g + b) / 3.0
+        elif op == OP_VECTOR_MAPPING:
+            node_vector_mapping(ins, reg)
+        elif op == OP_REFLECTION or op == OP_FACING or op == OP_PROJECT:
+            node_view_coordinates(ins, reg)
+        elif op == OP_CURVES:
+            node_curves(ins, reg, pt.params)
+        elif op == OP_MAP_RANGE:
+            node_map_range(ins, reg, pt.params)
+        elif op == OP_CLAMP:
+            reg[out] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
+        elif op == OP_WHITE_NOISE:
+            a = ins[2]
+            r, g, b = noise.white_noise(ins[5], reg[a], reg[a + 1], reg[a + 2], reg[ins[3]])
+            reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, r
         elif op == OP_COLOUR_SPACE:
             a = ins[2]
             reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],

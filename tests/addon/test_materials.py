@@ -421,9 +421,10 @@ def test_color_ramp_on_a_texture_follows_blenders_ramp(fresh, interpolation):
 def test_a_node_without_an_instruction_falls_back_to_the_mean_and_says_so(fresh):
     mat, node = node_material("Tinted", "ShaderNodeBsdfDiffuse")
     img, stored = make_image("Tint")
-    hue = mat.node_tree.nodes.new("ShaderNodeRGBCurve")
-    texture(mat, img, hue, "Color")
-    mat.node_tree.links.new(hue.outputs["Color"], node.inputs["Color"])
+    hue = mat.node_tree.nodes.new("ShaderNodeVectorTransform")  # world to world
+    hue.convert_from = hue.convert_to = "WORLD"
+    texture(mat, img, hue, "Vector")
+    mat.node_tree.links.new(hue.outputs["Vector"], node.inputs["Color"])
     spec, warnings = convert(mat)
     assert "colour_program" not in spec.kwargs
     assert spec.kwargs["colour"] == pytest.approx(
@@ -656,6 +657,55 @@ def test_vector_math_compiles_and_folds(fresh):
             pytest.approx(texel[:3], abs=1e-6)
         assert _program_at(spec.kwargs["colour_program"], (u / 2 + 0.5, v / 2)) == \
             pytest.approx(texel[:3], abs=1e-6)
+
+
+@pytest.mark.parametrize("kind", ["POINT", "TEXTURE", "VECTOR", "NORMAL"])
+def test_mapping_with_linked_inputs_is_blenders_transform(fresh, kind):
+    """A Mapping whose Location, Rotation and Scale come from other nodes compiles with them
+    read per point; its result on UV coordinates is the transform Blender's own Euler
+    matrix (mathutils) gives for that type."""
+    from mathutils import Euler
+
+    mat, node = node_material("Mapped", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = kind
+    values = {"Location": (0.3, -0.2, 0.1), "Rotation": (0.4, -0.7, 1.1),
+              "Scale": (1.5, 0.5, -2.0)}
+    for name, value in values.items():
+        if name not in mapping.inputs:  # Vector and Normal have no Location
+            continue
+        xyz = tree.nodes.new("ShaderNodeCombineXYZ")
+        for axis, v in zip("XYZ", value):
+            xyz.inputs[axis].default_value = v
+        tree.links.new(xyz.outputs[0], mapping.inputs[name])
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["UV"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    m = np.array(Euler(values["Rotation"], "XYZ").to_matrix())
+    loc, scale = np.array(values["Location"]), np.array(values["Scale"])
+    for uv in TEXEL_CENTRES:
+        p = np.array([*uv, 0.0])
+        want = {"POINT": m @ (p * scale) + loc, "TEXTURE": m.T @ (p - loc) / scale,
+                "VECTOR": m @ (p * scale), "NORMAL": m @ (p / scale)}[kind]
+        if kind == "NORMAL":
+            want = want / np.linalg.norm(want)
+        got = _program_at(spec.kwargs["colour_program"], uv)
+        assert got == pytest.approx(want, abs=1e-6)
+
+
+@pytest.mark.parametrize("output", ["Normal", "Reflection"])
+def test_view_coordinates_in_an_emission_are_named(fresh, output):
+    """Texture Coordinate's Normal and Reflection depend on the side a point is seen from,
+    which a light sample does not have: in an emission they are unsupported, named."""
+    mat, node = node_material("Glow", "ShaderNodeEmission")
+    tree = mat.node_tree
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs[output], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1
+    assert "material 'Glow'" in warnings[0] and f"output {output} in an emission" in warnings[0]
 
 
 def test_exact_chains_do_not_warn(fresh):
@@ -1170,3 +1220,69 @@ def test_a_textured_emission_strength_scales_the_colour_per_point(fresh, shader,
     for uv, strength, colour in zip(TEXEL_CENTRES, luminance, colour_texels):
         assert _program_at(part.kwargs["emission_program"], uv) == \
             pytest.approx(strength * colour[:3], abs=1e-5)
+
+
+@pytest.mark.parametrize("node_type", ["ShaderNodeRGBCurve", "ShaderNodeVectorCurve",
+                                       "ShaderNodeFloatCurve"])
+def test_curves_are_blenders_own_curves(fresh, node_type):
+    """RGB Curves (each channel's curve after the combined one), Vector Curves and Float
+    Curve compile to Blender's own curve evaluation, tabulated (within the table's
+    resolution), mixed with the input by the factor."""
+    mat, node = node_material("Curved", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    curves = tree.nodes.new(node_type)
+    curves.inputs[0].default_value = 0.8
+    mapping = curves.mapping
+    for cm in mapping.curves:
+        cm.points[1].location = (cm.points[1].location[0], 0.7)
+        cm.points.new(0.35, 0.6)
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    sink = curves.outputs[0]
+    if node_type == "ShaderNodeFloatCurve":
+        split = tree.nodes.new("ShaderNodeSeparateXYZ")
+        tree.links.new(coords.outputs["UV"], split.inputs[0])
+        tree.links.new(split.outputs["X"], curves.inputs["Value"])
+    else:
+        tree.links.new(coords.outputs["UV"], curves.inputs[1])
+    tree.links.new(sink, node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    mapping.update()
+    for u, v in ((0.1, 0.9), (0.45, 0.3), (0.8, 0.6)):
+        got = _program_at(spec.kwargs["colour_program"], (u, v))
+        if node_type == "ShaderNodeFloatCurve":
+            want = [0.2 * u + 0.8 * mapping.evaluate(mapping.curves[0], u)] * 3
+        elif node_type == "ShaderNodeRGBCurve":
+            c = mapping.curves
+            want = [0.2 * x + 0.8 * mapping.evaluate(c[j], mapping.evaluate(c[3], x))
+                    for j, x in enumerate((u, v, 0.0))]
+        else:
+            want = [0.2 * x + 0.8 * mapping.evaluate(mapping.curves[j], x)
+                    for j, x in enumerate((u, v, 0.0))]
+        assert got == pytest.approx(want, abs=5e-3)
+
+
+def test_a_map_range_of_constants_folds_exactly(fresh):
+    """A Map Range (or Clamp, or any node a program holds) on constants folds to its exact
+    value by the kernel's own function, with no warning."""
+    mat, node = node_material("Folded", "ShaderNodeBsdfPrincipled")
+    tree = mat.node_tree
+    map_range = tree.nodes.new("ShaderNodeMapRange")
+    map_range.interpolation_type = "SMOOTHSTEP"
+    map_range.inputs["Value"].default_value = 0.4
+    map_range.inputs["From Max"].default_value = 0.8
+    clamp = tree.nodes.new("ShaderNodeClamp")
+    clamp.inputs["Max"].default_value = 0.3
+    tree.links.new(map_range.outputs["Result"], clamp.inputs["Value"])
+    tree.links.new(clamp.outputs["Result"], node.inputs["Roughness"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.kwargs["roughness"] == pytest.approx(0.3)
+    assert "roughness_program" not in spec.kwargs
+    map_range.interpolation_type = "SMOOTHERSTEP"
+    map_range.inputs["Value"].default_value = 0.3
+    tree.links.new(map_range.outputs["Result"], node.inputs["Roughness"])
+    spec, warnings = convert(mat)
+    t = 0.3 / 0.8
+    assert warnings == []
+    assert spec.kwargs["roughness"] == pytest.approx(t ** 3 * (t * (6 * t - 15) + 10))

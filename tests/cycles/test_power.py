@@ -6,6 +6,7 @@ error shows; the correct render of the same variant must agree (test_agreement.p
 too) and the wrong one must not.
 """
 
+import copy
 import dataclasses
 import math
 import time
@@ -257,9 +258,9 @@ def _generated_as_object():
 
     spaces = exporter._texture_spaces
 
-    def object_for_generated(mesh, co, tri_verts, names, tri_loops=None):
+    def object_for_generated(mesh, co, tri_verts, names, tri_loops=None, normals=None):
         sh = renderers.core().shading
-        out = spaces(mesh, co, tri_verts, names, tri_loops)
+        out = spaces(mesh, co, tri_verts, names, tri_loops, normals)
         if sh.GENERATED in out:
             out[sh.GENERATED] = co[tri_verts]
         return out
@@ -267,6 +268,125 @@ def _generated_as_object():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(exporter, "_texture_spaces", object_for_generated)
         yield
+
+
+@contextmanager
+def _view_maps_changed(change):
+    """The renderer's Camera and Window maps as `change(model, corners, view_maps)` makes
+    them."""
+    kernels = renderers.core().kernels
+    view_maps = kernels.view_maps
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(kernels, "view_maps", lambda model, corners: change(model, corners,
+                                                                       view_maps))
+        yield
+
+
+def _camera_coordinates_looking_back():
+    """Camera coordinates in Blender's camera space (looking down -z), not Cycles'."""
+    def change(model, corners, view_maps):
+        local, window = view_maps(model, corners)
+        return local * np.array([1.0, 1.0, -1.0]), window
+    return _view_maps_changed(change)
+
+
+def _window_unshifted():
+    """The Window output of the camera without its shift."""
+    def change(model, corners, view_maps):
+        unshifted = copy.copy(model)
+        unshifted.cam = dataclasses.replace(model.cam, shift_x=0.0, shift_y=0.0)
+        return view_maps(unshifted, corners)
+    return _view_maps_changed(change)
+
+
+@contextmanager
+def _normal_coordinates_in_world_space():
+    """Texture Coordinate's Normal turned with the object (world space), not its own."""
+    from addon import exporter
+
+    instance_uvs = exporter._instance_uvs
+
+    def turned(mesh, insts):
+        maps = instance_uvs(mesh, insts)
+        sh = renderers.core().shading
+        if sh.NORMAL in maps:
+            linear = np.asarray(insts[0].matrix_world, np.float64)[:3, :3]
+            maps[sh.NORMAL] = (maps[sh.NORMAL] @ np.linalg.inv(linear)).astype(np.float32)
+        return maps
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_instance_uvs", turned)
+        yield
+
+
+@contextmanager
+def _mapping_links_unread():
+    """A Mapping's linked Location, Rotation and Scale read as their own values."""
+    from addon import shader_nodes
+
+    def unlinked(c, node, out):
+        sh = c.sh
+        regs = [c.program.const(list(node.inputs[name].default_value))
+                for name in ("Location", "Rotation", "Scale")]
+        vec = c.input(node.inputs["Vector"], "VECTOR")
+        return c.program.emit(sh.OP_VECTOR_MAPPING, 3, vec, *regs,
+                              e=sh.MAPPINGS.index(node.vector_type)), "VECTOR"
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeMapping", unlinked)
+        yield
+
+
+def _white_noise_dimensions_rotated():
+    """Each White Noise Texture hashed in the next dimension (1D as 2D, ... 4D as 1D)."""
+    def rotated(row, sh):
+        assert row[0] == sh.OP_WHITE_NOISE
+        return row[:5] + (row[5] % 4 + 1,) + row[6:]
+    return _instruction_changed("ShaderNodeTexWhiteNoise", rotated)
+
+
+@contextmanager
+def _instruction_changed(node_type, change):
+    """The last instruction each node of `node_type` compiles to, as `change(row, sh)`
+    returns it."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES[node_type]
+
+    def changed(c, node, out):
+        result = compile_node(c, node, out)
+        c.program.code[-1] = change(c.program.code[-1], c.sh)
+        return result
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, node_type, changed)
+        yield
+
+
+@contextmanager
+def _map_range_types_rotated():
+    """Each Map Range interpolated by the next type (Linear as Stepped, ...)."""
+    shading = renderers.core().shading
+    with pytest.MonkeyPatch.context() as mp:
+        kinds = shading.MAP_RANGES
+        mp.setattr(shading, "MAP_RANGES", kinds[1:] + kinds[:1])
+        yield
+
+
+def _curves_never_extrapolated():
+    """Curves held horizontal past their ends whatever their Extend setting."""
+    def flat(row, sh):
+        assert row[0] == sh.OP_CURVES
+        return row[:5] + (0,) + row[6:]
+    return _instruction_changed("ShaderNodeRGBCurve", flat)
+
+
+def _clamp_range_as_min_max():
+    """The Clamp node's Range type clamped as Min Max (a reversed range not turned round)."""
+    def min_max(row, sh):
+        assert row[0] == sh.OP_CLAMP
+        return row[:5] + (0,) + row[6:]
+    return _instruction_changed("ShaderNodeClamp", min_max)
 
 
 @contextmanager
@@ -736,6 +856,16 @@ INJECTIONS = {
     "colour_and_value_swapped": ("blend_modes", None, _colour_and_value_swapped),
     "hsv_read_as_hsl": ("blend_modes", None, _hsv_read_as_hsl),
     "texture_types_rotated": ("procedural_textures", None, _texture_types_rotated),
+    "camera_coordinates_looking_back": ("texture_coordinates", None,
+                                        _camera_coordinates_looking_back),
+    "window_unshifted": ("texture_coordinates", None, _window_unshifted),
+    "normal_coordinates_in_world_space": ("texture_coordinates", None,
+                                          _normal_coordinates_in_world_space),
+    "mapping_links_unread": ("texture_coordinates", None, _mapping_links_unread),
+    "white_noise_dimensions_rotated": ("white_noise", None, _white_noise_dimensions_rotated),
+    "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
+    "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
+    "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),
     "translucent_as_diffuse": ("translucency", _translucent_as_diffuse, None),
     "emission_strength_as_its_mean": ("emission_strength_texture", _emission_as_its_mean,
                                       None),

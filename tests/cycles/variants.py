@@ -1106,6 +1106,72 @@ def texture_spaces():
     ball.rotation_euler = (0.4, 0.0, 0.9)
 
 
+def _coordinate_checker(name, output, scale, mapping=None):
+    """A Diffuse material coloured by a Checker Texture of `scale` on Texture Coordinate's
+    `output`, through the Mapping `mapping(tree)` makes (its Vector linked here) if given."""
+    mat = bs.material(name, "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (0.9, 0.6, 0.1, 1.0)
+    checker.inputs["Color2"].default_value = (0.1, 0.3, 0.8, 1.0)
+    checker.inputs["Scale"].default_value = scale
+    vector = tree.nodes.new("ShaderNodeTexCoord").outputs[output]
+    if mapping is not None:
+        node = mapping(tree)
+        tree.links.new(vector, node.inputs["Vector"])
+        vector = node.outputs["Vector"]
+    tree.links.new(vector, checker.inputs["Vector"])
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    tree.links.new(checker.outputs["Color"], diffuse.inputs["Color"])
+    return mat
+
+
+def _linked_mapping(kind, **links):
+    """A Mapping of type `kind` whose inputs named in `links` are linked: a tuple is a
+    Combine XYZ of those values, "noise" a Noise Texture's Color (on Generated coordinates)
+    times 2."""
+    def make(tree):
+        node = tree.nodes.new("ShaderNodeMapping")
+        node.vector_type = kind
+        for name, value in links.items():
+            if value == "noise":
+                noise = tree.nodes.new("ShaderNodeTexNoise")
+                noise.inputs["Scale"].default_value = 2.0
+                scale = tree.nodes.new("ShaderNodeVectorMath")
+                scale.operation = "SCALE"
+                scale.inputs["Scale"].default_value = 2.0
+                tree.links.new(noise.outputs["Color"], scale.inputs[0])
+                source = scale.outputs["Vector"]
+            else:
+                combine = tree.nodes.new("ShaderNodeCombineXYZ")
+                for axis, v in zip("XYZ", value):
+                    combine.inputs[axis].default_value = v
+                source = combine.outputs["Vector"]
+            tree.links.new(source, node.inputs[name])
+        return node
+    return make
+
+
+def texture_coordinates():
+    """Texture Coordinate's view outputs and a Mapping with linked inputs (issue 14, point
+    1): Checker Textures on the object-space Normal of a turned ball, through a Normal
+    Mapping scaled and turned by linked vectors; on the Reflection, through a Texture
+    Mapping whose linked scale is 0 on y; on Camera coordinates, through a Point Mapping
+    turned by a Noise Texture; and on the Window (the camera shifted) on a card behind."""
+    _box()
+    bpy.context.scene.camera.data.shift_x = 0.06
+    normal = _coordinate_checker("NormalChecker", "Normal", 2.0, _linked_mapping(
+        "NORMAL", Rotation=(0.3, 0.0, 0.6), Scale=(1.0, 2.0, 0.5)))
+    reflection = _coordinate_checker("ReflectionChecker", "Reflection", 2.5, _linked_mapping(
+        "TEXTURE", Scale=(0.7, 0.0, 0.5)))
+    camera = _coordinate_checker("CameraChecker", "Camera", 4.0, _linked_mapping(
+        "POINT", Rotation="noise", Location=(0.1, 0.2, 0.0)))
+    _balls([normal, reflection, camera])
+    bpy.data.objects["Ball0"].rotation_euler = (0.4, 0.0, 0.9)
+    _card("WindowCard", (0.0, 0.5, 0.75), (1.2, 0.5), _coordinate_checker(
+        "WindowChecker", "Window", 6.0))
+
+
 def _painted_ball(name, centre, domain, data_type, attribute="Paint", alpha=False):
     """A smooth UV sphere of radius 0.27 whose colour attribute `attribute` (per `domain`)
     paints bands of colour from its vertices' positions, Diffuse-shaded by a Color
@@ -1352,6 +1418,203 @@ def procedural_textures():
               _magic_feed(8, "Fac", Scale=4.0, Distortion=1.5)]
     for i, feed in enumerate(others):
         _glowing_card(f"W{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, -0.55), (0.5, 0.5), feed)
+
+
+def _white_noise_feed(dimensions, output="Color", cells=8.0, w=0.0):
+    """A feed for _glowing_card: a White Noise Texture of `dimensions` on the card's
+    Generated coordinates times `cells`, floored (a random colour per cell; None: the raw
+    coordinates, noise per point; 0: the Vector unlinked), its W the floored x (1D) or
+    `w` (4D)."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexWhiteNoise")
+        node.noise_dimensions = dimensions
+        if dimensions == "4D":
+            node.inputs["W"].default_value = w
+        if cells == 0:
+            return node.outputs[output]
+        vector = tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"]
+        if cells is not None:
+            # Moved off the integers before the floor: the card's flat axis is Generated
+            # 1/2 everywhere, x 8 an integer, which float rounding puts either side of.
+            for operation in ("SCALE", "ADD", "FLOOR"):
+                vmath = tree.nodes.new("ShaderNodeVectorMath")
+                vmath.operation = operation
+                vmath.inputs[3].default_value = cells  # Scale (unavailable to the others)
+                vmath.inputs[1].default_value = (0.0123, 0.0123, 0.0123)
+                tree.links.new(vector, vmath.inputs[0])
+                vector = vmath.outputs["Vector"]
+        if dimensions == "1D":
+            split = tree.nodes.new("ShaderNodeSeparateXYZ")
+            tree.links.new(vector, split.inputs[0])
+            tree.links.new(split.outputs["X"], node.inputs["W"])
+        else:
+            tree.links.new(vector, node.inputs["Vector"])
+        return node.outputs[output]
+    return feed
+
+
+def white_noise():
+    """The White Noise Texture (issue 14, point 1): a random colour per cell of floored
+    coordinates in 1D, 2D, 3D and 4D, its Value in 2D, noise per point on the raw
+    coordinates and the Vector unlinked, on emitting cards seen head-on by an orthographic
+    camera."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 32))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    feeds = [_white_noise_feed("1D", cells=6.0), _white_noise_feed("2D", "Value", 5.0),
+             _white_noise_feed("3D"), _white_noise_feed("4D", w=0.37, cells=4.0),
+             _white_noise_feed("3D", cells=None), _white_noise_feed("3D", cells=0),
+             _white_noise_feed("2D", cells=7.0)]
+    for i, feed in enumerate(feeds):
+        _glowing_card(f"WN{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.0), (0.5, 0.5), feed)
+
+
+def _generated_axis(tree, axis="X"):
+    """The card's Generated coordinate along `axis` (0 to 1 across it)."""
+    split = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"], split.inputs[0])
+    return split.outputs[axis]
+
+
+def _map_range_feed(kind, clamp=True, steps=4.0, ends=(0.2, 0.7, 0.9, 0.1)):
+    """A feed for _glowing_card: a float Map Range of `kind` of the card's x from
+    ends[0]..ends[1] to ends[2]..ends[3] into a Combine Color's red, with its y as green."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeMapRange")
+        node.interpolation_type, node.clamp = kind, clamp
+        ins = {s.identifier: s for s in node.inputs}  # unavailable sockets too
+        for name, v in zip(("From Min", "From Max", "To Min", "To Max", "Steps"),
+                           ends + (steps,)):
+            ins[name].default_value = v
+        tree.links.new(_generated_axis(tree), ins["Value"])
+        combine = tree.nodes.new("ShaderNodeCombineColor")
+        tree.links.new(node.outputs["Result"], combine.inputs["Red"])
+        tree.links.new(_generated_axis(tree, "Z"), combine.inputs["Green"])
+        return combine.outputs["Color"]
+    return feed
+
+
+def _vector_map_range_feed(kind):
+    """A feed: a vector Map Range of `kind` of the card's Generated coordinates, the source
+    range linked (a Combine XYZ), clamped, steps per axis."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeMapRange")
+        node.data_type, node.interpolation_type, node.clamp = "FLOAT_VECTOR", kind, True
+        ins = {s.identifier: s for s in node.inputs}
+        ins["To_Min_FLOAT3"].default_value = (0.9, 0.1, 0.3)
+        ins["To_Max_FLOAT3"].default_value = (0.1, 0.8, 0.6)
+        ins["Steps_FLOAT3"].default_value = (3.0, 5.0, 2.0)
+        low = tree.nodes.new("ShaderNodeCombineXYZ")
+        low.inputs["X"].default_value, low.inputs["Z"].default_value = 0.1, 0.3
+        tree.links.new(low.outputs[0], ins["From_Min_FLOAT3"])
+        # (y: the card's flat axis is Generated 1/2, which must not land on a step.)
+        ins["From_Max_FLOAT3"].default_value = (0.8, 1.1, 0.9)
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"], ins["Vector"])
+        return node.outputs["Vector"]
+    return feed
+
+
+def _clamp_feed(kind, low, high):
+    """A feed: the card's x scaled to -0.5..1.5 clamped (Min Max or Range) as grey."""
+    def feed(tree):
+        scale = tree.nodes.new("ShaderNodeMath")
+        scale.operation = "MULTIPLY_ADD"
+        scale.inputs[1].default_value, scale.inputs[2].default_value = 2.0, -0.5
+        tree.links.new(_generated_axis(tree), scale.inputs[0])
+        node = tree.nodes.new("ShaderNodeClamp")
+        node.clamp_type = kind
+        node.inputs["Min"].default_value, node.inputs["Max"].default_value = low, high
+        tree.links.new(scale.outputs[0], node.inputs["Value"])
+        return node.outputs["Result"]
+    return feed
+
+
+def _curve_points(curve, points):
+    """Set a curve map's points (its two defaults moved, more added)."""
+    for p, (x, y) in zip(curve.points, points[:2]):
+        p.location = (x, y)
+    for x, y in points[2:]:
+        curve.points.new(x, y)
+
+
+def _curves_feed(kind, extend="EXTRAPOLATED"):
+    """A feed: RGB Curves of a gradient (x, z, 1 - x: reaching past 1 on the card's x via a
+    Multiply by 1.4) with a combined curve and per-channel curves, Vector Curves of the
+    Generated coordinates times 2 minus 1, or a Float Curve of x as grey; extrapolated or
+    horizontal beyond the curves' ends. Factor 0.85."""
+    def feed(tree):
+        node = tree.nodes.new({"RGB": "ShaderNodeRGBCurve", "VECTOR": "ShaderNodeVectorCurve",
+                               "FLOAT": "ShaderNodeFloatCurve"}[kind])
+        node.inputs[0].default_value = 0.85
+        mapping = node.mapping
+        mapping.extend = extend
+        curves = list(mapping.curves)
+        if kind == "RGB":
+            _curve_points(curves[3], [(0.0, 0.1), (0.9, 1.0), (0.5, 0.7)])
+            _curve_points(curves[0], [(0.0, 0.0), (1.0, 0.8), (0.3, 0.5)])
+            _curve_points(curves[2], [(0.1, 0.3), (1.0, 0.6)])
+            colour = tree.nodes.new("ShaderNodeCombineColor")
+            stretch = tree.nodes.new("ShaderNodeMath")
+            stretch.operation = "MULTIPLY"
+            stretch.inputs[1].default_value = 1.4
+            tree.links.new(_generated_axis(tree), stretch.inputs[0])
+            tree.links.new(stretch.outputs[0], colour.inputs["Red"])
+            tree.links.new(_generated_axis(tree, "Z"), colour.inputs["Green"])
+            invert = tree.nodes.new("ShaderNodeMath")
+            invert.operation = "SUBTRACT"
+            invert.inputs[0].default_value = 1.0
+            tree.links.new(_generated_axis(tree), invert.inputs[1])
+            tree.links.new(invert.outputs[0], colour.inputs["Blue"])
+            tree.links.new(colour.outputs[0], node.inputs["Color"])
+            return node.outputs["Color"]
+        if kind == "VECTOR":
+            _curve_points(curves[0], [(-1.0, -0.5), (1.0, 0.9), (0.2, 0.6)])
+            # (y, the card's flat axis, is 0: a curve through 0 there would leave rounding
+            # crumbs of 1e-16 against Cycles' exact 0, which no noise estimate covers.)
+            _curve_points(curves[1], [(-1.0, 0.2), (1.0, 0.7)])
+            _curve_points(curves[2], [(-0.8, 1.0), (1.0, -0.2)])
+            spread = tree.nodes.new("ShaderNodeVectorMath")
+            spread.operation = "MULTIPLY_ADD"
+            spread.inputs[1].default_value = (2.0, 2.0, 2.0)
+            spread.inputs[2].default_value = (-1.0, -1.0, -1.0)
+            tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"],
+                           spread.inputs[0])
+            tree.links.new(spread.outputs[0], node.inputs["Vector"])
+            absolute = tree.nodes.new("ShaderNodeVectorMath")
+            absolute.operation = "ABSOLUTE"
+            tree.links.new(node.outputs["Vector"], absolute.inputs[0])
+            return absolute.outputs[0]
+        _curve_points(curves[0], [(0.1, 0.2), (0.8, 0.9), (0.4, 0.1)])
+        tree.links.new(_generated_axis(tree), node.inputs["Value"])
+        return node.outputs["Value"]
+    return feed
+
+
+def converter_nodes():
+    """Map Range (float: every interpolation type, clamped or not, a reversed source range;
+    vector: stepped and smoother step with a linked source range), Clamp (Min Max and a
+    reversed Range), RGB Curves, Vector Curves and Float Curve (extrapolated, and
+    horizontal past their ends) (issue 14, point 1), on emitting cards seen head-on by an
+    orthographic camera."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    # (Unclamped, the result stays positive: Cycles emits negative light, Specula none.)
+    feeds = [_map_range_feed("LINEAR", clamp=False, ends=(0.3, 0.7, 0.3, 0.6)),
+             _map_range_feed("LINEAR"),
+             _map_range_feed("STEPPED", steps=3.0),
+             _map_range_feed("SMOOTHSTEP", ends=(0.8, 0.3, 0.0, 1.0)),
+             _map_range_feed("SMOOTHERSTEP"), _vector_map_range_feed("STEPPED"),
+             _vector_map_range_feed("SMOOTHERSTEP"),
+             _clamp_feed("MINMAX", 0.2, 0.8), _clamp_feed("RANGE", 0.9, 0.1),
+             _curves_feed("RGB"), _curves_feed("RGB", "HORIZONTAL"), _curves_feed("VECTOR"),
+             _curves_feed("FLOAT"), _curves_feed("FLOAT", "HORIZONTAL")]
+    for i, feed in enumerate(feeds):
+        row, col = divmod(i, 7)
+        _glowing_card(f"C{i}", (-2.0 + (col + 0.5) * 4.0 / 7, 0.0, 0.28 - 0.56 * row),
+                      (0.5, 0.5), feed)
 
 
 def _refraction(name, colour, roughness, ior=1.45):
@@ -2121,9 +2384,15 @@ _add(Variant("emission_under_layers", emission_under_layers, max_bounces=8, samp
 _add(Variant("node_groups", node_groups, max_bounces=8))
 _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
+_add(Variant("texture_coordinates", texture_coordinates, resolution=(128, 96), max_bounces=8,
+             samples=256, cycles_samples=512))
 _add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("procedural_textures", procedural_textures, resolution=(224, 96), max_bounces=0,
+             samples=64, cycles_samples=128))
+_add(Variant("white_noise", white_noise, resolution=(224, 32), max_bounces=0, samples=64,
+             cycles_samples=128))
+_add(Variant("converter_nodes", converter_nodes, resolution=(224, 64), max_bounces=0,
              samples=64, cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,

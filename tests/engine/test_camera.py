@@ -138,3 +138,32 @@ def test_fstop_to_infinity_converges_to_the_pinhole_image():
              for f in (0.5, 8.0, 1e6)]
     assert diffs[0] > diffs[1] > diffs[2]
     assert diffs[2] < 1e-4 * pinhole.mean()
+
+
+@pytest.mark.parametrize("kind", ["PERSP", "ORTHO"])
+def test_view_maps_are_camera_space_and_the_frame_position(rng, kind):
+    """Texture Coordinate's Camera and Window maps at random points in view: camera space
+    is (+x right, +y up, +z ahead) of the camera, at the point's distance; Window's
+    division is where `project` (pinhole) or the orthographic ray lands on the raster, over
+    the frame size, shift and a non-square frame included."""
+    cam = Camera(look_at((1.0, -4.0, 2.0), (0.2, 0.1, 0.5)), lens_mm=35.0, type=kind,
+                 ortho_scale=3.0, shift_x=0.1, shift_y=-0.05)
+    w, h = 160, 90
+    origin = np.array([0.3, -0.2, 0.1])
+    model = CameraModel(cam, w, h, origin)
+    data = model.data()
+    points = rng.uniform(-0.6, 0.6, (4, 3, 3)) + np.array([0.2, 0.1, 0.5]) - origin
+    local, window = camera.view_maps(model, points)
+    ndc = window[..., :2] / window[..., 2:]
+    for p, c, q in zip(points.reshape(-1, 3), local.reshape(-1, 3), ndc.reshape(-1, 2)):
+        assert np.linalg.norm(c) == pytest.approx(np.linalg.norm(p - model.position))
+        assert c[2] > 0  # ahead
+        if kind == "PERSP":
+            rx, ry, *_ = camera.project(*p, 0.0, 0.0, data)
+        else:  # the orthographic ray through (rx, ry) starts at the viewplane point
+            x = (c[0] - cam.shift_x * 2 * model.fit_half) / model.half_x
+            y = (c[1] - cam.shift_y * 2 * model.fit_half) / model.half_y
+            rx, ry = (x + 1) * 0.5 * w, (y + 1) * 0.5 * h
+            vx, vy = camera.raster_to_plane(rx, ry, data)
+            assert (vx, vy) == pytest.approx((c[0], c[1]))
+        assert q == pytest.approx((rx / w, ry / h))

@@ -70,3 +70,26 @@ def test_wave_profiles_and_magic_are_bounded(rng):
                                            0.5 - math.cos((-p[0] + p[1] - p[2]) * 5.0),
                                            0.5 + math.cos((-p[0] - p[1] + p[2]) * 5.0)),
                                           abs=1e-9)
+
+
+def test_float_bits_are_the_float32_bits(rng):
+    """float_bits is numpy's float32 view of the value, for normal, subnormal, signed-zero
+    and infinite values."""
+    values = np.concatenate([rng.normal(size=50) * 10.0 ** rng.integers(-40, 38, 50),
+                             [0.0, -0.0, 1e-45, -3e-39, np.inf, -np.inf, 1.0, -7.25]])
+    for x in values:
+        assert noise.float_bits(x) == int(np.float32(x).view(np.uint32)), x
+
+
+def test_white_noise_hashes_the_point_as_cycles_orders_it(rng):
+    """Each dimension's Color hashes the point's float32 bits with a channel number
+    (1D-3D) or reordered (4D), as util/hash.h's hash_float*_to_float3."""
+    h = noise._hash_to_float
+    for _ in range(20):
+        x, y, z, w = rng.normal(size=4) * 5.0
+        want = {1: (h(w), h(w, 1.0), h(w, 2.0)),
+                2: (h(x, y), h(x, y, 1.0), h(x, y, 2.0)),
+                3: (h(x, y, z), h(x, y, z, 1.0), h(x, y, z, 2.0)),
+                4: (h(x, y, z, w), h(z, x, w, y), h(w, z, y, x))}
+        for d in range(1, 5):
+            assert noise.white_noise(d, x, y, z, w) == pytest.approx(want[d], abs=0.0), d

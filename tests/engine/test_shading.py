@@ -381,3 +381,119 @@ def test_a_sloped_bump_shades_as_the_normal_map_of_its_slope():
     assert bumped.mean() == pytest.approx(mapped.mean(), rel=1e-4)
     floor = np.s_[1:8, :, :]
     assert abs(bumped[floor].mean() / flat[floor].mean() - 1.0) > 0.05
+
+
+def _rotation(x, y, z):
+    """Rz Ry Rx: Euler XYZ composed from the three axis rotations."""
+    cx, cy, cz, sx, sy, sz = (math.cos(x), math.cos(y), math.cos(z), math.sin(x),
+                              math.sin(y), math.sin(z))
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def test_mapping_of_each_type_with_its_inputs_in_registers(rng):
+    """The Mapping node with every input a register: Point scales, turns (Euler XYZ, the
+    axis rotations composed) and moves; Texture undoes Point (0 on an axis of zero scale);
+    Vector ignores the location; Normal divides by the scale, turns and normalises."""
+    for _ in range(10):
+        vec, loc, rot = rng.normal(size=3), rng.normal(size=3), rng.uniform(-3, 3, 3)
+        scale = rng.uniform(0.3, 2.0, 3) * rng.choice([-1, 1], 3)
+        m = _rotation(*rot)
+        got = {}
+        for kind in shading.MAPPINGS:
+            prog = Program()
+            regs = [prog.const(list(x)) for x in (vec, loc, rot, scale)]
+            out = prog.emit(shading.OP_VECTOR_MAPPING, 3, *regs, e=shading.MAPPINGS.index(kind))
+            got[kind] = shading.evaluate(prog)[out:out + 3]
+        np.testing.assert_allclose(got["POINT"], m @ (vec * scale) + loc, atol=1e-12)
+        np.testing.assert_allclose(got["TEXTURE"], m.T @ (vec - loc) / scale, atol=1e-12)
+        np.testing.assert_allclose(got["VECTOR"], m @ (vec * scale), atol=1e-12)
+        n = m @ (vec / scale)
+        np.testing.assert_allclose(got["NORMAL"], n / np.linalg.norm(n), atol=1e-12)
+        # Texture's inverse of Point: mapping Point's result back gives the vector.
+        prog = Program()
+        regs = [prog.const(list(x)) for x in (got["POINT"], loc, rot, scale)]
+        back = prog.emit(shading.OP_VECTOR_MAPPING, 3, *regs, e=1)
+        np.testing.assert_allclose(shading.evaluate(prog)[back:back + 3], vec, atol=1e-12)
+    prog = Program()
+    regs = [prog.const(x) for x in ([1.0, 2.0, 3.0], [0.0] * 3, [0.0] * 3, [2.0, 0.0, 1.0])]
+    out = prog.emit(shading.OP_VECTOR_MAPPING, 3, *regs, e=1)
+    np.testing.assert_allclose(shading.evaluate(prog)[out:out + 3], [0.5, 0.0, 3.0])
+
+
+@pytest.mark.parametrize("backfacing", [False, True])
+def test_reflection_normal_and_window_outputs(rng, backfacing):
+    """Texture Coordinate's Reflection is the view mirrored about the shading normal (the
+    direction a mirror sends the eye ray on); Normal is its map normalised and negated on a
+    back face; Window divides its homogeneous map through (0 where w is 0)."""
+    prog = Program()
+    reflection = prog.emit(shading.OP_REFLECTION, 3)
+    normal = prog.emit(shading.OP_FACING, 3, a=prog.const([0.0, 3.0, 4.0]))
+    window = prog.emit(shading.OP_PROJECT, 3, a=prog.const([1.0, 3.0, 2.0]))
+    flat = prog.emit(shading.OP_PROJECT, 3, a=prog.const([1.0, 3.0, 0.0]))
+    for _ in range(10):
+        n = rng.normal(size=3)
+        n /= np.linalg.norm(n)
+        wi = rng.normal(size=3)
+        wi /= np.linalg.norm(wi)
+        reg = shading.evaluate(prog, normal=n, incoming=wi, backfacing=backfacing)
+        ray = -wi  # the eye ray, and where a mirror sends it
+        np.testing.assert_allclose(reg[reflection:reflection + 3], ray - 2 * (ray @ n) * n,
+                                   atol=1e-12)
+        sign = -1 if backfacing else 1
+        np.testing.assert_allclose(reg[normal:normal + 3], [0, sign * 0.6, sign * 0.8])
+        np.testing.assert_allclose(reg[window:window + 3], [0.5, 1.5, 0.0])
+        np.testing.assert_allclose(reg[flat:flat + 3], 0.0)
+
+
+def _map_range(kind, value, ends, steps=4.0, clamp=False, width=1):
+    prog = Program()
+    regs = [prog.const([v] * width) for v in (value,) + tuple(ends) + (steps,)]
+    out = prog.emit(shading.OP_MAP_RANGE, width, *regs[:5], params=[
+        regs[5], shading.MAP_RANGES.index(kind), int(clamp), width])
+    return shading.evaluate(prog)[out:out + width]
+
+
+@pytest.mark.parametrize("width", [1, 3])
+def test_map_range_of_each_type(rng, width):
+    """Map Range: Linear maps the source range onto the target, Stepped in steps + 1 levels,
+    Smooth Step and Smoother Step as their polynomials (a reversed source range reversed);
+    Clamp holds a Linear result inside the target range, reversed or not; an empty source
+    range gives a float 0 and a vector the target minimum."""
+    for _ in range(20):
+        x, a, b, c, d = rng.uniform(-1, 2, 5)
+        t = (x - a) / (b - a)
+        s = min(max(t, 0.0), 1.0)
+        want = {"LINEAR": c + t * (d - c),
+                "STEPPED": c + math.floor(t * 4.0) / 3.0 * (d - c),
+                "SMOOTHSTEP": c + s * s * (3 - 2 * s) * (d - c),
+                "SMOOTHERSTEP": c + s ** 3 * (s * (6 * s - 15) + 10) * (d - c)}
+        for kind, w in want.items():
+            got = _map_range(kind, x, (a, b, c, d), steps=3.0, width=width)
+            np.testing.assert_allclose(got, w, atol=1e-12)
+        lo, hi = min(c, d), max(c, d)
+        np.testing.assert_allclose(_map_range("LINEAR", x, (a, b, c, d), clamp=True,
+                                              width=width), min(max(c + t * (d - c), lo), hi),
+                                   atol=1e-12)
+    empty = 0.0 if width == 1 else 0.25
+    np.testing.assert_allclose(_map_range("LINEAR", 0.7, (0.5, 0.5, 0.25, 0.9), width=width),
+                               empty)
+
+
+def test_clamp_and_ramp_extrapolation():
+    """Clamp: Min Max is min(max(x, lo), hi) even reversed (then hi); Range turns a reversed
+    range round. A table read past its ends continues the end entries' slope only when
+    extrapolating, else holds them."""
+    for x, lo, hi, swap, want in ((0.5, 0.2, 0.8, 0, 0.5), (1.5, 0.2, 0.8, 1, 0.8),
+                                  (0.5, 0.8, 0.2, 0, 0.2), (0.5, 0.8, 0.2, 1, 0.5),
+                                  (0.1, 0.8, 0.2, 1, 0.2)):
+        assert shading.clamp_range(x, lo, hi, swap) == want
+    table = np.zeros(4 * 5)
+    table[0::4] = [0.0, 0.1, 0.3, 0.6, 1.0]  # red: slopes 0.4 per step at the end
+    assert shading.ramp_lookup(table, 0, 5, 1.25, 0, True, True) == pytest.approx(1.0 + 0.4)
+    assert shading.ramp_lookup(table, 0, 5, -0.5, 0, True, True) == pytest.approx(-0.2)
+    assert shading.ramp_lookup(table, 0, 5, 1.25, 0, True, False) == 1.0
+    assert shading.ramp_lookup(table, 0, 5, 0.375, 0, True, False) == pytest.approx(0.2)
+    assert shading.ramp_lookup(table, 0, 5, 0.375, 0, False, False) == pytest.approx(0.1)
