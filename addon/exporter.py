@@ -65,6 +65,11 @@ class Instance:
     is_instance: bool = False
     # Object > Shading > Shadow Terminator > Geometry Offset (Cycles' default 0.1).
     terminator_offset: float = 0.1
+    # What the Object Info node reads: the object's colour (RGBA), its random number
+    # (noise.object_random) and pass index.
+    colour: tuple = (1.0, 1.0, 1.0, 1.0)
+    random: float = 0.0
+    pass_index: int = 0
 
 
 @dataclass
@@ -78,6 +83,7 @@ class ExportedScene:
     lights: list = field(default_factory=list)  # keyword dicts for core.Light
     environment: dict | None = None  # keyword arguments for core.World's map, if any
     world_volume: dict | None = None  # the world's Volume (core.World.volume), if any
+    object_maps: list = field(default_factory=list)  # the Object Info maps programs read
 
     @property
     def num_triangles(self):
@@ -291,6 +297,8 @@ class _Exporter:
         self.spaces = sorted({name for p in programs for name in p.uv_maps
                               if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA))})
+        self.out.object_maps = [n for n in sh.OBJECT_MAPS if any(n in p.uv_maps
+                                                                 for p in programs)]
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:
@@ -334,9 +342,12 @@ class _Exporter:
             lut = np.array([self.material(None)], np.int32)
         name = obj.name if not inst.is_instance or inst.parent is None else \
             f"{inst.parent.name}/{obj.name}"
-        self.out.instances.append(Instance(name, key, np.array(inst.matrix_world.copy()), lut,
-                                           bool(inst.is_instance),
-                                           self.terminator_offset(obj)))
+        self.out.instances.append(Instance(
+            name, key, np.array(inst.matrix_world.copy()), lut, bool(inst.is_instance),
+            self.terminator_offset(obj), tuple(obj.color),
+            core.load().noise.object_random(obj.name, inst.random_id if inst.is_instance
+                                            else None),
+            int(obj.pass_index)))
 
     def terminator_offset(self, obj) -> float:
         """The object's shadow terminator geometry offset (Blender 3.0+; Cycles' default
@@ -667,12 +678,24 @@ def _group_instances(exported: ExportedScene):
             yield name, mesh, chunk[0].material_lut, chunk
 
 
-def _instance_uvs(mesh: MeshData, insts) -> dict:
+def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
     """The UV maps of k instances of `mesh`, corners in the order to_world gives them (a
-    mirroring matrix flips the winding)."""
+    mirroring matrix flips the winding), and the Object Info maps `object_maps` (each
+    instance's values on all its corners)."""
     mirrored = np.linalg.det(insts[0].matrix_world[:3, :3]) < 0
-    return {name: np.tile(m[:, [0, 2, 1]] if mirrored else m, (len(insts), 1, 1))
+    maps = {name: np.tile(m[:, [0, 2, 1]] if mirrored else m, (len(insts), 1, 1))
             for name, m in mesh.uv_maps.items()}
+    sh = core.load().shading
+    per_instance = {
+        sh.OBJECT_LOCATION: lambda i: np.asarray(i.matrix_world, np.float64)[:3, 3],
+        sh.OBJECT_COLOUR: lambda i: i.colour[:3],
+        sh.OBJECT_NUMBERS: lambda i: (i.colour[3], i.random, i.pass_index)}
+    t = len(mesh.triangles)
+    for name in object_maps:
+        values = np.array([per_instance[name](i) for i in insts], np.float32)
+        maps[name] = np.broadcast_to(np.repeat(values, t, axis=0)[:, None, :],
+                                     (len(insts) * t, 3, 3))
+    return maps
 
 
 def _instance_tangents(mesh: MeshData, insts, mat_index, specs):
@@ -719,7 +742,7 @@ def to_core(exported: ExportedScene, core):
                          corner_normals=normals,
                          smooth=np.tile(mesh.smooth, k) if normals is not None else False,
                          terminator_offset=insts[0].terminator_offset,
-                         uv_maps=_instance_uvs(mesh, insts),
+                         uv_maps=_instance_uvs(mesh, insts, exported.object_maps),
                          tangents=_instance_tangents(mesh, insts, mat_index,
                                                      exported.materials))
     for spec in exported.lights:

@@ -24,7 +24,8 @@ WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
-           "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise")
+           "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
+           "ShaderNodeNewGeometry", "ShaderNodeObjectInfo")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -414,6 +415,38 @@ def _n_tex_coord(c, node, out):
     raise Unsupported(f"texture coordinate '{node.name}' output {name}")
 
 
+def _n_geometry(c, node, out):
+    """Geometry: Position (world space), Normal (the shading normal), True Normal (the
+    triangle's), Incoming (toward the viewer) and Backfacing, as Cycles' svm_node_geometry
+    reads sd->P, N, Ng, wi (N and Ng facing the viewer's side)."""
+    sh, p, name = c.sh, c.program, out.name
+    if name == "Position":
+        return p.uv(sh.POSITION), "VECTOR"
+    if name not in ("Normal", "True Normal", "Incoming", "Backfacing"):
+        raise Unsupported(f"geometry '{node.name}' output {name}")
+    if not c.view_dependent:
+        raise Unsupported(f"geometry '{node.name}' output {name} in an emission")
+    if name == "True Normal":
+        return p.emit(sh.OP_FACING, 3, a=p.uv(sh.TRUE_NORMAL)), "VECTOR"
+    if name == "Backfacing":
+        return p.emit(sh.OP_GEOMETRY, 1, d=2), "VALUE"
+    return p.emit(sh.OP_GEOMETRY, 3, d=0 if name == "Normal" else 1), "VECTOR"
+
+
+def _n_object_info(c, node, out):
+    """Object Info: the shaded object's Location, Color, Alpha, Random and Object Index
+    (its pass index), from the maps the exporter fills per instance."""
+    sh, p, name = c.sh, c.program, out.name
+    if name == "Location":
+        return p.uv(sh.OBJECT_LOCATION), "VECTOR"
+    if name == "Color":
+        return p.uv(sh.OBJECT_COLOUR), "RGBA"
+    numbers = ("Alpha", "Random", "Object Index")
+    if name not in numbers:
+        raise Unsupported(f"object info '{node.name}' output {name}")
+    return p.uv(sh.OBJECT_NUMBERS) + numbers.index(name), "VALUE"
+
+
 def _n_color_attribute(c, node, out):
     """Color Attribute: its Color, or its Alpha (the first channel of the alpha map)."""
     if out.name == "Alpha":
@@ -747,6 +780,8 @@ NODES = {
     "ShaderNodeTexWave": _n_wave,
     "ShaderNodeTexMagic": _n_magic,
     "ShaderNodeTexWhiteNoise": _n_white_noise,
+    "ShaderNodeNewGeometry": _n_geometry,
+    "ShaderNodeObjectInfo": _n_object_info,
     "ShaderNodeMapRange": _n_map_range,
     "ShaderNodeClamp": _n_clamp,
     "ShaderNodeRGBCurve": _n_curves,

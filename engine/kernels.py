@@ -33,7 +33,8 @@ from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX, enclosing
 from .plan import entered_media
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
-from .shading import CAMERA, MAX_REGISTERS, SLOTS, VIEW_MAPS, ProgramTable
+from .shading import (CAMERA, MAX_REGISTERS, POSITION, SLOTS, TRUE_NORMAL, VIEW_MAPS,
+                      WINDOW, ProgramTable)
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -202,7 +203,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     uv = programs = None
     if scene.programs is not None and (plan.textures or generic):
         uv, programs = scene.uv, scene.programs
-        fill_view_maps(scene, cam)
+        fill_view_maps(scene, cam, tri_normal)
     elif generic:  # no material has a program
         uv = np.zeros((1, 1, 3, 3), np.float32)
         none = np.full((len(scene.materials), 3), -1, np.int64)
@@ -258,16 +259,20 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         camera_media))
 
 
-def fill_view_maps(scene, cam: CameraModel) -> None:
-    """Write the camera's maps (Texture Coordinate's Camera and Window) into the scene's
-    maps for this render's camera and frame (a render at another size or with another
-    camera writes them again)."""
+def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:
+    """Write the maps the renderer makes into the scene's maps: the camera's (Texture
+    Coordinate's Camera and Window) for this render's camera and frame (a render at another
+    size or with another camera writes them again), and the Geometry node's Position (world
+    space) and True Normal (`tri_normal`, per triangle)."""
     names = [n for n in VIEW_MAPS if n in scene.uv_names]
     if not names:
         return
-    local, window = view_maps(cam, scene.vertices)
+    local, window = view_maps(cam, scene.vertices) if {CAMERA, WINDOW} & set(names) else \
+        (None, None)
+    values = {CAMERA: local, WINDOW: window, POSITION: scene.vertices + scene.origin,
+              TRUE_NORMAL: tri_normal[:, None, :]}
     for name in names:
-        scene.uv[scene.uv_names.index(name)] = local if name == CAMERA else window
+        scene.uv[scene.uv_names.index(name)] = values[name]
 
 
 def c_contiguous(data):

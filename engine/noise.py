@@ -425,3 +425,23 @@ def white_noise(d, x, y, z, w):
                 _hash_floats(4, x, y, z, 2.0))
     return (_hash_floats(4, x, y, z, w), _hash_floats(4, z, x, w, y),
             _hash_floats(4, w, z, y, x))
+
+
+# ----------------------------------------------------------------- object random numbers
+def hash_string(text: str) -> int:
+    """Cycles' hash_string: i = 37 i + c over the UTF-8 bytes, each a signed char as C
+    reads it on x86 (bytes past 127 count negative), in 32 bits."""
+    h = 0
+    for byte in text.encode("utf-8"):
+        h = (h * 37 + (byte - 256 if byte > 127 else byte)) & MASK
+    return h
+
+
+def object_random(name: str, instance_random_id: int | None = None) -> float:
+    """The Object Info node's Random: Cycles' random_id, the depsgraph instance's own for an
+    instance, else hash_uint2(hash_string(the object's name), 0), as a float32 times
+    1 / 2^32 (Cycles' (float)random_id * (1.0f / (float)0xFFFFFFFF))."""
+    rid = instance_random_id if instance_random_id is not None else \
+        hash_uint.py_func(2, hash_string(name), 0, 0, 0) if hasattr(hash_uint, "py_func") \
+        else hash_uint(2, hash_string(name), 0, 0, 0)
+    return float(np.float32(rid & MASK) / np.float32(4294967296.0))

@@ -89,6 +89,8 @@ OP_MAP_RANGE = 30   # reg[out:out+w] = Map Range of reg[a:], from reg[b:] .. reg
 #                     reg[d:] .. reg[e:]; params[p:p+4]: the Steps register, type
 #                     (MAP_RANGES), clamp, w
 OP_CLAMP = 31       # reg[out] = Clamp of reg[a] to reg[b] .. reg[c]; d: Range (else Min Max)
+OP_GEOMETRY = 32    # the hit's geometry (Geometry node): d = 0, reg[out:out+3] = the shading
+#                     normal; 1, the direction toward the viewer; 2, reg[out] = back face
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -107,7 +109,16 @@ COLOUR_ALPHA = "\x00alpha:"
 # position (0..1 from the bottom left). Interpolating either over a triangle is exact: both
 # are linear in the position.
 NORMAL, CAMERA, WINDOW = "\x00normal", "\x00camera", "\x00window"
-VIEW_MAPS = (CAMERA, WINDOW)
+# The Geometry node's Position (world space) and True Normal (the triangle's, as its
+# winding gives it; OP_FACING orients it) are maps the renderer fills from the scene too.
+POSITION, TRUE_NORMAL = "\x00position", "\x00true_normal"
+VIEW_MAPS = (CAMERA, WINDOW, POSITION, TRUE_NORMAL)
+# The Object Info node's outputs, per object (each corner of an object holds its values;
+# the exporter fills them per instance): its location; its colour; its alpha, Random
+# (Cycles' object random number) and pass index.
+OBJECT_LOCATION, OBJECT_COLOUR = "\x00object_location", "\x00object_colour"
+OBJECT_NUMBERS = "\x00object_numbers"
+OBJECT_MAPS = (OBJECT_LOCATION, OBJECT_COLOUR, OBJECT_NUMBERS)
 
 
 def map_label(name: str) -> str:
@@ -118,6 +129,8 @@ def map_label(name: str) -> str:
         return "Object coordinates"
     if name == NORMAL:
         return "normals"
+    if name in OBJECT_MAPS:
+        return "object info"
     for prefix in (COLOUR_ATTRIBUTE, COLOUR_ALPHA):
         if name.startswith(prefix):
             attribute = name[len(prefix):]
@@ -1019,6 +1032,10 @@ def run(first, end, pt, uv, f, u, v, reg):
             reg[out + 3] = (r + g + b) / 3.0
         elif op == OP_VECTOR_MAPPING:
             node_vector_mapping(ins, reg)
+        elif op == OP_GEOMETRY:
+            g = GEOMETRY + 3 * ins[5]
+            for j in range(3 if ins[5] < 2 else 1):
+                reg[out + j] = reg[g + j]
         elif op == OP_REFLECTION or op == OP_FACING or op == OP_PROJECT:
             node_view_coordinates(ins, reg)
         elif op == OP_CURVES:

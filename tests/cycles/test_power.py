@@ -390,6 +390,53 @@ def _clamp_range_as_min_max():
 
 
 @contextmanager
+def _object_random_zero():
+    """Object Info's Random read as 0 for every object (the depsgraph's random_id, which
+    is 0 for an object that is not an instance)."""
+    noise = renderers.core().noise
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(noise, "object_random", lambda name, instance_random_id=None: 0.0)
+        yield
+
+
+@contextmanager
+def _position_recentred():
+    """The Geometry node's Position relative to the scene's recentring origin, not the
+    world's."""
+    kernels = renderers.core().kernels
+    fill = kernels.fill_view_maps
+
+    def recentred(scene, cam, tri_normal):
+        origin = scene.origin
+        scene.origin = np.zeros(3)
+        try:
+            fill(scene, cam, tri_normal)
+        finally:
+            scene.origin = origin
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(kernels, "fill_view_maps", recentred)
+        yield
+
+
+@contextmanager
+def _backfacing_ignored():
+    """The Geometry node's Backfacing read as 0: every face a front face."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeNewGeometry"]
+
+    def front(c, node, out):
+        if out.name == "Backfacing":
+            return c.program.const([0.0]), "VALUE"
+        return compile_node(c, node, out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeNewGeometry", front)
+        yield
+
+
+@contextmanager
 def _colour_attributes_read(change):
     """The exporter's colour attributes (RGB, or alpha in the first channel) as
     `change(values, alpha)` makes them."""
@@ -863,6 +910,9 @@ INJECTIONS = {
                                           _normal_coordinates_in_world_space),
     "mapping_links_unread": ("texture_coordinates", None, _mapping_links_unread),
     "white_noise_dimensions_rotated": ("white_noise", None, _white_noise_dimensions_rotated),
+    "object_random_zero": ("geometry_and_object_info", None, _object_random_zero),
+    "position_recentred": ("geometry_and_object_info", None, _position_recentred),
+    "backfacing_ignored": ("geometry_and_object_info", None, _backfacing_ignored),
     "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
     "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
     "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),

@@ -1172,6 +1172,110 @@ def texture_coordinates():
         "WindowChecker", "Window", 6.0))
 
 
+def _diffuse_fed(name, feed):
+    """A Diffuse material whose Color is the socket `feed(tree)` returns."""
+    mat = bs.material(name, "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    tree.links.new(feed(tree), diffuse.inputs["Color"])
+    return mat
+
+
+def _object_info_feed(tree):
+    """Object Info: its Color mixed toward (Random, Alpha, Object Index / 4) by Alpha."""
+    info = tree.nodes.new("ShaderNodeObjectInfo")
+    combine = tree.nodes.new("ShaderNodeCombineColor")
+    quarter = tree.nodes.new("ShaderNodeMath")
+    quarter.operation = "DIVIDE"
+    quarter.inputs[1].default_value = 4.0
+    tree.links.new(info.outputs["Object Index"], quarter.inputs[0])
+    for source, channel in ((info.outputs["Random"], "Red"), (info.outputs["Alpha"], "Green"),
+                            (quarter.outputs[0], "Blue")):
+        tree.links.new(source, combine.inputs[channel])
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    ins = {s.identifier: s for s in mix.inputs}
+    tree.links.new(info.outputs["Alpha"], ins["Factor_Float"])
+    tree.links.new(info.outputs["Color"], ins["A_Color"])
+    tree.links.new(combine.outputs["Color"], ins["B_Color"])
+    return mix.outputs[2]
+
+
+def _position_feed(tree):
+    """A Checker Texture (scale 5) on the Geometry node's Position (world space)."""
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 5.0
+    checker.inputs["Color1"].default_value = (0.9, 0.6, 0.1, 1.0)
+    checker.inputs["Color2"].default_value = (0.1, 0.3, 0.8, 1.0)
+    tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Position"],
+                   checker.inputs["Vector"])
+    return checker.outputs["Color"]
+
+
+def _normals_feed(tree):
+    """The Geometry node's |Normal| mixed with |True Normal| by Incoming . Normal."""
+    geometry = tree.nodes.new("ShaderNodeNewGeometry")
+    absolute = []
+    for name in ("Normal", "True Normal"):
+        node = tree.nodes.new("ShaderNodeVectorMath")
+        node.operation = "ABSOLUTE"
+        tree.links.new(geometry.outputs[name], node.inputs[0])
+        absolute.append(node.outputs[0])
+    dot = tree.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    tree.links.new(geometry.outputs["Incoming"], dot.inputs[0])
+    tree.links.new(geometry.outputs["Normal"], dot.inputs[1])
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "VECTOR"
+    ins = {s.identifier: s for s in mix.inputs}
+    tree.links.new(dot.outputs["Value"], ins["Factor_Float"])
+    tree.links.new(absolute[0], ins["A_Vector"])
+    tree.links.new(absolute[1], ins["B_Vector"])
+    return mix.outputs[1]
+
+
+def _backfacing_feed(tree):
+    """Orange on a front face, green on a back face (Geometry's Backfacing as the factor)."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    ins = {s.identifier: s for s in mix.inputs}
+    ins["A_Color"].default_value = (0.9, 0.4, 0.1, 1.0)
+    ins["B_Color"].default_value = (0.2, 0.8, 0.3, 1.0)
+    tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Backfacing"],
+                   ins["Factor_Float"])
+    return mix.outputs[2]
+
+
+def geometry_and_object_info():
+    """The Geometry node (Position, Normal, True Normal, Incoming, Backfacing) and Object
+    Info (Color, Alpha, Random, Object Index) (issue 14, point 1): a ball and three cubes
+    sharing one mesh, each with its own colour, alpha and pass index (Random differs by
+    object); a ball chequered on world positions; a faceted ball (flat and smooth halves)
+    coloured by its normals; and a card seen from behind whose back face is green."""
+    _box()
+    info = _diffuse_fed("Info", _object_info_feed)
+    ball = _sphere(info, (-0.6, 0.0, 0.27), 0.27, "InfoBall")
+    ball.color, ball.pass_index = (0.9, 0.5, 0.2, 0.3), 3
+    mesh = None
+    for i, (colour, index) in enumerate((((0.2, 0.6, 0.9, 0.8), 1), ((0.8, 0.8, 0.2, 0.0), 2),
+                                         ((0.9, 0.2, 0.5, 0.5), 4))):
+        cube = _cube(f"InfoCube{i}", (-0.75 + 0.3 * i, 0.5, 0.8), (0.18, 0.18, 0.18), info)
+        if mesh is None:
+            mesh = cube.data
+        else:  # linked duplicates: one mesh, three objects
+            old, cube.data = cube.data, mesh
+            bpy.data.meshes.remove(old)
+        cube.color, cube.pass_index = colour, index
+    _sphere(_diffuse_fed("Position", _position_feed), (0.0, 0.0, 0.27), 0.27, "PositionBall")
+    faceted = _sphere(_diffuse_fed("Normals", _normals_feed), (0.6, 0.0, 0.27), 0.27,
+                      "NormalsBall")
+    for face in faceted.data.polygons:
+        face.use_smooth = face.center[0] > 0.0
+    faceted.rotation_euler = (0.3, 0.2, 0.4)
+    _card("BackCard", (0.55, 0.5, 0.85), (0.5, 0.35), _diffuse_fed("Backfacing",
+                                                                   _backfacing_feed))
+
+
 def _painted_ball(name, centre, domain, data_type, attribute="Paint", alpha=False):
     """A smooth UV sphere of radius 0.27 whose colour attribute `attribute` (per `domain`)
     paints bands of colour from its vertices' positions, Diffuse-shaded by a Color
@@ -2386,6 +2490,8 @@ _add(Variant("texture_spaces", texture_spaces, max_bounces=8))
 _add(Variant("colour_attributes", colour_attributes, max_bounces=8))
 _add(Variant("texture_coordinates", texture_coordinates, resolution=(128, 96), max_bounces=8,
              samples=256, cycles_samples=512))
+_add(Variant("geometry_and_object_info", geometry_and_object_info, resolution=(128, 96),
+             max_bounces=8, samples=256, cycles_samples=512))
 _add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("procedural_textures", procedural_textures, resolution=(224, 96), max_bounces=0,

@@ -93,3 +93,16 @@ def test_white_noise_hashes_the_point_as_cycles_orders_it(rng):
                 4: (h(x, y, z, w), h(z, x, w, y), h(w, z, y, x))}
         for d in range(1, 5):
             assert noise.white_noise(d, x, y, z, w) == pytest.approx(want[d], abs=0.0), d
+
+
+def test_object_random_hashes_the_name_as_cycles():
+    """Object Info's Random of an object that is not an instance: hash_uint2 of the name's
+    hash_string (37 i + c over signed chars) and 0, over 2^32; an instance's is its own
+    random_id over 2^32."""
+    assert noise.hash_string("") == 0
+    assert noise.hash_string("Ab") == (65 * 37 + 98)
+    assert noise.hash_string("é") == ((0xC3 - 256) * 37 + (0xA9 - 256)) & noise.MASK
+    h = noise.hash_uint.py_func(2, noise.hash_string("Cube"), 0, 0, 0)
+    assert noise.object_random("Cube") == pytest.approx(h / 2.0 ** 32, rel=1e-7)
+    assert noise.object_random("Cube", 2 ** 31) == 0.5
+    assert noise.object_random("Cube", -1) == pytest.approx(1.0)
