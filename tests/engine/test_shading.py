@@ -207,6 +207,13 @@ def _fresnel_exact(cos, eta):
     return 0.5 * a * a * (1 + b * b)
 
 
+def _random_views(rng, n):
+    """n random (unit normal, unit direction toward the viewer) pairs."""
+    for _ in range(n):
+        pair = rng.normal(size=(2, 3))
+        yield pair / np.linalg.norm(pair, axis=1, keepdims=True)
+
+
 @pytest.mark.parametrize("backfacing", [False, True])
 def test_fresnel_and_layer_weight_read_the_view_at_the_hit(rng, backfacing):
     """Cycles' Fresnel and Layer Weight nodes at random views of a hit: the IOR inverted
@@ -219,11 +226,7 @@ def test_fresnel_and_layer_weight_read_the_view_at_the_hit(rng, backfacing):
     fresnel = prog.emit(shading.OP_FRESNEL, 1, a=ior, b=-1)
     fresnel_tilted = prog.emit(shading.OP_FRESNEL, 1, a=ior, b=tilted)
     layer = prog.emit(shading.OP_LAYER_WEIGHT, 2, a=blend, b=-1)
-    for _ in range(20):
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
-        i = rng.normal(size=3)
-        i /= np.linalg.norm(i)
+    for n, i in _random_views(rng, 20):
         reg = shading.evaluate(prog, normal=n, incoming=i, backfacing=backfacing)
         cos = n @ i
         eta = 1 / 1.45 if backfacing else 1.45
@@ -433,11 +436,7 @@ def test_reflection_normal_and_window_outputs(rng, backfacing):
     normal = prog.emit(shading.OP_FACING, 3, a=prog.const([0.0, 3.0, 4.0]))
     window = prog.emit(shading.OP_PROJECT, 3, a=prog.const([1.0, 3.0, 2.0]))
     flat = prog.emit(shading.OP_PROJECT, 3, a=prog.const([1.0, 3.0, 0.0]))
-    for _ in range(10):
-        n = rng.normal(size=3)
-        n /= np.linalg.norm(n)
-        wi = rng.normal(size=3)
-        wi /= np.linalg.norm(wi)
+    for n, wi in _random_views(rng, 10):
         reg = shading.evaluate(prog, normal=n, incoming=wi, backfacing=backfacing)
         ray = -wi  # the eye ray, and where a mirror sends it
         np.testing.assert_allclose(reg[reflection:reflection + 3], ray - 2 * (ray @ n) * n,
