@@ -25,7 +25,7 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
-           "ShaderNodeNewGeometry", "ShaderNodeObjectInfo")
+           "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -655,6 +655,33 @@ def _n_white_noise(c, node, out):
     return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
 
 
+def _n_brick(c, node, out):
+    """Brick Texture: every input linkable; Offset, Squash and their frequencies."""
+    colours = [c.input(node.inputs[n], "RGBA") for n in ("Color1", "Color2", "Mortar")]
+    values = [c.input(node.inputs[n], "VALUE") for n in (
+        "Scale", "Mortar Size", "Mortar Smooth", "Bias", "Brick Width", "Row Height")]
+    reg = c.program.emit(c.sh.OP_BRICK, 4, _texture_vector(c, node), *colours, params=[
+        *values, node.offset, node.offset_frequency, node.squash, node.squash_frequency])
+    return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
+
+
+def _n_vector_rotate(c, node, out):
+    """Vector Rotate: every type, inverted or not."""
+    sh = c.sh
+    vec, centre, axis = (c.input(enabled_input(node, n), "VECTOR")
+                         for n in ("Vector", "Center", "Axis"))
+    angle = c.input(enabled_input(node, "Angle"), "VALUE")
+    rotation = c.input(enabled_input(node, "Rotation"), "VECTOR")
+    return c.program.emit(sh.OP_VECTOR_ROTATE, 3, a=vec, b=centre, c=axis,
+                          d=sh.ROTATIONS.index(node.rotation_type), e=angle,
+                          params=[int(node.invert), rotation]), "VECTOR"
+
+
+def _n_rgb_to_bw(c, node, out):
+    """RGB to BW: the colour's luminance (Cycles' linear_rgb_to_gray)."""
+    return c.convert(c.input(node.inputs["Color"], "RGBA"), "RGBA", "VALUE"), "VALUE"
+
+
 def _n_color_ramp(c, node, out):
     """Color Ramp as Cycles bakes it: a table of RAMP_TABLE_SIZE entries from Blender's own
     ramp evaluation, looked up (linearly unless Constant) at the factor."""
@@ -780,6 +807,9 @@ NODES = {
     "ShaderNodeTexWave": _n_wave,
     "ShaderNodeTexMagic": _n_magic,
     "ShaderNodeTexWhiteNoise": _n_white_noise,
+    "ShaderNodeTexBrick": _n_brick,
+    "ShaderNodeVectorRotate": _n_vector_rotate,
+    "ShaderNodeRGBToBW": _n_rgb_to_bw,
     "ShaderNodeNewGeometry": _n_geometry,
     "ShaderNodeObjectInfo": _n_object_info,
     "ShaderNodeMapRange": _n_map_range,

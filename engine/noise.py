@@ -264,7 +264,7 @@ def noise_texture(d, kind, normalize, x, y, z, w, detail, roughness, lacunarity,
     o = OFFSETS[d - 1]
     if distortion != 0.0:
         if d == 1:
-            x += snoise(1, x + o[0, 0], 0.0, 0.0, 0.0) * distortion
+            x += snoise(d, x + o[0, 0], 0.0, 0.0, 0.0) * distortion
         else:
             dx = snoise(d, x + o[0, 0], y + o[0, 1], z + o[0, 2], w + o[0, 3]) * distortion
             dy = snoise(d, x + o[1, 0], y + o[1, 1], z + o[1, 2], w + o[1, 3]) * distortion
@@ -330,8 +330,9 @@ def wave(kind, bands, rings, profile, x, y, z, distortion, detail, dscale, droug
         n = math.sqrt(rx * rx + ry * ry + rz * rz) * 20.0
     n += phase
     if distortion != 0.0:
-        fbm = fractal(3, 3, x * dscale, y * dscale, z * dscale, 0.0,
-                      min(max(detail, 0.0), 15.0), droughness, 2.0, 0.0, 1.0, True)
+        # (np.int64, np.bool_: a literal argument would compile fractal a second time.)
+        fbm = fractal(np.int64(3), np.int64(3), x * dscale, y * dscale, z * dscale, 0.0,
+                      min(max(detail, 0.0), 15.0), droughness, 2.0, 0.0, 1.0, np.bool_(True))
         n += distortion * (fbm * 2.0 - 1.0)
     if profile == 0:
         return 0.5 + 0.5 * math.sin(n - 0.5 * math.pi)
@@ -414,17 +415,19 @@ def white_noise(d, x, y, z, w):
     """Cycles' White Noise Texture (svm_node_tex_white_noise) of dimension d (1D reads w):
     its Color (r, g, b); its Value is r. Each channel hashes the point with a channel
     number or its coordinates reordered, as util/hash.h's hash_float*_to_float3."""
+    # (Counts as np.int64: literal ones would compile _hash_floats once per count.)
+    n1, n2, n3, n4 = np.int64(1), np.int64(2), np.int64(3), np.int64(4)
     if d == 1:
-        return (_hash_floats(1, w, 0.0, 0.0, 0.0), _hash_floats(2, w, 1.0, 0.0, 0.0),
-                _hash_floats(2, w, 2.0, 0.0, 0.0))
+        return (_hash_floats(n1, w, 0.0, 0.0, 0.0), _hash_floats(n2, w, 1.0, 0.0, 0.0),
+                _hash_floats(n2, w, 2.0, 0.0, 0.0))
     if d == 2:
-        return (_hash_floats(2, x, y, 0.0, 0.0), _hash_floats(3, x, y, 1.0, 0.0),
-                _hash_floats(3, x, y, 2.0, 0.0))
+        return (_hash_floats(n2, x, y, 0.0, 0.0), _hash_floats(n3, x, y, 1.0, 0.0),
+                _hash_floats(n3, x, y, 2.0, 0.0))
     if d == 3:
-        return (_hash_floats(3, x, y, z, 0.0), _hash_floats(4, x, y, z, 1.0),
-                _hash_floats(4, x, y, z, 2.0))
-    return (_hash_floats(4, x, y, z, w), _hash_floats(4, z, x, w, y),
-            _hash_floats(4, w, z, y, x))
+        return (_hash_floats(n3, x, y, z, 0.0), _hash_floats(n4, x, y, z, 1.0),
+                _hash_floats(n4, x, y, z, 2.0))
+    return (_hash_floats(n4, x, y, z, w), _hash_floats(n4, z, x, w, y),
+            _hash_floats(n4, w, z, y, x))
 
 
 # ----------------------------------------------------------------- object random numbers
@@ -445,3 +448,41 @@ def object_random(name: str, instance_random_id: int | None = None) -> float:
         hash_uint.py_func(2, hash_string(name), 0, 0, 0) if hasattr(hash_uint, "py_func") \
         else hash_uint(2, hash_string(name), 0, 0, 0)
     return float(np.float32(rid & MASK) / np.float32(4294967296.0))
+
+
+# ----------------------------------------------------------------- bricks
+@njit(**JIT)
+def _brick_noise(n):
+    """Cycles' brick_noise: a fast integer hash of n to [0, 1), in 32-bit arithmetic."""
+    n = (n + 1013) & 0x7FFFFFFF
+    n = (n >> 13) ^ n
+    nn = (n * ((n * n * 60493 + 19990303) & MASK) + 1376312589) & 0x7FFFFFFF
+    return 0.5 * (nn / 1073741824.0)
+
+
+@njit(**JIT)
+def brick(x, y, mortar_size, mortar_smooth, bias, brick_width, row_height, offset_amount,
+          offset_frequency, squash_amount, squash_frequency):
+    """Cycles' Brick Texture (svm_brick) at the scaled point (x, y): (tint, mortar). Every
+    offset_frequency-th row is shifted by offset_amount of a brick, every
+    squash_frequency-th row's bricks are squash_amount as wide; a brick's tint is a hash
+    of its row and column plus the bias; mortar is 1 within mortar_size of a brick's
+    edge, smoothed over mortar_smooth of it."""
+    row = int(math.floor(y / row_height))
+    offset = 0.0
+    if offset_frequency != 0 and squash_frequency != 0:
+        if row % squash_frequency == 0:
+            brick_width *= squash_amount
+        if row % offset_frequency == 0:
+            offset = brick_width * offset_amount
+    column = int(math.floor((x + offset) / brick_width))
+    bx = (x + offset) - brick_width * column
+    by = y - row_height * row
+    tint = min(max(_brick_noise(((row << 16) + (column & 0xFFFF)) & MASK) + bias, 0.0), 1.0)
+    distance = min(min(bx, by), min(brick_width - bx, row_height - by))
+    if distance >= mortar_size:
+        return tint, 0.0
+    if mortar_smooth == 0.0:
+        return tint, 1.0
+    f = (1.0 - distance / mortar_size) / mortar_smooth
+    return tint, 0.0 if f <= 0.0 else (1.0 if f >= 1.0 else (3.0 - 2.0 * f) * f * f)

@@ -91,6 +91,13 @@ OP_MAP_RANGE = 30   # reg[out:out+w] = Map Range of reg[a:], from reg[b:] .. reg
 OP_CLAMP = 31       # reg[out] = Clamp of reg[a] to reg[b] .. reg[c]; d: Range (else Min Max)
 OP_GEOMETRY = 32    # the hit's geometry (Geometry node): d = 0, reg[out:out+3] = the shading
 #                     normal; 1, the direction toward the viewer; 2, reg[out] = back face
+OP_BRICK = 33       # reg[out:out+3] Color, reg[out+3] Fac of Cycles' Brick Texture at
+#                     reg[a:a+3]: colours reg[b:], reg[c:], mortar reg[d:]; params[p:p+6] the
+#                     registers of Scale, Mortar Size, Mortar Smooth, Bias, Brick Width and Row
+#                     Height, then offset, its frequency, squash and its frequency
+OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
+#                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
+#                     angles reg[params[p+1]:]; params[p]: invert
 
 # The names of the per-corner coordinate maps beside a mesh's UV maps for Texture
 # Coordinate's Generated output (the mesh's texture space: (P - location) / (2 size) + 1/2,
@@ -145,6 +152,8 @@ BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE"
 HUE = BLENDS.index("HUE")
 # Types of OP_VECTOR_MAPPING (the Mapping node's, svm_mapping in kernel/svm/mapping_util.h).
 MAPPINGS = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+# Types of OP_VECTOR_ROTATE (the Vector Rotate node's).
+ROTATIONS = ("AXIS_ANGLE", "X_AXIS", "Y_AXIS", "Z_AXIS", "EULER_XYZ")
 # Types of OP_MAP_RANGE (the Map Range node's interpolation types).
 MAP_RANGES = ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP")
 # Conversions of OP_COLOUR_SPACE (Separate and Combine Color's modes; util/color.h).
@@ -627,7 +636,7 @@ def node_image(ins, reg, pt):
     tex = pt.textures[ins[3]]
     x, y = reg[ins[2]], reg[ins[2] + 1]
     out = ins[1]
-    alpha = image_channel(x, y, 3, pt.texels, tex)
+    alpha = image_channel(x, y, np.int64(3), pt.texels, tex)  # (not a literal: one compile)
     for ch in range(3):
         c = image_channel(x, y, ch, pt.texels, tex)
         if ins[4] != 0 and alpha != 1.0 and alpha != 0.0:
@@ -703,13 +712,80 @@ def node_vector_mapping(ins, reg):
 
 
 @njit(**JIT)
+def axis_rotation(x, y, z, ax, ay, az, angle):
+    """(x, y, z) turned by `angle` about the unit axis a (Rodrigues; Cycles'
+    rotate_around_axis)."""
+    c, s = math.cos(angle), math.sin(angle)
+    t = 1.0 - c
+    return ((c + t * ax * ax) * x + (t * ax * ay - az * s) * y + (t * ax * az + ay * s) * z,
+            (t * ax * ay + az * s) * x + (c + t * ay * ay) * y + (t * ay * az - ax * s) * z,
+            (t * ax * az - ay * s) * x + (t * ay * az + ax * s) * y + (c + t * az * az) * z)
+
+
+@njit(**JIT)
+def node_vector_rotate(ins, reg, params):
+    """Cycles' Vector Rotate (svm_node_vector_rotate): about the centre, by Euler XYZ angles
+    (inverted: the transposed rotation) or by an angle about an axis (X, Y, Z or the Axis
+    input normalised; inverted: the negated angle; a zero axis leaves the vector)."""
+    a, b, kind, out, p = ins[2], ins[3], ins[5], ins[1], ins[7]
+    invert = params[p] != 0.0
+    x, y, z = reg[a] - reg[b], reg[a + 1] - reg[b + 1], reg[a + 2] - reg[b + 2]
+    if kind == 4:  # EULER_XYZ
+        e = int(params[p + 1])
+        m = euler_rotation(reg[e], reg[e + 1], reg[e + 2])
+        if invert:
+            rx, ry, rz = (m[0][0] * x + m[1][0] * y + m[2][0] * z,
+                          m[0][1] * x + m[1][1] * y + m[2][1] * z,
+                          m[0][2] * x + m[1][2] * y + m[2][2] * z)
+        else:
+            rx, ry, rz = (m[0][0] * x + m[0][1] * y + m[0][2] * z,
+                          m[1][0] * x + m[1][1] * y + m[1][2] * z,
+                          m[2][0] * x + m[2][1] * y + m[2][2] * z)
+    else:
+        if kind == 0:
+            ax, ay, az = reg[ins[4]], reg[ins[4] + 1], reg[ins[4] + 2]
+        else:
+            ax, ay, az = (1.0 if kind == 1 else 0.0, 1.0 if kind == 2 else 0.0,
+                          1.0 if kind == 3 else 0.0)
+        length = math.sqrt(ax * ax + ay * ay + az * az)
+        if length == 0.0:
+            reg[out], reg[out + 1], reg[out + 2] = reg[a], reg[a + 1], reg[a + 2]
+            return
+        angle = -reg[ins[6]] if invert else reg[ins[6]]
+        rx, ry, rz = axis_rotation(x, y, z, ax / length, ay / length, az / length, angle)
+    reg[out], reg[out + 1], reg[out + 2] = rx + reg[b], ry + reg[b + 1], rz + reg[b + 2]
+
+
+@njit(**JIT)
+def node_brick(ins, reg, params):
+    """Cycles' Brick Texture (svm_node_tex_brick): the bricks' two colours mixed by each
+    brick's tint, the mortar colour over them by the mortar factor."""
+    a, p, out = ins[2], ins[7], ins[1]
+    scale = reg[int(params[p])]
+    tint, f = noise.brick(reg[a] * scale, reg[a + 1] * scale, reg[int(params[p + 1])],
+                          reg[int(params[p + 2])], reg[int(params[p + 3])],
+                          reg[int(params[p + 4])], reg[int(params[p + 5])], params[p + 6],
+                          int(params[p + 7]), params[p + 8], int(params[p + 9]))
+    for j in range(3):
+        c = reg[ins[3] + j]
+        if f != 1.0:
+            c = (1.0 - tint) * c + tint * reg[ins[4] + j]
+        reg[out + j] = c * (1.0 - f) + reg[ins[5] + j] * f
+    reg[out + 3] = f
+
+
+@njit(**JIT)
 def node_view_coordinates(ins, reg):
-    """Texture Coordinate's outputs made from the hit's geometry or a view map's value:
-    Reflection (Cycles' svm_texco_reflection: -reflect(wi, N) = 2 (N.wi) N - wi), Normal
-    (the interpolated object-space normal normalised, negated on a back face as sd->N is)
-    and Window (the homogeneous map divided through; Cycles' transform_perspective)."""
+    """The Geometry node's Normal, Incoming and Backfacing, and Texture Coordinate's
+    outputs made from the hit's geometry or a view map's value: Reflection (Cycles'
+    svm_texco_reflection: -reflect(wi, N) = 2 (N.wi) N - wi), Normal (the interpolated
+    object-space normal normalised, negated on a back face as sd->N is) and Window (the
+    homogeneous map divided through; Cycles' transform_perspective)."""
     op, a, out, g = ins[0], ins[2], ins[1], GEOMETRY
-    if op == OP_REFLECTION:
+    if op == OP_GEOMETRY:  # the normal, the view (3 registers) or the side (1)
+        for j in range(3 if ins[5] < 2 else 1):
+            reg[out + j] = reg[g + 3 * ins[5] + j]
+    elif op == OP_REFLECTION:
         nx, ny, nz = reg[g], reg[g + 1], reg[g + 2]
         ix, iy, iz = reg[g + 3], reg[g + 4], reg[g + 5]
         d = 2.0 * (nx * ix + ny * iy + nz * iz)
@@ -791,7 +867,8 @@ def node_ramp(ins, reg, params):
     """Cycles' Color Ramp (svm_node_rgb_ramp): the table at the factor, linear between
     entries unless the ramp is Constant."""
     for j in range(4):
-        reg[ins[1] + j] = ramp_lookup(params, ins[7], ins[3], reg[ins[2]], j, ins[4] != 0, False)
+        reg[ins[1] + j] = ramp_lookup(params, ins[7], ins[3], reg[ins[2]], j, ins[4] != 0,
+                                      np.bool_(False))
 
 
 @njit(**JIT)
@@ -804,7 +881,8 @@ def node_curves(ins, reg, params):
     lo, hi = params[p], params[p + 1]
     for j in range(ins[6]):
         x = reg[a + j]
-        y = ramp_lookup(params, p + 2, n, (x - lo) / (hi - lo) if hi != lo else 0.0, j, True,
+        y = ramp_lookup(params, p + 2, n, (x - lo) / (hi - lo) if hi != lo else 0.0, j,
+                        np.bool_(True),
                         ins[5] != 0)
         reg[out + j] = (1.0 - fac) * x + fac * y
 
@@ -842,7 +920,7 @@ def node_map_range(ins, reg, params):
         # A float's clamp is a Clamp node after it (Cycles' MapRangeNode::expand), whatever
         # the type; a vector's applies to Linear and Stepped only.
         if clamp and (width == 1 or kind < 2):
-            r = clamp_range(r, to_lo, to_hi, True)
+            r = clamp_range(r, to_lo, to_hi, np.bool_(True))
         reg[out + j] = r
 
 
@@ -972,6 +1050,54 @@ def node_colour_ops(ins, reg):
             reg[out + j] = max((1.0 + contrast) * reg[a + j] + reg[b] - contrast * 0.5, 0.0)
 
 
+# The opcodes of the procedural textures, of the converters and of the nodes reading the
+# hit's geometry: each group one function of its own (node_texture, node_converter,
+# node_view_coordinates), keeping the interpreter short.
+TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK)
+CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP)
+GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
+
+
+@njit(**JIT)
+def node_texture(ins, reg, params):
+    """The procedural textures: Color in reg[out:out+3], Fac in reg[out+3]."""
+    op, out, a = ins[0], ins[1], ins[2]
+    if op == OP_CHECKER:
+        node_checker(ins, reg)
+    elif op == OP_NOISE:
+        node_noise(ins, reg, params)
+    elif op == OP_GRADIENT:
+        g = noise.gradient(ins[5], reg[a], reg[a + 1], reg[a + 2])
+        reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = g, g, g, g
+    elif op == OP_WAVE:
+        node_wave(ins, reg, params)
+    elif op == OP_MAGIC:
+        r, g, b = noise.magic(reg[a], reg[a + 1], reg[a + 2], reg[ins[3]], ins[5], reg[ins[4]])
+        reg[out], reg[out + 1], reg[out + 2] = r, g, b
+        reg[out + 3] = (r + g + b) / 3.0
+    elif op == OP_WHITE_NOISE:
+        r, g, b = noise.white_noise(ins[5], reg[a], reg[a + 1], reg[a + 2], reg[ins[3]])
+        reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, r
+    else:
+        node_brick(ins, reg, params)
+
+
+@njit(**JIT)
+def node_converter(ins, reg, params):
+    """Mapping, Vector Rotate, the Curves, Map Range and Clamp."""
+    op = ins[0]
+    if op == OP_VECTOR_MAPPING:
+        node_vector_mapping(ins, reg)
+    elif op == OP_VECTOR_ROTATE:
+        node_vector_rotate(ins, reg, params)
+    elif op == OP_CURVES:
+        node_curves(ins, reg, params)
+    elif op == OP_MAP_RANGE:
+        node_map_range(ins, reg, params)
+    else:
+        reg[ins[1]] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
+
+
 @njit(**JIT)
 def run(first, end, pt, uv, f, u, v, reg):
     """Execute instructions first..end-1 of the ProgramTable pt at the hit (triangle f,
@@ -1004,8 +1130,6 @@ def run(first, end, pt, uv, f, u, v, reg):
             reg[out] = (reg[ins[2]] + reg[ins[2] + 1] + reg[ins[2] + 2]) / 3.0
         elif op == OP_COMBINE:
             reg[out], reg[out + 1], reg[out + 2] = reg[ins[2]], reg[ins[3]], reg[ins[4]]
-        elif op == OP_CHECKER:
-            node_checker(ins, reg)
         elif op == OP_RAMP:
             node_ramp(ins, reg, pt.params)
         elif op == OP_HSV:
@@ -1016,38 +1140,12 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_fresnel(ins, reg)
         elif op == OP_LAYER_WEIGHT:
             node_layer_weight(ins, reg)
-        elif op == OP_NOISE:
-            node_noise(ins, reg, pt.params)
-        elif op == OP_GRADIENT:
-            a = ins[2]
-            g = noise.gradient(ins[5], reg[a], reg[a + 1], reg[a + 2])
-            reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = g, g, g, g
-        elif op == OP_WAVE:
-            node_wave(ins, reg, pt.params)
-        elif op == OP_MAGIC:
-            a = ins[2]
-            r, g, b = noise.magic(reg[a], reg[a + 1], reg[a + 2], reg[ins[3]], ins[5],
-                                  reg[ins[4]])
-            reg[out], reg[out + 1], reg[out + 2] = r, g, b
-            reg[out + 3] = (r + g + b) / 3.0
-        elif op == OP_VECTOR_MAPPING:
-            node_vector_mapping(ins, reg)
-        elif op == OP_GEOMETRY:
-            g = GEOMETRY + 3 * ins[5]
-            for j in range(3 if ins[5] < 2 else 1):
-                reg[out + j] = reg[g + j]
-        elif op == OP_REFLECTION or op == OP_FACING or op == OP_PROJECT:
+        elif op in TEXTURE_OPS:
+            node_texture(ins, reg, pt.params)
+        elif op in CONVERTER_OPS:
+            node_converter(ins, reg, pt.params)
+        elif op in GEOMETRY_OPS:
             node_view_coordinates(ins, reg)
-        elif op == OP_CURVES:
-            node_curves(ins, reg, pt.params)
-        elif op == OP_MAP_RANGE:
-            node_map_range(ins, reg, pt.params)
-        elif op == OP_CLAMP:
-            reg[out] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
-        elif op == OP_WHITE_NOISE:
-            a = ins[2]
-            r, g, b = noise.white_noise(ins[5], reg[a], reg[a + 1], reg[a + 2], reg[ins[3]])
-            reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, r
         elif op == OP_COLOUR_SPACE:
             a = ins[2]
             reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],
@@ -1170,7 +1268,9 @@ def bump_normal(nx, ny, nz, ex, ey, ez, fx, fy, fz, dh_e, dh_f, strength):
 def raw_result_at(rows, mat, f, u, v, pt, uv, reg):
     """The three result registers of program rows[mat] (which must exist) run at the hit
     (triangle f, barycentrics u, v); non-finite channels are 0, negative ones kept."""
-    run(rows[mat, 0], rows[mat, 1], pt, uv, f, u, v, reg)
+    # f as int64 whatever array it came from: an int32 triangle index compiled the whole
+    # interpreter a second time.
+    run(rows[mat, 0], rows[mat, 1], pt, uv, np.int64(f), u, v, reg)
     o = rows[mat, 2]
     r0, r1, r2 = reg[o], reg[o + 1], reg[o + 2]
     return (r0 if math.isfinite(r0) else 0.0, r1 if math.isfinite(r1) else 0.0,

@@ -306,8 +306,8 @@ def _normal_coordinates_in_world_space():
 
     instance_uvs = exporter._instance_uvs
 
-    def turned(mesh, insts):
-        maps = instance_uvs(mesh, insts)
+    def turned(mesh, insts, object_maps=()):
+        maps = instance_uvs(mesh, insts, object_maps)
         sh = renderers.core().shading
         if sh.NORMAL in maps:
             linear = np.asarray(insts[0].matrix_world, np.float64)[:3, :3]
@@ -433,6 +433,26 @@ def _backfacing_ignored():
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(shader_nodes.NODES, "ShaderNodeNewGeometry", front)
+        yield
+
+
+@contextmanager
+def _parameter_changed(node_type, opcode, index, value):
+    """Parameter `index` of each `node_type` node's instruction (of `opcode`, a
+    shading.OP_* name) set to `value`."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES[node_type]
+
+    def changed(c, node, out):
+        result = compile_node(c, node, out)
+        row = c.program.code[-1]
+        assert row[0] == getattr(c.sh, opcode)
+        c.program.params[row[7] + index] = float(value)
+        return result
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, node_type, changed)
         yield
 
 
@@ -913,6 +933,11 @@ INJECTIONS = {
     "object_random_zero": ("geometry_and_object_info", None, _object_random_zero),
     "position_recentred": ("geometry_and_object_info", None, _position_recentred),
     "backfacing_ignored": ("geometry_and_object_info", None, _backfacing_ignored),
+    # Bricks' offset frequency 0 (no offset or squash); Vector Rotate's Invert ignored.
+    "brick_rows_unshifted": ("bricks_and_rotation", None, lambda: _parameter_changed(
+        "ShaderNodeTexBrick", "OP_BRICK", 7, 0)),
+    "rotation_never_inverted": ("bricks_and_rotation", None, lambda: _parameter_changed(
+        "ShaderNodeVectorRotate", "OP_VECTOR_ROTATE", 0, 0)),
     "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
     "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
     "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),

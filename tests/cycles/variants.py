@@ -1717,6 +1717,101 @@ def converter_nodes():
                       (0.5, 0.5), feed)
 
 
+def _brick_feed(output="Color", width_linked=False, **settings):
+    """A feed for _glowing_card: a Brick Texture on the card's (x, z) as (x, y) (bricks lie
+    in x and y) with `settings` (its properties and inputs by name); with `width_linked`,
+    its Brick Width 0.3 + 0.4 x the card's x."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexBrick")
+        plane = tree.nodes.new("ShaderNodeCombineXYZ")
+        tree.links.new(_generated_axis(tree), plane.inputs["X"])
+        tree.links.new(_generated_axis(tree, "Z"), plane.inputs["Y"])
+        tree.links.new(plane.outputs[0], node.inputs["Vector"])
+        node.inputs["Color1"].default_value = (0.8, 0.3, 0.1, 1.0)
+        node.inputs["Color2"].default_value = (0.3, 0.6, 0.9, 1.0)
+        node.inputs["Mortar"].default_value = (0.9, 0.9, 0.8, 1.0)
+        node.inputs["Scale"].default_value = 3.0
+        for key, value in settings.items():
+            if key in node.inputs:
+                node.inputs[key].default_value = value
+            else:
+                setattr(node, key, value)
+        if width_linked:
+            width = tree.nodes.new("ShaderNodeMath")
+            width.operation = "MULTIPLY_ADD"
+            width.inputs[1].default_value, width.inputs[2].default_value = 0.4, 0.3
+            tree.links.new(_generated_axis(tree), width.inputs[0])
+            tree.links.new(width.outputs[0], node.inputs["Brick Width"])
+        return node.outputs[output]
+    return feed
+
+
+def _rotated_checker_feed(kind, invert=False, axis_linked=False):
+    """A feed: a Checker Texture (scale 4) of the card's Generated coordinates less 1/2,
+    turned by a Vector Rotate of `kind` about (0.1, 0, 0.1) (angle 0.6, Euler (0.3, 0.5,
+    0.9)), inverted or not; with `axis_linked`, its Axis the coordinates themselves."""
+    def feed(tree):
+        centred = tree.nodes.new("ShaderNodeVectorMath")
+        centred.operation = "SUBTRACT"
+        centred.inputs[1].default_value = (0.5, 0.5, 0.5)
+        tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Generated"],
+                       centred.inputs[0])
+        node = tree.nodes.new("ShaderNodeVectorRotate")
+        node.rotation_type, node.invert = kind, invert
+        ins = {s.identifier: s for s in node.inputs}
+        ins["Center"].default_value = (0.1, 0.0, 0.1)
+        ins["Angle"].default_value = 0.6
+        ins["Axis"].default_value = (0.3, 1.0, 0.2)
+        ins["Rotation"].default_value = (0.3, 0.5, 0.9)
+        tree.links.new(centred.outputs[0], ins["Vector"])
+        if axis_linked:
+            tree.links.new(centred.outputs[0], ins["Axis"])
+        checker = tree.nodes.new("ShaderNodeTexChecker")
+        checker.inputs["Scale"].default_value = 4.0
+        checker.inputs["Color1"].default_value = (0.9, 0.6, 0.1, 1.0)
+        checker.inputs["Color2"].default_value = (0.1, 0.3, 0.8, 1.0)
+        tree.links.new(node.outputs["Vector"], checker.inputs["Vector"])
+        return checker.outputs["Color"]
+    return feed
+
+
+def _grey_feed(tree):
+    """A feed: RGB to BW of a colour gradient (the card's x, z and 1/2)."""
+    combine = tree.nodes.new("ShaderNodeCombineColor")
+    tree.links.new(_generated_axis(tree), combine.inputs["Red"])
+    tree.links.new(_generated_axis(tree, "Z"), combine.inputs["Green"])
+    combine.inputs["Blue"].default_value = 0.5
+    grey = tree.nodes.new("ShaderNodeRGBToBW")
+    tree.links.new(combine.outputs[0], grey.inputs["Color"])
+    return grey.outputs["Val"]
+
+
+def bricks_and_rotation():
+    """Brick Textures (the default offset; squashed and offset rows with smoothed mortar
+    and a bias; a linked brick width; the Fac output), Vector Rotate of every type
+    (inverted or not, a linked axis) and RGB to BW (issue 14, point 1), on emitting cards
+    seen head-on by an orthographic camera."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    feeds = [_brick_feed(),
+             _brick_feed(squash=0.6, squash_frequency=3, offset=0.25, offset_frequency=3,
+                         **{"Mortar Smooth": 0.4, "Mortar Size": 0.04, "Bias": -0.3}),
+             _brick_feed(width_linked=True, **{"Row Height": 0.2}),
+             _brick_feed("Fac", **{"Mortar Smooth": 0.7, "Mortar Size": 0.05}),
+             _grey_feed,
+             _rotated_checker_feed("AXIS_ANGLE"),
+             _rotated_checker_feed("AXIS_ANGLE", invert=True, axis_linked=True),
+             _rotated_checker_feed("X_AXIS"), _rotated_checker_feed("Y_AXIS", invert=True),
+             _rotated_checker_feed("Z_AXIS"), _rotated_checker_feed("EULER_XYZ"),
+             _rotated_checker_feed("EULER_XYZ", invert=True)]
+    for i, feed in enumerate(feeds):
+        row, col = divmod(i, 7)
+        _glowing_card(f"B{i}", (-2.0 + (col + 0.5) * 4.0 / 7, 0.0, 0.28 - 0.56 * row),
+                      (0.5, 0.5), feed)
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -2495,6 +2590,8 @@ _add(Variant("procedural_textures", procedural_textures, resolution=(224, 96), m
 _add(Variant("white_noise", white_noise, resolution=(224, 32), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("converter_nodes", converter_nodes, resolution=(224, 64), max_bounces=0,
+             samples=64, cycles_samples=128))
+_add(Variant("bricks_and_rotation", bricks_and_rotation, resolution=(224, 64), max_bounces=0,
              samples=64, cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,

@@ -106,3 +106,25 @@ def test_object_random_hashes_the_name_as_cycles():
     assert noise.object_random("Cube") == pytest.approx(h / 2.0 ** 32, rel=1e-7)
     assert noise.object_random("Cube", 2 ** 31) == 0.5
     assert noise.object_random("Cube", -1) == pytest.approx(1.0)
+
+
+def test_bricks_lay_in_offset_rows_with_mortar_between():
+    """A Brick Texture's mortar is 1 within Mortar Size of a brick's edge and 0 inside it;
+    every offset_frequency-th row is shifted by the offset (a brick's tint is the same
+    across its width, and changes where the shifted row's joint falls); a squashed row's
+    bricks are narrower; tints stay in [0, 1]."""
+    b = noise.brick.py_func
+    settings = dict(mortar_size=0.02, mortar_smooth=0.0, bias=0.0, brick_width=0.5,
+                    row_height=0.25, offset_amount=0.5, offset_frequency=2, squash_amount=1.0,
+                    squash_frequency=2)
+    assert b(0.5, 0.1, **settings)[1] == 0.0
+    assert b(0.25, 0.1, **settings)[1] == 1.0 and b(0.5, 0.24, **settings)[1] == 1.0
+    # Row 0 (offset: 0 % 2 == 0) has its joints at x = 0.25 + k/2, row 1 at x = k/2.
+    assert b(0.26, 0.1, **settings)[1] == 1.0 and b(0.26, 0.35, **settings)[1] == 0.0
+    assert b(0.3, 0.1, **settings)[0] == b(0.6, 0.1, **settings)[0]
+    assert b(0.3, 0.35, **settings)[0] != b(0.6, 0.35, **settings)[0]
+    squashed = dict(settings, squash_amount=0.5)
+    assert b(0.12, 0.1, **squashed)[1] == 1.0 and b(0.12, 0.35, **squashed)[1] == 0.0
+    for x in np.linspace(-3, 3, 50):
+        tint = b(x, 0.37 * x, **dict(settings, bias=0.3))[0]
+        assert 0.0 <= tint <= 1.0
