@@ -78,8 +78,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
-                  "HAS_TRANSLUCENT", "HAS_SHEEN",
-                  "EXACT_FRESNEL", "PROFILE", "DEBUG")
+                  "HAS_TRANSLUCENT", "HAS_SHEEN", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -96,7 +95,6 @@ HAS_COATS = True  # Principled coats (scene.Material.coated): layers over mixed 
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
 HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen layers)
-EXACT_FRESNEL = True  # a setting, not a feature: both generic variants exist
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -131,9 +129,11 @@ MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "sheen_ltc specular_tint emission_root "
                                             "emission_share")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
-# volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty).
+# volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
+# exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's). A setting,
+# not a feature, so it is read at run time: one kernel serves both.
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
-                                    "caustics camera_media")
+                                    "caustics camera_media exact_fresnel")
 # One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
 # current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
 # last BSDF sample (inf: delta or camera), the passes, and, for the weight against light
@@ -1018,7 +1018,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:],
-            specular_tint_at(x, sc, paths), u, EXACT_FRESNEL, mt.fresnel[x.mat])
+            specular_tint_at(x, sc, paths), u, sc.exact_fresnel, mt.fresnel[x.mat])
         # A tilted normal (smooth, mapped or bumped) can refract a direction back above the
         # geometric surface: Cycles' bsdf_microfacet_sample drops it (as the rough lobe).
         below_m = wx * x.mx + wy * x.my + wz * x.mz < 0.0

@@ -60,7 +60,7 @@ class Kernel:
         self.constants = dict(constants)
         self.key = key_of(self.constants)
         self.generic = all(self.constants[n] for n in PLAN_CONSTANTS
-                           if n not in ("EXACT_FRESNEL", "PROFILE", "DEBUG"))
+                           if n not in ("PROFILE", "DEBUG"))
         self.tag = tag_of(self.constants) + ("" if cache else f"_once{id(self):x}")
         namespace = dict(vars(integrator))
         namespace.update(vars(light_tracing))
@@ -85,11 +85,10 @@ class Kernel:
         self.compile_seconds = 0.0
 
     def covers(self, constants: dict) -> bool:
-        """Whether this kernel has every feature `constants` asks for (and the same
-        Fresnel): a kernel built without glass cannot be handed a glass scene."""
+        """Whether this kernel has every feature `constants` asks for: a kernel built
+        without glass cannot be handed a glass scene."""
         return all(self.constants[n] or not constants[n] for n in PLAN_CONSTANTS
-                   if n not in ("EXACT_FRESNEL", "PROFILE", "DEBUG")) and \
-            self.constants["EXACT_FRESNEL"] == constants["EXACT_FRESNEL"]
+                   if n not in ("PROFILE", "DEBUG"))
 
     def _marker(self) -> str | None:
         """A file beside numba's cache saying this plan's kernel compiled before."""
@@ -175,8 +174,8 @@ def build_in_background(constants: dict, compile_with) -> threading.Thread:
     return thread
 
 
-def generic_constants(exact_fresnel: bool = True) -> dict:
-    return dict(GENERIC, EXACT_FRESNEL=exact_fresnel)
+def generic_constants() -> dict:
+    return dict(GENERIC)
 
 
 # ------------------------------------------------------------------ scene data
@@ -256,7 +255,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     return c_contiguous(SceneData(
         geometry, materials, em, np.asarray(scene.world.colour, np.float64), camera,
         PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
-        camera_media))
+        camera_media, np.bool_(settings.fresnel == "exact")))
 
 
 def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:

@@ -163,7 +163,7 @@ class Plan:
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen,
-            EXACT_FRESNEL=self.fresnel == "exact", PROFILE=False, DEBUG=False)
+            PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
         return (f"{self.triangles} triangles, {self.num_emitters} emissive, "

@@ -155,7 +155,7 @@ class Kernels:
         self.constants = plan.kernel_constants(grid, emitters is not None
                                                and hasattr(emitters, "bounds"))
         self.constants["PROFILE"] = self.profile
-        generic = kernels.generic_constants(plan.fresnel == "exact")
+        generic = kernels.generic_constants()
         generic["PROFILE"] = self.profile
         self.pending = None
         self.switched_at = 0
