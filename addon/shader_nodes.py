@@ -25,7 +25,8 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
-           "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick")
+           "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
+           "ShaderNodeTexVoronoi")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -655,6 +656,27 @@ def _n_white_noise(c, node, out):
     return (reg, "RGBA") if out.identifier == "Color" else (reg + 3, "VALUE")
 
 
+def _n_voronoi(c, node, out):
+    """Voronoi Texture: every dimension, feature and distance metric, fractal octaves and
+    Normalize; all five outputs."""
+    vo = core.load().voronoi
+    d = int(node.voronoi_dimensions[0])
+    co = _texture_vector(c, node) if d > 1 else c.program.const([0.0, 0.0, 0.0])
+    w = enabled_input(node, "W")
+    w = c.input(w, "VALUE") if w is not None else c.program.const([0.0])
+    # (Inputs a feature does not use are absent or disabled: those read as 0.)
+    inputs = [c.input(s, "VALUE") if s is not None else c.program.const([0.0])
+              for s in (enabled_input(node, name) for name in (
+                  "Scale", "Detail", "Roughness", "Lacunarity", "Smoothness", "Exponent",
+                  "Randomness"))]
+    reg = c.program.emit(c.sh.OP_VORONOI, 9, a=co, b=w, params=[
+        *inputs, d, vo.FEATURES.index(node.feature), vo.METRICS.index(node.distance),
+        int(node.normalize)])
+    at, kind = {"Color": (0, "RGBA"), "Distance": (3, "VALUE"), "Position": (4, "VECTOR"),
+                "W": (7, "VALUE"), "Radius": (8, "VALUE")}[out.identifier]
+    return reg + at, kind
+
+
 def _n_brick(c, node, out):
     """Brick Texture: every input linkable; Offset, Squash and their frequencies."""
     colours = [c.input(node.inputs[n], "RGBA") for n in ("Color1", "Color2", "Mortar")]
@@ -807,6 +829,7 @@ NODES = {
     "ShaderNodeTexWave": _n_wave,
     "ShaderNodeTexMagic": _n_magic,
     "ShaderNodeTexWhiteNoise": _n_white_noise,
+    "ShaderNodeTexVoronoi": _n_voronoi,
     "ShaderNodeTexBrick": _n_brick,
     "ShaderNodeVectorRotate": _n_vector_rotate,
     "ShaderNodeRGBToBW": _n_rgb_to_bw,

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import noise
+from . import noise, voronoi
 from .fresnel import fresnel_dielectric
 from .jit import ALLOCATING, INLINE, JIT, njit
 
@@ -95,6 +95,12 @@ OP_BRICK = 33       # reg[out:out+3] Color, reg[out+3] Fac of Cycles' Brick Text
 #                     reg[a:a+3]: colours reg[b:], reg[c:], mortar reg[d:]; params[p:p+6] the
 #                     registers of Scale, Mortar Size, Mortar Smooth, Bias, Brick Width and Row
 #                     Height, then offset, its frequency, squash and its frequency
+OP_VORONOI = 35     # reg[out:out+3] Color, reg[out+3] Distance, reg[out+4:out+7] Position,
+#                     reg[out+7] W, reg[out+8] Radius of Cycles' Voronoi Texture at vector
+#                     reg[a:a+3] and W reg[b]; params[p:p+7] the registers of Scale, Detail,
+#                     Roughness, Lacunarity, Smoothness, Exponent and Randomness, then its
+#                     dimensions, feature (voronoi.FEATURES), metric (voronoi.METRICS) and
+#                     normalize
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -757,6 +763,21 @@ def node_vector_rotate(ins, reg, params):
 
 
 @njit(**JIT)
+def node_voronoi(ins, reg, params):
+    """Cycles' Voronoi Texture (voronoi.voronoi): its five outputs side by side."""
+    a, p, out = ins[2], ins[7], ins[1]
+    dist, r, g, b, px, py, pz, pw, radius = voronoi.voronoi(
+        np.int64(params[p + 7]), np.int64(params[p + 8]), np.int64(params[p + 9]),
+        params[p + 10] != 0.0, reg[a], reg[a + 1], reg[a + 2], reg[ins[3]],
+        reg[int(params[p])], reg[int(params[p + 1])], reg[int(params[p + 2])],
+        reg[int(params[p + 3])], reg[int(params[p + 4])], reg[int(params[p + 5])],
+        reg[int(params[p + 6])])
+    reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, dist
+    reg[out + 4], reg[out + 5], reg[out + 6] = px, py, pz
+    reg[out + 7], reg[out + 8] = pw, radius
+
+
+@njit(**JIT)
 def node_brick(ins, reg, params):
     """Cycles' Brick Texture (svm_node_tex_brick): the bricks' two colours mixed by each
     brick's tint, the mortar colour over them by the mortar factor."""
@@ -1053,7 +1074,8 @@ def node_colour_ops(ins, reg):
 # The opcodes of the procedural textures, of the converters and of the nodes reading the
 # hit's geometry: each group one function of its own (node_texture, node_converter,
 # node_view_coordinates), keeping the interpreter short.
-TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK)
+TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
+               OP_VORONOI)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
 
@@ -1078,6 +1100,8 @@ def node_texture(ins, reg, params):
     elif op == OP_WHITE_NOISE:
         r, g, b = noise.white_noise(ins[5], reg[a], reg[a + 1], reg[a + 2], reg[ins[3]])
         reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, r
+    elif op == OP_VORONOI:
+        node_voronoi(ins, reg, params)
     else:
         node_brick(ins, reg, params)
 

@@ -589,11 +589,13 @@ def test_transparent_bsdf_is_transparent(fresh):
 
 
 def test_unreducible_chains_keep_what_the_object_is(fresh):
-    """A Voronoi Texture cannot be reduced: Base Color keeps its own value, emission is off
+    """A Wavelength node cannot be reduced: Base Color keeps its own value, emission is off
     (the socket's own white would turn the surface into a light)."""
     mat, node = node_material("Painted", "ShaderNodeBsdfPrincipled",
                               **{"Base Color": (0.2, 0.4, 0.6, 1.0), "Emission Strength": 1.0})
-    attr = mat.node_tree.nodes.new("ShaderNodeTexVoronoi")
+    attr = mat.node_tree.nodes.new("ShaderNodeWavelength")
+    mat.node_tree.links.new(mat.node_tree.nodes.new("ShaderNodeTexCoord").outputs["UV"],
+                            attr.inputs["Wavelength"])
     mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Base Color"])
     mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Emission Color"])
     spec, warnings = convert(mat)
@@ -1063,8 +1065,8 @@ def test_bump_nodes_are_compiled(fresh, core, shader):
     mat.node_tree.links.remove(bump.inputs["Height"].links[0])
     spec, warnings = convert(mat)
     assert warnings == [] and "height_program" not in spec.kwargs
-    noise = mat.node_tree.nodes.new("ShaderNodeTexVoronoi")
-    mat.node_tree.links.new(noise.outputs["Distance"], bump.inputs["Height"])
+    noise = mat.node_tree.nodes.new("ShaderNodeTexSky")
+    mat.node_tree.links.new(noise.outputs["Color"], bump.inputs["Height"])
     spec, warnings = convert(mat)
     assert "height_program" not in spec.kwargs
     assert any(bump.name in w and noise.name in w and "without the bump" in w

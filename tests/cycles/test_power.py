@@ -938,6 +938,11 @@ INJECTIONS = {
         "ShaderNodeTexBrick", "OP_BRICK", 7, 0)),
     "rotation_never_inverted": ("bricks_and_rotation", None, lambda: _parameter_changed(
         "ShaderNodeVectorRotate", "OP_VECTOR_ROTATE", 0, 0)),
+    # Every Voronoi feature read as F1; every distance metric as Euclidean.
+    "voronoi_features_all_f1": ("voronoi", None, lambda: _parameter_changed(
+        "ShaderNodeTexVoronoi", "OP_VORONOI", 8, 0)),
+    "voronoi_metrics_all_euclidean": ("voronoi", None, lambda: _parameter_changed(
+        "ShaderNodeTexVoronoi", "OP_VORONOI", 9, 0)),
     "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
     "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
     "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),

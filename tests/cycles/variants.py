@@ -1812,6 +1812,75 @@ def bricks_and_rotation():
                       (0.5, 0.5), feed)
 
 
+def _voronoi_feed(dimensions, feature="F1", metric="EUCLIDEAN", output="Color",
+                  plane=False, w_linked=False, normalize=False, **inputs):
+    """A feed for _glowing_card: a Voronoi Texture of `dimensions`, `feature` and distance
+    `metric` (Scale 5 unless given) on the card's Generated coordinates (unlinked), or on
+    its (x, z) with `plane`; its W 0.37, or the card's x with `w_linked`; `output` read,
+    through Absolute where it is the Position (a point of a cell below 0) or Smooth F1's
+    Distance (its smooth minimum dips below 0 near a point): negative light, which Cycles
+    emits and Specula does not."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeTexVoronoi")
+        node.voronoi_dimensions, node.feature, node.distance = dimensions, feature, metric
+        node.normalize = normalize
+        ins = {s.identifier: s for s in node.inputs}  # unavailable sockets too
+        ins["Scale"].default_value, ins["W"].default_value = 5.0, 0.37
+        for key, value in inputs.items():
+            ins[key].default_value = value
+        if plane:
+            xz = tree.nodes.new("ShaderNodeCombineXYZ")
+            tree.links.new(_generated_axis(tree), xz.inputs["X"])
+            tree.links.new(_generated_axis(tree, "Z"), xz.inputs["Y"])
+            tree.links.new(xz.outputs[0], ins["Vector"])
+        if w_linked:
+            tree.links.new(_generated_axis(tree), ins["W"])
+        out = node.outputs[output]
+        if output == "Position":
+            absolute = tree.nodes.new("ShaderNodeVectorMath")
+            absolute.operation = "ABSOLUTE"
+            tree.links.new(out, absolute.inputs[0])
+            out = absolute.outputs["Vector"]
+        elif feature == "SMOOTH_F1" and output == "Distance":
+            absolute = tree.nodes.new("ShaderNodeMath")
+            absolute.operation = "ABSOLUTE"
+            tree.links.new(out, absolute.inputs[0])
+            out = absolute.outputs[0]
+        return out
+    return feed
+
+
+def voronoi():
+    """The Voronoi Texture (issue 14, point 1): F1, F2, Smooth F1, Distance to Edge and
+    N-Sphere Radius in 1D to 4D, under every distance metric, with fractal octaves
+    (whole and fractional Detail) and Normalize, each of its five outputs, on emitting
+    cards seen head-on by an orthographic camera. (Generated y is 1/2 on a card: times
+    Scale 5 it is 2.5, off the cells' edges.)"""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    feeds = [_voronoi_feed("3D"), _voronoi_feed("3D", output="Distance"),
+             _voronoi_feed("2D", "F2", "MANHATTAN", "Distance", plane=True, normalize=True),
+             _voronoi_feed("2D", "SMOOTH_F1", "CHEBYCHEV", plane=True, Smoothness=0.6),
+             _voronoi_feed("3D", "F1", "MINKOWSKI", "Distance", Exponent=0.7, Detail=2.5,
+                           Roughness=0.6),
+             _voronoi_feed("3D", "DISTANCE_TO_EDGE", output="Distance", Detail=1.5),
+             _voronoi_feed("3D", "N_SPHERE_RADIUS", output="Radius"),
+             _voronoi_feed("1D", output="W", w_linked=True),
+             _voronoi_feed("1D", "SMOOTH_F1", output="Distance", w_linked=True),
+             _voronoi_feed("4D", "F2"),
+             _voronoi_feed("4D", output="Position", Randomness=0.8),
+             _voronoi_feed("2D", plane=True, normalize=True, Randomness=0.4, Detail=1.3),
+             _voronoi_feed("2D", "DISTANCE_TO_EDGE", output="Distance", plane=True,
+                           normalize=True, Randomness=0.7),
+             _voronoi_feed("3D", "F2", "CHEBYCHEV", "Distance", normalize=True, Detail=1.0)]
+    for i, feed in enumerate(feeds):
+        row, col = divmod(i, 7)
+        _glowing_card(f"V{i}", (-2.0 + (col + 0.5) * 4.0 / 7, 0.0, 0.28 - 0.56 * row),
+                      (0.5, 0.5), feed)
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -2593,6 +2662,8 @@ _add(Variant("converter_nodes", converter_nodes, resolution=(224, 64), max_bounc
              samples=64, cycles_samples=128))
 _add(Variant("bricks_and_rotation", bricks_and_rotation, resolution=(224, 64), max_bounces=0,
              samples=64, cycles_samples=128))
+_add(Variant("voronoi", voronoi, resolution=(224, 64), max_bounces=0, samples=64,
+             cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))
