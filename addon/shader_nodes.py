@@ -699,6 +699,30 @@ def _n_vector_rotate(c, node, out):
                           params=[int(node.invert), rotation]), "VECTOR"
 
 
+def _n_blackbody(c, node, out):
+    """Blackbody: Cycles' fit of a black body's colour (in Rec.709, the scene's linear
+    space here)."""
+    return c.program.emit(c.sh.OP_BLACKBODY, 3, a=c.input(node.inputs["Temperature"],
+                                                           "VALUE")), "RGBA"
+
+
+def _n_normal(c, node, out):
+    """Normal: its Normal output is its own direction, normalised; Dot that direction
+    dotted with its input, normalised (Vector Math's safe normalise: 0 stays 0)."""
+    sh = c.sh
+    direction = np.array(node.outputs["Normal"].default_value, float)
+    length = np.linalg.norm(direction)
+    direction = c.program.const(list(direction / length if length > 0 else direction))
+    if out.identifier == "Normal":
+        return direction, "VECTOR"
+    unit = c.program.emit(sh.OP_VECTOR_MATH, 4, a=c.input(node.inputs["Normal"], "VECTOR"),
+                          b=direction, c=direction, d=sh.VECTOR_MATHS.index("NORMALIZE"),
+                          e=c.program.const([1.0]))
+    reg = c.program.emit(sh.OP_VECTOR_MATH, 4, a=unit, b=direction, c=direction,
+                         d=sh.VECTOR_MATHS.index("DOT_PRODUCT"), e=c.program.const([1.0]))
+    return reg + 3, "VALUE"
+
+
 def _n_rgb_to_bw(c, node, out):
     """RGB to BW: the colour's luminance (Cycles' linear_rgb_to_gray)."""
     return c.convert(c.input(node.inputs["Color"], "RGBA"), "RGBA", "VALUE"), "VALUE"
@@ -830,6 +854,8 @@ NODES = {
     "ShaderNodeTexMagic": _n_magic,
     "ShaderNodeTexWhiteNoise": _n_white_noise,
     "ShaderNodeTexVoronoi": _n_voronoi,
+    "ShaderNodeBlackbody": _n_blackbody,
+    "ShaderNodeNormal": _n_normal,
     "ShaderNodeTexBrick": _n_brick,
     "ShaderNodeVectorRotate": _n_vector_rotate,
     "ShaderNodeRGBToBW": _n_rgb_to_bw,

@@ -101,6 +101,7 @@ OP_VORONOI = 35     # reg[out:out+3] Color, reg[out+3] Distance, reg[out+4:out+7
 #                     Roughness, Lacunarity, Smoothness, Exponent and Randomness, then its
 #                     dimensions, feature (voronoi.FEATURES), metric (voronoi.METRICS) and
 #                     normalize
+OP_BLACKBODY = 36   # reg[out:out+3] = the Blackbody node's colour of temperature reg[a] (K)
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -184,6 +185,32 @@ PER_COMPONENT = tuple(MATHS.index({"FRACTION": "FRACT"}.get(op, op))
 INTERPOLATIONS = ("Closest", "Linear", "Cubic", "Smart")  # Smart is Cubic on the CPU
 EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
 LUMINANCE = (0.2126, 0.7152, 0.0722)
+# Cycles' fit of a black body's Rec.709 colour (kernel/tables.h, the blackbody_table_*
+# coefficients; svm_math_blackbody_color_rec709): per temperature band (lower edges
+# BLACKBODY_BANDS K), red and green a / T + b T + c, blue a cubic in T. Below 800 K and
+# from 12000 K on, the colours at the ends.
+BLACKBODY_BANDS = np.array([965.0, 1167.0, 1449.0, 1902.0, 3315.0, 6365.0])
+BLACKBODY_R = np.array([[1.61919106e+03, -2.05010916e-03, 5.02995757e+00],
+                        [2.48845471e+03, -1.11330907e-03, 3.22621544e+00],
+                        [3.34143193e+03, -4.86551192e-04, 1.76486769e+00],
+                        [4.09461742e+03, -1.27446582e-04, 7.25731635e-01],
+                        [4.67028036e+03, 2.91258199e-05, 1.26703442e-01],
+                        [4.59509185e+03, 2.87495649e-05, 1.50345020e-01],
+                        [3.78717450e+03, 9.35907826e-06, 3.99075871e-01]])
+BLACKBODY_G = np.array([[-4.88999748e+02, 6.04330754e-04, -7.55807526e-02],
+                        [-7.55994277e+02, 3.16730098e-04, 4.78306139e-01],
+                        [-1.02363977e+03, 1.20223470e-04, 9.36662319e-01],
+                        [-1.26571316e+03, 4.87340896e-06, 1.27054498e+00],
+                        [-1.42529332e+03, -4.01150431e-05, 1.43972784e+00],
+                        [-1.17554822e+03, -2.16378048e-05, 1.30408023e+00],
+                        [-5.00799571e+02, -4.59832026e-06, 1.09098763e+00]])
+BLACKBODY_B = np.array([[5.96945309e-11, -4.85742887e-08, -9.70622247e-05, -4.07936148e-03],
+                        [2.40430366e-11, 5.55021075e-08, -1.98503712e-04, 2.89312858e-02],
+                        [-1.40949732e-11, 1.89878968e-07, -3.56632824e-04, 9.10767778e-02],
+                        [-3.61460868e-11, 2.84822009e-07, -4.93211319e-04, 1.56723440e-01],
+                        [-1.97075738e-11, 1.75359352e-07, -2.50542825e-04, -2.22783266e-02],
+                        [-1.61997957e-13, -1.64216008e-08, 3.86216271e-04, -7.38077418e-01],
+                        [6.72650283e-13, -2.73078809e-08, 4.24098264e-04, -7.52335691e-01]])
 # Entries of a Color Ramp's table (Cycles' RAMP_TABLE_SIZE).
 RAMP_TABLE_SIZE = 256
 # The registers one program may use (the kernel's scratch per path batch); the last
@@ -967,6 +994,20 @@ def rgb_to_hsv(r, g, b):
 
 
 @njit(**JIT)
+def blackbody(t):
+    """The Blackbody node's colour of temperature t (K) in linear Rec.709, negative
+    channels 0 (Cycles' svm_node_blackbody; the fit leaves Rec.709's gamut at the ends)."""
+    if t >= 12000.0:
+        return 0.8262954810464208, 0.9945080501520986, 1.566307710274283
+    if t < 800.0:
+        return 5.413294490189271, 0.0, 0.0
+    i = np.searchsorted(BLACKBODY_BANDS, t, side="right")
+    r, g, b = BLACKBODY_R[i], BLACKBODY_G[i], BLACKBODY_B[i]
+    return (max(r[0] / t + r[1] * t + r[2], 0.0), max(g[0] / t + g[1] * t + g[2], 0.0),
+            max(((b[0] * t + b[1]) * t + b[2]) * t + b[3], 0.0))
+
+
+@njit(**JIT)
 def hsv_to_rgb(h, s, v):
     """Cycles' hsv_to_rgb (util/color.h)."""
     if s == 0.0:
@@ -1076,7 +1117,8 @@ def node_colour_ops(ins, reg):
 # node_view_coordinates), keeping the interpreter short.
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
                OP_VORONOI)
-CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP)
+CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
+                 OP_BLACKBODY)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
 
 
@@ -1108,7 +1150,7 @@ def node_texture(ins, reg, params):
 
 @njit(**JIT)
 def node_converter(ins, reg, params):
-    """Mapping, Vector Rotate, the Curves, Map Range and Clamp."""
+    """Mapping, Vector Rotate, the Curves, Map Range, Clamp and Blackbody."""
     op = ins[0]
     if op == OP_VECTOR_MAPPING:
         node_vector_mapping(ins, reg)
@@ -1118,6 +1160,8 @@ def node_converter(ins, reg, params):
         node_curves(ins, reg, params)
     elif op == OP_MAP_RANGE:
         node_map_range(ins, reg, params)
+    elif op == OP_BLACKBODY:
+        reg[ins[1]], reg[ins[1] + 1], reg[ins[1] + 2] = blackbody(reg[ins[2]])
     else:
         reg[ins[1]] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
 

@@ -437,6 +437,46 @@ def _backfacing_ignored():
 
 
 @contextmanager
+def _blackbody_in_celsius():
+    """The Blackbody's Temperature taken as degrees Celsius (273.15 K added)."""
+    from addon import shader_nodes
+
+    def celsius(c, node, out):
+        sh = c.sh
+        kelvin = c.program.emit(sh.OP_MATH, 1, a=c.input(node.inputs["Temperature"], "VALUE"),
+                                b=c.program.const([273.15]), c=c.program.const([0.0]),
+                                d=sh.MATHS.index("ADD"))
+        return c.program.emit(sh.OP_BLACKBODY, 3, a=kelvin), "RGBA"
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeBlackbody", celsius)
+        yield
+
+
+@contextmanager
+def _normal_node_unnormalised():
+    """The Normal node's direction used as it is set, not normalised."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeNormal"]
+
+    def raw(c, node, out):
+        length = sum(x * x for x in node.outputs["Normal"].default_value) ** 0.5
+        first = len(c.program.code)
+        result = compile_node(c, node, out)
+        for row in c.program.code[first:]:  # the direction's constant, scaled back
+            if row[0] == c.sh.OP_CONST and row[4] == 3:
+                for j in range(3):
+                    c.program.params[row[7] + j] *= length
+                break
+        return result
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeNormal", raw)
+        yield
+
+
+@contextmanager
 def _parameter_changed(node_type, opcode, index, value):
     """Parameter `index` of each `node_type` node's instruction (of `opcode`, a
     shading.OP_* name) set to `value`."""
@@ -943,6 +983,8 @@ INJECTIONS = {
         "ShaderNodeTexVoronoi", "OP_VORONOI", 8, 0)),
     "voronoi_metrics_all_euclidean": ("voronoi", None, lambda: _parameter_changed(
         "ShaderNodeTexVoronoi", "OP_VORONOI", 9, 0)),
+    "blackbody_in_celsius": ("blackbody_and_normal", None, _blackbody_in_celsius),
+    "normal_node_unnormalised": ("blackbody_and_normal", None, _normal_node_unnormalised),
     "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
     "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
     "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),

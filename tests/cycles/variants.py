@@ -1881,6 +1881,56 @@ def voronoi():
                       (0.5, 0.5), feed)
 
 
+def _blackbody_feed(kelvin=None):
+    """A feed: a Blackbody of `kelvin`, or of the card's x mapped to 500 .. 13000 K (below
+    Cycles' 800 K floor, through each of its seven fitted bands, past its 12000 K end)."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeBlackbody")
+        if kelvin is not None:
+            node.inputs["Temperature"].default_value = kelvin
+            return node.outputs["Color"]
+        ramp = tree.nodes.new("ShaderNodeMapRange")
+        ramp.inputs["To Min"].default_value, ramp.inputs["To Max"].default_value = 500.0, 13000.0
+        tree.links.new(_generated_axis(tree), ramp.inputs["Value"])
+        tree.links.new(ramp.outputs["Result"], node.inputs["Temperature"])
+        return node.outputs["Color"]
+    return feed
+
+
+def _normal_node_feed(output="Dot", linked=True):
+    """A feed: a Normal node of direction (0.3, -0.5, 0.8) (not of unit length); its Dot
+    with the card's Object coordinates (or its own unlinked input) through Math Absolute,
+    or its Normal output through Vector Math Absolute."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeNormal")
+        node.outputs["Normal"].default_value = (0.3, -0.5, 0.8)
+        node.inputs["Normal"].default_value = (0.6, 0.0, 0.8)
+        if linked:
+            tree.links.new(tree.nodes.new("ShaderNodeTexCoord").outputs["Object"],
+                           node.inputs["Normal"])
+        absolute = tree.nodes.new("ShaderNodeMath" if output == "Dot" else
+                                  "ShaderNodeVectorMath")
+        absolute.operation = "ABSOLUTE"
+        tree.links.new(node.outputs[output], absolute.inputs[0])
+        return absolute.outputs[0]
+    return feed
+
+
+def blackbody_and_normal():
+    """The Blackbody node (issue 14, point 1) over 500 .. 13000 K and at 3200 K, and the
+    Normal node's Dot (linked to the card's Object coordinates, and unlinked) and Normal
+    outputs, on emitting cards seen head-on by an orthographic camera."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 32))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    feeds = [_blackbody_feed(), _blackbody_feed(3200.0), _blackbody_feed(650.0),
+             _normal_node_feed(), _normal_node_feed(linked=False),
+             _normal_node_feed("Normal"), _blackbody_feed(20000.0)]
+    for i, feed in enumerate(feeds):
+        _glowing_card(f"K{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.0), (0.5, 0.5), feed)
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -2664,6 +2714,8 @@ _add(Variant("bricks_and_rotation", bricks_and_rotation, resolution=(224, 64), m
              samples=64, cycles_samples=128))
 _add(Variant("voronoi", voronoi, resolution=(224, 64), max_bounces=0, samples=64,
              cycles_samples=128))
+_add(Variant("blackbody_and_normal", blackbody_and_normal, resolution=(224, 32),
+             max_bounces=0, samples=64, cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))
