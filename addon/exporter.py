@@ -128,17 +128,22 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
     object's own space; Generated, the mesh's texture space as Cycles' mesh_texture_space
     maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis); Normal, the corner
     normals (`normals`, object space; a flat face's are its own); colour attributes
-    (shading.COLOUR_ATTRIBUTE), linear RGB, per corner or per point (a mesh without the
-    attribute has no map: it reads 0 there, warned, as Cycles' missing attribute)."""
+    (shading.COLOUR_ATTRIBUTE), linear RGB, per corner or per point, and attributes of
+    any kind (shading.ATTRIBUTE) (a mesh without the attribute has no map: it reads 0
+    there, warned, as Cycles' missing attribute)."""
     sh = core.load().shading
     out = {}
+    # Attribute maps: (prefix, reader, whether the reader's flag is set for this prefix).
+    readers = ((sh.ATTRIBUTE, _named_attribute, False),
+               (sh.ATTRIBUTE_SCALARS, _named_attribute, True),
+               (sh.COLOUR_ATTRIBUTE, _colour_attribute, False),
+               (sh.COLOUR_ALPHA, _colour_attribute, True))
     for name in spaces:
-        for prefix in (sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA):
+        for prefix, read, flag in readers:
             if name.startswith(prefix):
-                colours = _colour_attribute(mesh, name[len(prefix):], tri_verts, tri_loops,
-                                            prefix == sh.COLOUR_ALPHA)
-                if colours is not None:
-                    out[name] = colours
+                values = read(mesh, name[len(prefix):], tri_verts, tri_loops, flag)
+                if values is not None:
+                    out[name] = values
     if sh.OBJECT in spaces:
         out[sh.OBJECT] = co[tri_verts]
     if sh.NORMAL in spaces and normals is not None:
@@ -169,6 +174,41 @@ def _colour_attribute(mesh, name, tri_verts, tri_loops, alpha=False):
         rgb[:] = rgba[:, :3]
     index = tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)
     return rgb[index]
+
+
+# Attribute types as Cycles' Attribute node reads them: (foreach_get key, components).
+ATTRIBUTE_TYPES = {"FLOAT": ("value", 1), "INT": ("value", 1), "INT8": ("value", 1),
+                   "BOOLEAN": ("value", 1), "FLOAT2": ("vector", 2), "INT32_2D": ("vector", 2),
+                   "FLOAT_VECTOR": ("vector", 3), "FLOAT_COLOR": ("color", 4),
+                   "BYTE_COLOR": ("color", 4)}
+
+
+def _named_attribute(mesh, name, tri_verts, tri_loops, scalars=False):
+    """(t, 3, 3) per triangle corner of the mesh attribute `name` as the Attribute node
+    reads it (shading.ATTRIBUTE): its vector, or with `scalars` (Fac, Alpha, 0); None
+    where the mesh has no such attribute on its points, corners or faces, or one of a type
+    Cycles does not read (a matrix)."""
+    attr = mesh.attributes.get(name)
+    if attr is None or attr.domain not in ("POINT", "CORNER", "FACE") or \
+            attr.data_type not in ATTRIBUTE_TYPES:
+        return None
+    key, width = ATTRIBUTE_TYPES[attr.data_type]
+    raw = np.zeros(len(attr.data) * width, np.float32)  # (colours linear, bytes decoded)
+    attr.data.foreach_get(key, raw)
+    raw = raw.reshape(-1, width)
+    out = np.zeros((len(raw), 3), np.float32)
+    if scalars:
+        out[:, 0] = raw[:, 0] if width <= 2 else raw[:, :3].mean(axis=1)
+        out[:, 1] = raw[:, 3] if width == 4 else 1.0
+    else:
+        out[:, :min(width, 3)] = raw[:, :3]
+        if width == 1:
+            out[:, 1:] = raw
+    if attr.domain == "FACE":
+        faces = np.zeros(len(tri_verts), np.int32)
+        mesh.loop_triangles.foreach_get("polygon_index", faces)
+        return out[np.repeat(faces[:, None], 3, axis=1)]
+    return out[tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)]
 
 
 def _tangents(mesh, tri_loops, names, warn) -> dict:
@@ -296,7 +336,8 @@ class _Exporter:
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
                               if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL)
-                              or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA))})
+                              or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
+                                                  sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS))})
         self.out.object_maps = [n for n in sh.OBJECT_MAPS if any(n in p.uv_maps
                                                                  for p in programs)]
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials

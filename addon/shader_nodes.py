@@ -26,7 +26,7 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
-           "ShaderNodeTexVoronoi")
+           "ShaderNodeTexVoronoi", "ShaderNodeAttribute")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -457,6 +457,19 @@ def _n_color_attribute(c, node, out):
     return c.program.uv(c.sh.COLOUR_ATTRIBUTE + node.layer_name), "RGBA"
 
 
+def _n_attribute(c, node, out):
+    """Attribute of type Geometry: the mesh's attribute of that name (generic, colour or a
+    UV map) on points, corners or faces, each output as Cycles reads the attribute's type."""
+    if node.attribute_type != "GEOMETRY":
+        raise Unsupported(f"attribute '{node.name}' of type {node.attribute_type}")
+    sh, name = c.sh, node.attribute_name
+    if out.identifier in ("Color", "Vector"):
+        return c.program.uv(sh.ATTRIBUTE + name), "RGBA" if out.identifier == "Color" \
+            else "VECTOR"
+    reg = c.program.uv(sh.ATTRIBUTE_SCALARS + name)
+    return (reg + 1 if out.identifier == "Alpha" else reg), "VALUE"
+
+
 def _n_uv_map(c, node, out):
     if node.from_instancer:
         raise Unsupported(f"UV map '{node.name}' from the instancer")
@@ -855,6 +868,7 @@ NODES = {
     "ShaderNodeTexWhiteNoise": _n_white_noise,
     "ShaderNodeTexVoronoi": _n_voronoi,
     "ShaderNodeBlackbody": _n_blackbody,
+    "ShaderNodeAttribute": _n_attribute,
     "ShaderNodeNormal": _n_normal,
     "ShaderNodeTexBrick": _n_brick,
     "ShaderNodeVectorRotate": _n_vector_rotate,

@@ -127,6 +127,13 @@ NORMAL, CAMERA, WINDOW = "\x00normal", "\x00camera", "\x00window"
 # winding gives it; OP_FACING orients it) are maps the renderer fills from the scene too.
 POSITION, TRUE_NORMAL = "\x00position", "\x00true_normal"
 VIEW_MAPS = (CAMERA, WINDOW, POSITION, TRUE_NORMAL)
+# The Attribute node (of type Geometry) reads the mesh's attribute of its name (a generic
+# attribute, a colour attribute or a UV map) as two maps: ATTRIBUTE + name, its vector (the
+# Color and Vector outputs: a scalar repeated, a 2D value with z = 0, a colour's RGB), and
+# ATTRIBUTE_SCALARS + name, its Fac (a scalar, a 2D value's x, the mean of three
+# components) and Alpha (a colour's alpha, else 1) in the first two channels, as Cycles'
+# svm_node_attr_store reads each type.
+ATTRIBUTE, ATTRIBUTE_SCALARS = "\x00attribute:", "\x00attribute_scalars:"
 # The Object Info node's outputs, per object (each corner of an object holds its values;
 # the exporter fills them per instance): its location; its colour; its alpha, Random
 # (Cycles' object random number) and pass index.
@@ -149,6 +156,9 @@ def map_label(name: str) -> str:
         if name.startswith(prefix):
             attribute = name[len(prefix):]
             return f"colour attribute '{attribute}'" if attribute else "colour attribute"
+    for prefix in (ATTRIBUTE, ATTRIBUTE_SCALARS):
+        if name.startswith(prefix):
+            return f"attribute '{name[len(prefix):]}'"
     return f"UV map '{name}'" if name else "UV map"
 
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h): per channel up to

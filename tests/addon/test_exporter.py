@@ -9,7 +9,7 @@ import pytest
 from addon_helpers import camera_object, cube_object, depsgraph, link, node_material, sphere_object
 from mathutils import Matrix, Vector
 
-from addon import exporter
+from addon import exporter, materials
 
 
 def export(scene):
@@ -589,3 +589,33 @@ def test_colour_attributes_are_read_per_corner_and_named_when_missing(fresh, cor
     scene, warnings = exporter.to_core(export(fresh), core)
     assert any("'Painted'" in w and "colour attribute 'Wetness'" in w for w in warnings)
     assert not scene.uv.any()
+
+
+def test_attribute_node_reads_each_type_and_names_a_missing_one(fresh, core):
+    """An Attribute node reads a face attribute per triangle (every corner of a face the
+    face's value), its Fac from the attribute's type (a 2D value's x); an Object-type
+    Attribute is unsupported and named; a missing attribute reads 0 and is named with its
+    object."""
+    obj = cube_object("Tagged")
+    faces = obj.data.attributes.new("tag", "FLOAT", "FACE")
+    values = np.arange(1, len(faces.data) + 1, dtype=np.float32)
+    faces.data.foreach_set("value", values)
+    mat, node = node_material("Tags", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    attr = tree.nodes.new("ShaderNodeAttribute")
+    attr.attribute_name = "tag"
+    tree.links.new(attr.outputs["Fac"], node.inputs["Color"])
+    obj.data.materials.append(mat)
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert warnings == []
+    (scalars,) = scene.uv  # (Fac, Alpha, 0) per corner: each triangle one face's value
+    assert set(np.unique(scalars[:, :, 0])) == set(values)
+    assert (scalars[:, :, 0] == scalars[:, :1, 0]).all() and (scalars[:, :, 1] == 1).all()
+    attr.attribute_name = "missing"
+    scene, warnings = exporter.to_core(export(fresh), core)
+    assert any("'Tagged'" in w and "attribute 'missing'" in w for w in warnings), warnings
+    assert not scene.uv.any()
+    attr.attribute_type = "OBJECT"
+    spec, warnings = materials.convert(mat)
+    assert spec.ctor == "diffuse" and "colour_program" not in spec.kwargs
+    assert any(attr.name in w and "OBJECT" in w for w in warnings), warnings

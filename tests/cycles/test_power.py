@@ -477,6 +477,33 @@ def _normal_node_unnormalised():
 
 
 @contextmanager
+def _attribute_scalars_changed(change):
+    """The exporter's Attribute scalars (Fac, Alpha) as `change(scalars, vector)` makes
+    them."""
+    from addon import exporter
+
+    read = exporter._named_attribute
+
+    def changed(mesh, name, tri_verts, tri_loops, scalars=False):
+        out = read(mesh, name, tri_verts, tri_loops, scalars)
+        if scalars and out is not None:
+            change(out, read(mesh, name, tri_verts, tri_loops, False))
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_named_attribute", changed)
+        yield
+
+
+def _alpha_as_one(scalars, vector):
+    scalars[..., 1] = 1.0
+
+
+def _fac_as_mean(scalars, vector):
+    scalars[..., 0] = vector.mean(axis=-1)
+
+
+@contextmanager
 def _parameter_changed(node_type, opcode, index, value):
     """Parameter `index` of each `node_type` node's instruction (of `opcode`, a
     shading.OP_* name) set to `value`."""
@@ -985,6 +1012,12 @@ INJECTIONS = {
         "ShaderNodeTexVoronoi", "OP_VORONOI", 9, 0)),
     "blackbody_in_celsius": ("blackbody_and_normal", None, _blackbody_in_celsius),
     "normal_node_unnormalised": ("blackbody_and_normal", None, _normal_node_unnormalised),
+    # Attribute: a colour's Alpha read as 1; Fac as the mean of the vector (a 2D
+    # attribute's Fac is its x in Cycles).
+    "attribute_alpha_as_one": ("attributes", None,
+                               lambda: _attribute_scalars_changed(_alpha_as_one)),
+    "attribute_fac_as_mean": ("attributes", None,
+                              lambda: _attribute_scalars_changed(_fac_as_mean)),
     "map_range_types_rotated": ("converter_nodes", None, _map_range_types_rotated),
     "curves_never_extrapolated": ("converter_nodes", None, _curves_never_extrapolated),
     "clamp_range_as_min_max": ("converter_nodes", None, _clamp_range_as_min_max),

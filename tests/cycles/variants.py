@@ -1931,6 +1931,84 @@ def blackbody_and_normal():
         _glowing_card(f"K{i}", (-2.0 + (i + 0.5) * 4.0 / 7, 0.0, 0.0), (0.5, 0.5), feed)
 
 
+# The attributes of the attribute cards' mesh: name -> (data type, domain, components).
+CARD_ATTRIBUTES = {"height": ("FLOAT", "POINT", 1), "pair": ("FLOAT2", "CORNER", 2),
+                   "facet": ("FLOAT_VECTOR", "FACE", 3), "paint": ("FLOAT_COLOR", "CORNER", 4),
+                   "bytes": ("BYTE_COLOR", "POINT", 4), "ids": ("INT", "FACE", 1),
+                   "flag": ("BOOLEAN", "POINT", 1)}
+
+
+def _attribute_grid():
+    """A 0.5 x 0.5 card of 4 x 4 quads (x, z) carrying CARD_ATTRIBUTES, seeded values in
+    0.05 .. 1 (ids 0 .. 9, flags 0 or 1), and a UV map."""
+    rng = np.random.default_rng(11)
+    n = 4
+    verts = [(-0.25 + 0.5 * i / n, 0.0, -0.25 + 0.5 * j / n)
+             for j in range(n + 1) for i in range(n + 1)]
+    faces = [(j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1,
+              (j + 1) * (n + 1) + i) for j in range(n) for i in range(n)]
+    mesh = bpy.data.meshes.new("AttributeGrid")
+    mesh.from_pydata(verts, [], faces)
+    mesh.uv_layers.new(name="UVMap")
+    for name, (kind, domain, width) in CARD_ATTRIBUTES.items():
+        attr = mesh.attributes.new(name, kind, domain)
+        count = len(attr.data)
+        if kind == "INT":
+            attr.data.foreach_set("value", rng.integers(0, 10, count).astype(np.int32))
+        elif kind == "BOOLEAN":
+            attr.data.foreach_set("value", rng.integers(0, 2, count).astype(bool))
+        else:
+            key = {1: "value", 2: "vector", 3: "vector", 4: "color"}[width]
+            attr.data.foreach_set(key, rng.uniform(0.05, 1.0, count * width).astype(
+                np.float32))
+    return mesh
+
+
+def _attribute_card(name, centre, mesh, attribute, output, scale=1.0):
+    """An emitting card of `mesh` (its own) whose colour is the Attribute node's `output` of
+    `attribute` (times `scale`)."""
+    mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
+    tree = mat.node_tree
+    node = tree.nodes.new("ShaderNodeAttribute")
+    node.attribute_type, node.attribute_name = "GEOMETRY", attribute
+    out = node.outputs[output]
+    if scale != 1.0:
+        times = tree.nodes.new("ShaderNodeMath")
+        times.operation = "MULTIPLY"
+        times.inputs[1].default_value = scale
+        tree.links.new(out, times.inputs[0])
+        out = times.outputs[0]
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    tree.links.new(out, emission.inputs["Color"])
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.location = centre
+    return obj
+
+
+def attributes():
+    """The Attribute node (issue 14, point 1) of type Geometry on a mesh with a float
+    attribute on its points, a 2D one on corners, a vector per face, a float colour with
+    alpha on corners, a byte colour on points, an integer per face and a boolean per point,
+    and its UV map: Fac, Color, Vector and Alpha, each read as Cycles reads its type, on
+    emitting cards seen head-on."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (224, 64))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    reads = [("height", "Fac", 1.0), ("pair", "Vector", 1.0), ("facet", "Color", 1.0),
+             ("paint", "Color", 1.0), ("paint", "Alpha", 1.0), ("bytes", "Color", 1.0),
+             ("ids", "Fac", 0.1), ("flag", "Fac", 1.0), ("facet", "Fac", 1.0),
+             ("pair", "Fac", 1.0), ("UVMap", "Vector", 1.0), ("bytes", "Alpha", 1.0),
+             ("height", "Color", 1.0), ("paint", "Fac", 1.0)]
+    for i, (name, output, scale) in enumerate(reads):
+        row, col = divmod(i, 7)
+        mesh = _attribute_grid()
+        _attribute_card(f"A{i}", (-2.0 + (col + 0.5) * 4.0 / 7, 0.0, 0.28 - 0.56 * row), mesh,
+                        name, output, scale)
+
+
 def _refraction(name, colour, roughness, ior=1.45):
     mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=colour + (1.0,),
                       Roughness=roughness, IOR=ior)
@@ -2716,6 +2794,8 @@ _add(Variant("voronoi", voronoi, resolution=(224, 64), max_bounces=0, samples=64
              cycles_samples=128))
 _add(Variant("blackbody_and_normal", blackbody_and_normal, resolution=(224, 32),
              max_bounces=0, samples=64, cycles_samples=128))
+_add(Variant("attributes", attributes, resolution=(224, 64), max_bounces=0, samples=64,
+             cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))
