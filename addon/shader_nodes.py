@@ -719,6 +719,22 @@ def _n_blackbody(c, node, out):
                                                            "VALUE")), "RGBA"
 
 
+def xyz_to_scene_linear() -> list:
+    """Cycles' XYZ to scene-linear matrix for this Blender's colour configuration
+    (row-major): Blender's own XYZ (D65) to scene-linear conversion, which Cycles 5's
+    Wavelength colours match to 1e-5 (an ACES route through Cycles' older xyz_E_to_aces
+    matrix was 8 % off in blue)."""
+    columns = [mathutils.Color(e).from_xyz_d65_to_scene_linear() for e in np.eye(3)]
+    return list(np.array([list(c) for c in columns]).T.ravel())
+
+
+def _n_wavelength(c, node, out):
+    """Wavelength: the CIE colour-matching functions in the scene's linear RGB, as Cycles."""
+    return c.program.emit(c.sh.OP_WAVELENGTH, 3, a=c.input(node.inputs["Wavelength"],
+                                                            "VALUE"),
+                          params=xyz_to_scene_linear()), "RGBA"
+
+
 def _n_normal(c, node, out):
     """Normal: its Normal output is its own direction, normalised; Dot that direction
     dotted with its input, normalised (Vector Math's safe normalise: 0 stays 0)."""
@@ -869,6 +885,7 @@ NODES = {
     "ShaderNodeTexVoronoi": _n_voronoi,
     "ShaderNodeBlackbody": _n_blackbody,
     "ShaderNodeAttribute": _n_attribute,
+    "ShaderNodeWavelength": _n_wavelength,
     "ShaderNodeNormal": _n_normal,
     "ShaderNodeTexBrick": _n_brick,
     "ShaderNodeVectorRotate": _n_vector_rotate,

@@ -102,6 +102,8 @@ OP_VORONOI = 35     # reg[out:out+3] Color, reg[out+3] Distance, reg[out+4:out+7
 #                     dimensions, feature (voronoi.FEATURES), metric (voronoi.METRICS) and
 #                     normalize
 OP_BLACKBODY = 36   # reg[out:out+3] = the Blackbody node's colour of temperature reg[a] (K)
+OP_WAVELENGTH = 37  # reg[out:out+3] = the Wavelength node's colour of reg[a] nm; params[p:p+9]
+#                     the CIE XYZ to scene-linear matrix (row-major)
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -1003,6 +1005,56 @@ def rgb_to_hsv(r, g, b):
     return h, s, cmax
 
 
+# The CIE 1931 colour-matching functions (x, y, z) every 5 nm from 380 to 780 nm, as
+# Cycles tabulates them (kernel/tables.h cie_color_match).
+CIE_COLOUR_MATCH = np.array([
+    (0.0014, 0.0000, 0.0065), (0.0022, 0.0001, 0.0105), (0.0042, 0.0001, 0.0201),
+    (0.0076, 0.0002, 0.0362), (0.0143, 0.0004, 0.0679), (0.0232, 0.0006, 0.1102),
+    (0.0435, 0.0012, 0.2074), (0.0776, 0.0022, 0.3713), (0.1344, 0.0040, 0.6456),
+    (0.2148, 0.0073, 1.0391), (0.2839, 0.0116, 1.3856), (0.3285, 0.0168, 1.6230),
+    (0.3483, 0.0230, 1.7471), (0.3481, 0.0298, 1.7826), (0.3362, 0.0380, 1.7721),
+    (0.3187, 0.0480, 1.7441), (0.2908, 0.0600, 1.6692), (0.2511, 0.0739, 1.5281),
+    (0.1954, 0.0910, 1.2876), (0.1421, 0.1126, 1.0419), (0.0956, 0.1390, 0.8130),
+    (0.0580, 0.1693, 0.6162), (0.0320, 0.2080, 0.4652), (0.0147, 0.2586, 0.3533),
+    (0.0049, 0.3230, 0.2720), (0.0024, 0.4073, 0.2123), (0.0093, 0.5030, 0.1582),
+    (0.0291, 0.6082, 0.1117), (0.0633, 0.7100, 0.0782), (0.1096, 0.7932, 0.0573),
+    (0.1655, 0.8620, 0.0422), (0.2257, 0.9149, 0.0298), (0.2904, 0.9540, 0.0203),
+    (0.3597, 0.9803, 0.0134), (0.4334, 0.9950, 0.0087), (0.5121, 1.0000, 0.0057),
+    (0.5945, 0.9950, 0.0039), (0.6784, 0.9786, 0.0027), (0.7621, 0.9520, 0.0021),
+    (0.8425, 0.9154, 0.0018), (0.9163, 0.8700, 0.0017), (0.9786, 0.8163, 0.0014),
+    (1.0263, 0.7570, 0.0011), (1.0567, 0.6949, 0.0010), (1.0622, 0.6310, 0.0008),
+    (1.0456, 0.5668, 0.0006), (1.0026, 0.5030, 0.0003), (0.9384, 0.4412, 0.0002),
+    (0.8544, 0.3810, 0.0002), (0.7514, 0.3210, 0.0001), (0.6424, 0.2650, 0.0000),
+    (0.5419, 0.2170, 0.0000), (0.4479, 0.1750, 0.0000), (0.3608, 0.1382, 0.0000),
+    (0.2835, 0.1070, 0.0000), (0.2187, 0.0816, 0.0000), (0.1649, 0.0610, 0.0000),
+    (0.1212, 0.0446, 0.0000), (0.0874, 0.0320, 0.0000), (0.0636, 0.0232, 0.0000),
+    (0.0468, 0.0170, 0.0000), (0.0329, 0.0119, 0.0000), (0.0227, 0.0082, 0.0000),
+    (0.0158, 0.0057, 0.0000), (0.0114, 0.0041, 0.0000), (0.0081, 0.0029, 0.0000),
+    (0.0058, 0.0021, 0.0000), (0.0041, 0.0015, 0.0000), (0.0029, 0.0010, 0.0000),
+    (0.0020, 0.0007, 0.0000), (0.0014, 0.0005, 0.0000), (0.0010, 0.0004, 0.0000),
+    (0.0007, 0.0002, 0.0000), (0.0005, 0.0002, 0.0000), (0.0003, 0.0001, 0.0000),
+    (0.0002, 0.0001, 0.0000), (0.0002, 0.0001, 0.0000), (0.0001, 0.0000, 0.0000),
+    (0.0001, 0.0000, 0.0000), (0.0001, 0.0000, 0.0000), (0.0000, 0.0000, 0.0000)])
+
+
+@njit(**JIT)
+def wavelength(nm, xyz_to_rgb):
+    """The Wavelength node (svm_node_wavelength): the colour-matching functions at nm
+    (linear between Cycles' 5 nm entries; black outside 380 .. 775), to the scene's linear
+    RGB by `xyz_to_rgb` (9 floats, row-major), scaled by 1 / 2.52 so that no channel
+    exceeds 1, negative channels 0."""
+    ii = (nm - 380.0) / 5.0
+    i = int(ii)  # (float_to_int truncates toward 0: -0.5 is entry 0, as in Cycles)
+    if i < 0 or i >= 80:
+        return 0.0, 0.0, 0.0
+    t = ii - i
+    lo, hi = CIE_COLOUR_MATCH[i], CIE_COLOUR_MATCH[i + 1]
+    x, y, z = lo[0] + t * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1]), lo[2] + t * (hi[2] - lo[2])
+    return (max((xyz_to_rgb[0] * x + xyz_to_rgb[1] * y + xyz_to_rgb[2] * z) / 2.52, 0.0),
+            max((xyz_to_rgb[3] * x + xyz_to_rgb[4] * y + xyz_to_rgb[5] * z) / 2.52, 0.0),
+            max((xyz_to_rgb[6] * x + xyz_to_rgb[7] * y + xyz_to_rgb[8] * z) / 2.52, 0.0))
+
+
 @njit(**JIT)
 def blackbody(t):
     """The Blackbody node's colour of temperature t (K) in linear Rec.709, negative
@@ -1128,7 +1180,7 @@ def node_colour_ops(ins, reg):
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
                OP_VORONOI)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
-                 OP_BLACKBODY)
+                 OP_BLACKBODY, OP_WAVELENGTH)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
 
 
@@ -1160,7 +1212,7 @@ def node_texture(ins, reg, params):
 
 @njit(**JIT)
 def node_converter(ins, reg, params):
-    """Mapping, Vector Rotate, the Curves, Map Range, Clamp and Blackbody."""
+    """Mapping, Vector Rotate, the Curves, Map Range, Clamp, Blackbody and Wavelength."""
     op = ins[0]
     if op == OP_VECTOR_MAPPING:
         node_vector_mapping(ins, reg)
@@ -1172,6 +1224,9 @@ def node_converter(ins, reg, params):
         node_map_range(ins, reg, params)
     elif op == OP_BLACKBODY:
         reg[ins[1]], reg[ins[1] + 1], reg[ins[1] + 2] = blackbody(reg[ins[2]])
+    elif op == OP_WAVELENGTH:
+        reg[ins[1]], reg[ins[1] + 1], reg[ins[1] + 2] = wavelength(
+            reg[ins[2]], params[ins[7]:ins[7] + 9])
     else:
         reg[ins[1]] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
 

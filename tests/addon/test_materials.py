@@ -589,15 +589,15 @@ def test_transparent_bsdf_is_transparent(fresh):
 
 
 def test_unreducible_chains_keep_what_the_object_is(fresh):
-    """A Wavelength node cannot be reduced: Base Color keeps its own value, emission is off
+    """A Vector Transform cannot be reduced: Base Color keeps its own value, emission is off
     (the socket's own white would turn the surface into a light)."""
     mat, node = node_material("Painted", "ShaderNodeBsdfPrincipled",
                               **{"Base Color": (0.2, 0.4, 0.6, 1.0), "Emission Strength": 1.0})
-    attr = mat.node_tree.nodes.new("ShaderNodeWavelength")
+    attr = mat.node_tree.nodes.new("ShaderNodeVectorTransform")
     mat.node_tree.links.new(mat.node_tree.nodes.new("ShaderNodeTexCoord").outputs["UV"],
-                            attr.inputs["Wavelength"])
-    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Base Color"])
-    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Emission Color"])
+                            attr.inputs["Vector"])
+    mat.node_tree.links.new(attr.outputs["Vector"], node.inputs["Base Color"])
+    mat.node_tree.links.new(attr.outputs["Vector"], node.inputs["Emission Color"])
     spec, warnings = convert(mat)
     assert spec.ctor == "principled" and "emission" not in spec.kwargs
     assert spec.kwargs["base_colour"] == pytest.approx((0.2, 0.4, 0.6), abs=1e-6)

@@ -340,6 +340,15 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                 "distance": _r(bumps.uniform(0.002, 0.02), 4),
                 "strength": _r(bumps.uniform(0.3, 1.0), 3) if bumps.random() < 0.5 else 1.0,
                 "invert": bool(bumps.random() < 0.3)}
+    # Some opaque surfaces coloured by a procedural texture (issue 14's nodes), from a
+    # stream of their own: a texture of random kind and settings on Generated or Object
+    # coordinates, its Fac-like output through a Math or Map Range node or not, into a
+    # two-stop Color Ramp (a colour in 0 .. 1) or, for a colour output, straight in.
+    textures = np.random.default_rng([seed, 0x7e47])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("diffuse", "glossy", "principled", "metal") and \
+                textures.random() < 0.3:
+            o["material"]["colour_texture"] = _draw_colour_texture(textures)
     if avoid_known:
         params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
@@ -374,6 +383,8 @@ def features(params) -> list[str]:
                  + (f":fac_{m['mix']['factor']['kind']}" if m.get("mix", {}).get("factor")
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
+                 + (f":{m['colour_texture']['node'][13:].lower()}_colour"
+                    if m.get("colour_texture") else "")
                  + (":alpha" if m.get("alpha") else "")
                  + (":coat" if m.get("coat") else "")
                  + (":sheen" if m.get("sheen") else "")
@@ -465,10 +476,111 @@ def _defaults_light(light):
     return out
 
 
+# The procedural textures the fuzz draws: node kind -> (output for a colour, output for a
+# factor, {property: choices}, {input: (low, high)}).
+TEXTURES = {
+    "ShaderNodeTexNoise": ("Color", "Fac", {"noise_dimensions": ["2D", "3D", "4D"],
+                                            "noise_type": ["FBM", "MULTIFRACTAL",
+                                                           "RIDGED_MULTIFRACTAL"]},
+                           {"Scale": (1.0, 8.0), "Detail": (0.0, 4.0), "Roughness": (0.2, 0.8),
+                            "Distortion": (0.0, 1.0)}),
+    "ShaderNodeTexVoronoi": ("Color", "Distance", {
+        "voronoi_dimensions": ["2D", "3D", "4D"],
+        "feature": ["F1", "F2", "SMOOTH_F1", "DISTANCE_TO_EDGE", "N_SPHERE_RADIUS"],
+        "distance": ["EUCLIDEAN", "MANHATTAN", "CHEBYCHEV"], "normalize": [False, True]},
+        {"Scale": (2.0, 10.0), "Detail": (0.0, 2.0), "Randomness": (0.3, 1.0),
+         "Smoothness": (0.2, 1.0)}),
+    "ShaderNodeTexWave": ("Color", "Fac", {"wave_type": ["BANDS", "RINGS"],
+                                           "wave_profile": ["SIN", "SAW", "TRI"]},
+                          {"Scale": (1.0, 6.0), "Distortion": (0.0, 4.0)}),
+    "ShaderNodeTexMagic": ("Color", "Fac", {"turbulence_depth": [1, 2, 3]},
+                           {"Scale": (1.0, 5.0), "Distortion": (0.5, 2.0)}),
+    "ShaderNodeTexBrick": ("Color", "Fac", {}, {"Scale": (2.0, 8.0),
+                                                "Mortar Size": (0.01, 0.05)}),
+    "ShaderNodeTexGradient": ("Color", "Fac", {"gradient_type": ["LINEAR", "QUADRATIC",
+                                                                 "SPHERICAL", "RADIAL"]}, {}),
+    "ShaderNodeTexWhiteNoise": ("Color", "Value", {"noise_dimensions": ["2D", "3D"]}, {}),
+}
+
+
+def _draw_colour_texture(rng):
+    """A random procedural colour chain for a surface's colour (see random_scene)."""
+    kind = str(rng.choice(sorted(TEXTURES)))
+    _, _, choices, ranges = TEXTURES[kind]
+    t = {"node": kind, "coords": str(rng.choice(["Generated", "Object"])),
+         "settings": {k: (v[int(rng.integers(len(v)))] if not isinstance(v[0], bool)
+                          else bool(rng.random() < 0.5)) for k, v in choices.items()},
+         "inputs": {k: _r(rng.uniform(lo, hi), 3) for k, (lo, hi) in ranges.items()}}
+    if kind == "ShaderNodeTexWhiteNoise":  # per point noise is all noise: floored cells
+        t["cells"] = _r(rng.uniform(3.0, 9.0), 2)
+    # (Voronoi's Distance to Edge and N-Sphere Radius have no Color output.)
+    colourless = t["settings"].get("feature") in ("DISTANCE_TO_EDGE", "N_SPHERE_RADIUS")
+    if not colourless and rng.random() < 0.4:
+        t["output"] = "colour"
+        return t
+    t["output"] = "factor"
+    t["shape"] = str(rng.choice(["none", "math_absolute", "math_sine", "map_range"]))
+    t["ramp"] = [[0.0, *[_r(c) for c in rng.uniform(0.05, 0.95, 3)]],
+                 [1.0, *[_r(c) for c in rng.uniform(0.05, 0.95, 3)]]]
+    t["ramp_positions"] = sorted(_r(x, 3) for x in rng.uniform(0.0, 1.0, 2))
+    return t
+
+
+def _colour_texture(mat, t):
+    """The material's colour input (Color / Base Color) from the chain `t`."""
+    tree = mat.node_tree
+    shader = next(n for n in tree.nodes if "Base Color" in n.inputs or (
+        "Color" in n.inputs and n.bl_idname.startswith("ShaderNodeBsdf")))
+    node = tree.nodes.new(t["node"])
+    for key, value in t["settings"].items():
+        setattr(node, key, value)
+    for key, value in t["inputs"].items():
+        if key in node.inputs:
+            node.inputs[key].default_value = value
+    coords = tree.nodes.new("ShaderNodeTexCoord").outputs[t["coords"]]
+    if t.get("cells"):
+        scaled = tree.nodes.new("ShaderNodeVectorMath")
+        scaled.operation, scaled.inputs["Scale"].default_value = "SCALE", t["cells"]
+        tree.links.new(coords, scaled.inputs[0])
+        floor = tree.nodes.new("ShaderNodeVectorMath")
+        floor.operation = "FLOOR"
+        tree.links.new(scaled.outputs["Vector"], floor.inputs[0])
+        coords = floor.outputs["Vector"]
+    if "Vector" in node.inputs:
+        tree.links.new(coords, node.inputs["Vector"])
+    colour_out, factor_out, _, _ = TEXTURES[t["node"]]
+    target = shader.inputs["Base Color" if "Base Color" in shader.inputs else "Color"]
+    if t["output"] == "colour":
+        tree.links.new(node.outputs[colour_out], target)
+        return mat
+    value = node.outputs["Radius" if t["settings"].get("feature") == "N_SPHERE_RADIUS"
+                         else factor_out]
+    if t["shape"] != "none":
+        shape = tree.nodes.new("ShaderNodeMapRange" if t["shape"] == "map_range"
+                               else "ShaderNodeMath")
+        if t["shape"] == "map_range":
+            shape.inputs["From Min"].default_value = 0.2
+            shape.inputs["From Max"].default_value = 0.8
+        else:
+            shape.operation = "ABSOLUTE" if t["shape"] == "math_absolute" else "SINE"
+        tree.links.new(value, shape.inputs[0])
+        value = shape.outputs[0]
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    for element, position, stop in zip(ramp.color_ramp.elements, t["ramp_positions"],
+                                       t["ramp"]):
+        element.position, element.color = position, (*stop[1:], 1.0)
+    tree.links.new(value, ramp.inputs["Fac"])
+    tree.links.new(ramp.outputs["Color"], target)
+    return mat
+
+
 def _simpler_material(m):
     out = []
     if m["kind"] != "diffuse":
         out.append(("diffuse", {"kind": "diffuse", "colour": [0.8, 0.8, 0.8]}))
+    if m.get("colour_texture"):
+        out.append(("untextured colour",
+                    {k: v for k, v in m.items() if k != "colour_texture"}))
     if m.get("roughness_checker"):
         out.append(("untextured roughness",
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
@@ -658,6 +770,8 @@ def _bpy_surface(name, m):
     mat = _bpy_surface_shader(name, m)
     if m.get("roughness_checker"):
         _roughness_checker(mat, m["roughness_checker"])
+    if m.get("colour_texture"):
+        _colour_texture(mat, m["colour_texture"])
     if m.get("bump"):
         b = m["bump"]
         from tests.cycles.variants import _bumped

@@ -437,20 +437,33 @@ def _backfacing_ignored():
 
 
 @contextmanager
-def _blackbody_in_celsius():
-    """The Blackbody's Temperature taken as degrees Celsius (273.15 K added)."""
+def _input_offset(node_type, name, opcode, offset, params=lambda: ()):
+    """A `node_type` node (one instruction of `opcode` on one input) reading its input
+    `name` plus `offset`."""
     from addon import shader_nodes
 
-    def celsius(c, node, out):
+    def shifted(c, node, out):
         sh = c.sh
-        kelvin = c.program.emit(sh.OP_MATH, 1, a=c.input(node.inputs["Temperature"], "VALUE"),
-                                b=c.program.const([273.15]), c=c.program.const([0.0]),
-                                d=sh.MATHS.index("ADD"))
-        return c.program.emit(sh.OP_BLACKBODY, 3, a=kelvin), "RGBA"
+        value = c.program.emit(sh.OP_MATH, 1, a=c.input(node.inputs[name], "VALUE"),
+                               b=c.program.const([offset]), c=c.program.const([0.0]),
+                               d=sh.MATHS.index("ADD"))
+        return c.program.emit(getattr(sh, opcode), 3, a=value, params=params()), "RGBA"
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeBlackbody", celsius)
+        mp.setitem(shader_nodes.NODES, node_type, shifted)
         yield
+
+
+def _blackbody_in_celsius():
+    """The Blackbody's Temperature taken as degrees Celsius (273.15 K added)."""
+    return _input_offset("ShaderNodeBlackbody", "Temperature", "OP_BLACKBODY", 273.15)
+
+
+def _wavelength_5nm_longer():
+    """The Wavelength node's input 5 nm longer (one entry of Cycles' table off)."""
+    from addon import shader_nodes
+    return _input_offset("ShaderNodeWavelength", "Wavelength", "OP_WAVELENGTH", 5.0,
+                         shader_nodes.xyz_to_scene_linear)
 
 
 @contextmanager
@@ -1012,6 +1025,7 @@ INJECTIONS = {
         "ShaderNodeTexVoronoi", "OP_VORONOI", 9, 0)),
     "blackbody_in_celsius": ("blackbody_and_normal", None, _blackbody_in_celsius),
     "normal_node_unnormalised": ("blackbody_and_normal", None, _normal_node_unnormalised),
+    "wavelength_5nm_longer": ("wavelength", None, _wavelength_5nm_longer),
     # Attribute: a colour's Alpha read as 1; Fac as the mean of the vector (a 2D
     # attribute's Fac is its x in Cycles).
     "attribute_alpha_as_one": ("attributes", None,

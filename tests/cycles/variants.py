@@ -1881,20 +1881,26 @@ def voronoi():
                       (0.5, 0.5), feed)
 
 
+def _ranged_feed(node_type, name, value, low, high):
+    """A feed: the Color of a `node_type` node whose input `name` is `value`, or (None) the
+    card's x mapped to low .. high."""
+    def feed(tree):
+        node = tree.nodes.new(node_type)
+        if value is not None:
+            node.inputs[name].default_value = value
+            return node.outputs["Color"]
+        ramp = tree.nodes.new("ShaderNodeMapRange")
+        ramp.inputs["To Min"].default_value, ramp.inputs["To Max"].default_value = low, high
+        tree.links.new(_generated_axis(tree), ramp.inputs["Value"])
+        tree.links.new(ramp.outputs["Result"], node.inputs[name])
+        return node.outputs["Color"]
+    return feed
+
+
 def _blackbody_feed(kelvin=None):
     """A feed: a Blackbody of `kelvin`, or of the card's x mapped to 500 .. 13000 K (below
     Cycles' 800 K floor, through each of its seven fitted bands, past its 12000 K end)."""
-    def feed(tree):
-        node = tree.nodes.new("ShaderNodeBlackbody")
-        if kelvin is not None:
-            node.inputs["Temperature"].default_value = kelvin
-            return node.outputs["Color"]
-        ramp = tree.nodes.new("ShaderNodeMapRange")
-        ramp.inputs["To Min"].default_value, ramp.inputs["To Max"].default_value = 500.0, 13000.0
-        tree.links.new(_generated_axis(tree), ramp.inputs["Value"])
-        tree.links.new(ramp.outputs["Result"], node.inputs["Temperature"])
-        return node.outputs["Color"]
-    return feed
+    return _ranged_feed("ShaderNodeBlackbody", "Temperature", kelvin, 500.0, 13000.0)
 
 
 def _normal_node_feed(output="Dot", linked=True):
@@ -1914,6 +1920,20 @@ def _normal_node_feed(output="Dot", linked=True):
         tree.links.new(node.outputs[output], absolute.inputs[0])
         return absolute.outputs[0]
     return feed
+
+
+def wavelength():
+    """The Wavelength node (issue 14, point 1) over 350 .. 800 nm (black below 380 and from
+    780 on in Cycles) and at 470, 550 and 610 nm, on emitting cards seen head-on by an
+    orthographic camera."""
+    scene = bs.new_scene()
+    cam = bs.camera(scene, "Camera", (0.0, -3.0, 0.0), 50.0, (128, 32))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
+    bs.black_world(scene)
+    feeds = [_ranged_feed("ShaderNodeWavelength", "Wavelength", nm, 350.0, 800.0)
+             for nm in (None, 470.0, 550.0, 610.0)]
+    for i, feed in enumerate(feeds):
+        _glowing_card(f"L{i}", (-2.0 + (i + 0.5) * 4.0 / 4, 0.0, 0.0), (0.8, 0.8), feed)
 
 
 def blackbody_and_normal():
@@ -2795,6 +2815,8 @@ _add(Variant("voronoi", voronoi, resolution=(224, 64), max_bounces=0, samples=64
 _add(Variant("blackbody_and_normal", blackbody_and_normal, resolution=(224, 32),
              max_bounces=0, samples=64, cycles_samples=128))
 _add(Variant("attributes", attributes, resolution=(224, 64), max_bounces=0, samples=64,
+             cycles_samples=128))
+_add(Variant("wavelength", wavelength, resolution=(128, 32), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
