@@ -72,6 +72,14 @@ OUTPUT_IGNORED = (("Displacement", "displacement is not applied"),
                   ("Thickness", "thickness is not used"))
 
 
+def _leaf_emission(spec) -> np.ndarray:
+    """The constant emission (3,) of a spec that is not a mix."""
+    if spec.ctor == "emission_only":
+        return spec.kwargs.get("strength", 1.0) * np.asarray(spec.kwargs.get("colour", (1,) * 3),
+                                                             np.float64)
+    return np.asarray(spec.kwargs.get("emission", (0.0,) * 3), np.float64)
+
+
 @dataclass(frozen=True)
 class MaterialSpec:
     """A core `Material` constructor call: `getattr(Material, ctor)(name, **kwargs)`."""
@@ -965,13 +973,23 @@ class _Reader:
             if part.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
-        if fac_program is not None and any(
-                max(leaf.kwargs.get("emission", (0.0,))) > 0 or leaf.ctor == "emission_only"
-                and leaf.kwargs.get("strength", 0.0) > 0
-                for leaf in (*first.leaves(), *second.leaves())):
-            self.warn(f"an emission mixed by a textured factor is mixed by its mean, "
-                      f"{fac:.3g}")
         kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
+        if fac_program is not None and any(
+                max(_leaf_emission(leaf)) > 0 for leaf in (*first.leaves(), *second.leaves())):
+            program = None
+            if first.ctor != "mix" and second.ctor != "mix":
+                a, b = (scale * _leaf_emission(part) for part in (first, second))
+                program = shader_nodes.mixed_by(fac_program, a, b)
+            if program is None:
+                self.warn(f"an emission mixed by a textured factor is mixed by its mean, "
+                          f"{fac:.3g}")
+            else:  # the mix's own, per point (the Light Path node's invisible emitters)
+                for part in (first, second):
+                    part.kwargs.pop("emission", None)
+                    if part.ctor == "emission_only":
+                        part.kwargs["strength"] = 0.0
+                kwargs["emission"] = tuple(np.maximum(a, b))  # (stands in for light choice)
+                kwargs["emission_program"] = program
         if fac_program is not None:
             kwargs["fac_program"] = fac_program
         return MaterialSpec("mix", self.material.name, kwargs)

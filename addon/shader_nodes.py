@@ -26,7 +26,7 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
-           "ShaderNodeTexVoronoi", "ShaderNodeAttribute")
+           "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -838,6 +838,18 @@ def _n_vector_math(c, node, out):
     return (reg + 3, "VALUE") if out.name == "Value" else (reg, "VECTOR")
 
 
+def _n_light_path(c, node, out):
+    """Light Path: the state of the path being shaded (shading.set_light_path), as Cycles'
+    svm_node_light_path reads it; Portal Depth is 0 (Specula has no light portals)."""
+    sh = c.sh
+    if out.name == "Portal Depth":
+        return c.program.const([0.0]), "VALUE"
+    if out.name not in sh.LIGHT_PATH_OUTPUTS:
+        raise Unsupported(f"light path '{node.name}' output {out.name}")
+    return c.program.emit(sh.OP_LIGHT_PATH, 1,
+                          d=sh.LIGHT_PATH_OUTPUTS.index(out.name)), "VALUE"
+
+
 def _normal(c, node):
     """The register of a Fresnel or Layer Weight node's Normal, -1 for the hit's own."""
     sock = node.inputs["Normal"]
@@ -902,6 +914,7 @@ NODES = {
     "ShaderNodeVectorMath": _n_vector_math,
     "ShaderNodeFresnel": _n_fresnel,
     "ShaderNodeLayerWeight": _n_layer_weight,
+    "ShaderNodeLightPath": _n_light_path,
 }
 
 
@@ -913,6 +926,25 @@ def scaled(program, strength):
     program.out = program.emit(sh.OP_BLEND, 3, a=fac, b=program.out, c=s,
                                d=sh.BLENDS.index("MULTIPLY"))
     return program
+
+
+def mixed_by(fac_program, first, second):
+    """A program whose result is the constants `first` and `second` (3 values each) mixed
+    per point by the first channel of `fac_program`, clamped to [0, 1] as a Mix Shader's
+    factor is (two emissions mixed by a varying factor); None where the factor reads the
+    hit's view or normal, which an emission cannot (a light sampled from elsewhere has
+    neither)."""
+    sh = core.load().shading
+    viewed = (sh.OP_FRESNEL, sh.OP_LAYER_WEIGHT, *sh.GEOMETRY_OPS)
+    if any(ins[0] in viewed for ins in fac_program.code):
+        return None
+    p = sh.Program(list(fac_program.code), list(fac_program.params),
+                   list(fac_program.textures), list(fac_program.uv_maps),
+                   fac_program.registers, fac_program.out)
+    zero = p.const([0.0])
+    fac = p.emit(sh.OP_MATH, 1, a=p.out, b=zero, c=zero, d=sh.MATHS.index("ADD"), e=1)
+    p.out = p.emit(sh.OP_LERP, 3, a=fac, b=p.const(first), c=p.const(second), d=3)
+    return p
 
 
 def constant(colour):

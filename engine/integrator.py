@@ -68,6 +68,9 @@ GRAZING_COS = 1e-3
 RAY_EPSILON = 2.0**-18
 # Russian roulette starts after this many scatter events (Cycles: min_light_bounces + 1).
 ROULETTE_MIN_BOUNCE = 2
+# A GGX lobe this smooth (alpha_x alpha_y at most this) is a singular one to the Light Path
+# node (Cycles' BSDF_ROUGHNESS_SQ_THRESH: bsdf_microfacet_sample's label).
+SINGULAR_ALPHA_SQ = 2e-10
 
 # ------------------------------------------------------------------ the plan's constants
 # What a kernel compiles in (Plan.kernel_key): the generic kernel's values, all on.
@@ -78,7 +81,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
-                  "HAS_TRANSLUCENT", "HAS_SHEEN", "PROFILE", "DEBUG")
+                  "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -95,6 +98,7 @@ HAS_COATS = True  # Principled coats (scene.Material.coated): layers over mixed 
 HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow rays cross them
 HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen layers)
+HAS_LIGHT_PATH = True  # programs read the path's state (the Light Path node): paths keep it
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -145,16 +149,19 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # each path is inside (media.MEDIA_STACK material indices, -1 empty); with transparency
 # (HAS_TRANSPARENCY), each path's bounce count, its transparent crossings, the distance
 # from its last scattering vertex (o64, where its MIS state was set) to the ray's start and
-# the volume boundaries it crossed (counted apart, as Cycles does).
+# the volume boundaries it crossed (counted apart, as Cycles does); with the Light Path
+# node (HAS_LIGHT_PATH), the flags of the ray that arrives (shading.RAY_*, Cycles'
+# PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
                             "camera_near prev_normal svm media bounce transparent mis_t "
-                            "bounds")
+                            "bounds flags kind_bounces")
 # Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
 # path's transparent crossings plus its own, the sampler bounce of its vertex and the media
-# it is in (traced a segment at a time, media.MEDIA_STACK entries).
+# it is in (traced a segment at a time, media.MEDIA_STACK entries); with the Light Path
+# node, its path's bounce and diffuse, glossy and transmission bounces at its vertex (n, 4).
 ShadowRays = namedtuple("ShadowRays", "row origin direction tmax contrib transparent vertex "
-                                      "media")
+                                      "media bounces")
 # One surface vertex: hit point, geometric normal n and shading normal s (both on the
 # incoming side; s after the material's normal map), the specular lobes' normal m, wo,
 # front face, triangle, barycentrics, material, distance, the offset scale and the mesh's
@@ -239,6 +246,10 @@ def generate_camera_rays(pixels, sample, seed, centred, sc, paths):
         if HAS_VOLUMES:  # in the media around the camera (media.enclosing)
             for j in range(media.MEDIA_STACK):
                 paths.media[i, j] = sc.camera_media[j]
+        if HAS_LIGHT_PATH:
+            paths.flags[i] = shading.RAY_CAMERA
+            for j in range(3):
+                paths.kind_bounces[i, j] = 0
         if DEBUG:
             _debug_mark(paths, i, 1, paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2])
 
@@ -827,6 +838,8 @@ def sample_emitter(x, u_sel, ua, ub, sc, paths):
                                                                    em)
         light_scale = em.scale[e]
         if HAS_TEXTURES and pdf > 0.0:
+            if HAS_LIGHT_PATH:
+                shading.set_ray_length(paths.svm, dist)
             q0, q1, q2 = textured_emitter(e, ua, ub, pdf, q0, q1, q2, sc, paths)
         if HAS_COATS or HAS_SHEEN:
             f = em.triangle_of_entry[e]
@@ -890,6 +903,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     ps = paths.pseed[row]
     u_sel = sample_1d(ps, rev_sample, bounce_dim(depth, LIGHT_SELECT))
     ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, LIGHT_POINT))
+    if HAS_LIGHT_PATH:  # a light's emission: no flags, one bounce on (PATH_RAY_EMISSION)
+        bounce = paths.bounce[i] if HAS_TRANSPARENCY else depth
+        light_path_registers(i, 0, 0.0, np.float64(bounce + 1), paths)
     wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
                                                                       paths)
     g0 = g1 = g2 = pdf_b = 0.0
@@ -971,6 +987,10 @@ def queue_shadow(i, row, depth, x, ox, oy, oz, wx, wy, wz, dist, light_scale, f0
     if HAS_TRANSPARENCY:
         shadow.transparent[s] = paths.transparent[i]
         shadow.vertex[s] = depth
+    if HAS_LIGHT_PATH:
+        shadow.bounces[s, 0] = paths.bounce[i] if HAS_TRANSPARENCY else depth
+        for j in range(3):
+            shadow.bounces[s, j + 1] = paths.kind_bounces[i, j]
     return s + 1
 
 
@@ -1160,6 +1180,8 @@ def scatter_in_medium(i, out, row, depth, vertex, ts, sc, paths, shadow, n_shado
     if HAS_LIGHT_SAMPLING:
         u_sel = sample_1d(ps, rev_sample, bounce_dim(vertex, LIGHT_SELECT))
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(vertex, LIGHT_POINT))
+        if HAS_LIGHT_PATH:  # as at a surface (sample_light)
+            light_path_registers(i, 0, 0.0, np.float64(depth + 1), paths)
         wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
                                                                           paths)
         f0, f1, f2, pdf_p = media.eval_phase(paths.media, i, mt, dx, dy, dz, wx, wy, wz)
@@ -1183,6 +1205,8 @@ def spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf,
     """Continue path i from its scattering point p in a medium as row `out`: no surface to
     leave (no offset), its media unchanged, no normal for the next MIS weight."""
     media.carry(paths.media, i, paths.media, out, sc.materials.medium, 0, False, False)
+    if HAS_LIGHT_PATH:
+        count_bounce(i, out, shading.RAY_VOLUME_SCATTER, paths)
     if HAS_LIGHT_TRACING:  # (light paths never end in a medium)
         paths.caustic_q[out], paths.caustic_eta[out] = 0.0, 1.0
     if HAS_TRANSPARENCY:
@@ -1211,6 +1235,53 @@ def path_counts(i, step, tfar, paths):
         return (depth, depth + paths.transparent[i] + paths.bounds[i],
                 np.float64(tfar) + paths.mis_t[i])
     return step, step, np.float64(tfar)
+
+
+def light_path_registers(i, flags, length, depth, paths):
+    """The Light Path node's view of path i (svm_node_light_path): `flags` of this
+    evaluation (the path's own at a surface it reaches, none for a light's emission sampled
+    from its vertex), the ray's length, the depth Cycles reports there and the path's
+    bounce counters."""
+    kb = paths.kind_bounces
+    crossed = paths.transparent[i] if HAS_TRANSPARENCY else 0
+    shading.set_light_path(paths.svm, flags, length, depth, kb[i, 0], kb[i, 1], crossed,
+                           kb[i, 2])
+
+
+def bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths):
+    """Cycles' path flags of the ray a bounce off vertex x (kind k) starts toward w
+    (path_state_next of the sampled label): reflection or transmission by w's side;
+    diffuse, glossy or singular (a delta lobe, or GGX of alpha^2 <= SINGULAR_ALPHA_SQ) by
+    the lobe sampled, for the Principled and Glossy layers the choice sample_bsdf made."""
+    side = shading.RAY_TRANSMIT if wx * x.nx + wy * x.ny + wz * x.nz < 0.0 else \
+        shading.RAY_REFLECT
+    if k == DIFFUSE or k == SHEEN or k == TRANSLUCENT:
+        return shading.RAY_DIFFUSE | side
+    if k == PRINCIPLED or k == GLOSSY or k == ROUGH_GLASS or k == ROUGH_METAL:
+        glossy = shading.RAY_GLOSSY
+        if lobe.alpha * lobe.alpha <= SINGULAR_ALPHA_SQ:
+            glossy |= shading.RAY_SINGULAR
+        if k == PRINCIPLED or k == GLOSSY:
+            u_lobe = sample_1d(paths.pseed[row], rev_sample, bounce_dim(vertex, LOBE))
+            if u_lobe >= lobe.p_spec:
+                return shading.RAY_DIFFUSE | side
+        return glossy | side
+    return shading.RAY_GLOSSY | shading.RAY_SINGULAR | side
+
+
+def count_bounce(i, out, flags, paths):
+    """Path i's flags and bounce counters as row `out` after a bounce of `flags`: a
+    transmission counts as one, a diffuse or glossy reflection as one of its kind
+    (Cycles' path_state_next); a volume scatter counts none of them."""
+    paths.flags[out] = flags
+    for j in range(3):
+        paths.kind_bounces[out, j] = paths.kind_bounces[i, j]
+    if flags & shading.RAY_TRANSMIT:
+        paths.kind_bounces[out, 2] += 1
+    elif flags & shading.RAY_DIFFUSE:
+        paths.kind_bounces[out, 0] += 1
+    elif flags & shading.RAY_REFLECT:
+        paths.kind_bounces[out, 1] += 1
 
 
 def write_passes(row, x, sc, paths):
@@ -1245,6 +1316,10 @@ def pass_through(i, out, row, x, tfar, boundary, sc, paths):
     paths.transparent[out] = paths.transparent[i] + (0 if boundary else 1)
     paths.bounds[out] = paths.bounds[i] + (1 if boundary else 0)
     paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
+    if HAS_LIGHT_PATH:  # the ray goes on as the same kind of ray (a camera ray stays one)
+        paths.flags[out] = paths.flags[i]
+        for j in range(3):
+            paths.kind_bounces[out, j] = paths.kind_bounces[i, j]
     if HAS_VOLUMES:  # a transparent surface lets the path into its medium as glass does
         media.carry(paths.media, i, paths.media, out, sc.materials.medium,
                     sc.geometry.material_index[x.f], x.front, True)
@@ -1264,10 +1339,11 @@ def cross_surface(i, out, row, x, k, tfar, transparent_max, sc, paths):
     return k == BOUNDARY, out
 
 
-def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
+def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, flags, sc, paths):
     """Continue path i (at bounce depth, on a surface of kind k) as row `out` of the
     compacted batch: leave the surface toward the side of the new direction, into embree's
-    buffers, with the path's light-tracing weight state, media and counters."""
+    buffers, with the path's light-tracing weight state, media and counters (and, for the
+    Light Path node, the bounce's `flags`)."""
     if HAS_LIGHT_TRACING:
         cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
         paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
@@ -1280,6 +1356,8 @@ def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths):
         paths.transparent[out] = paths.transparent[i]
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
+    if HAS_LIGHT_PATH:
+        count_bounce(i, out, flags, paths)
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
     eps = side * ray_offset(x.scale)
     paths.o64[out, 0] = x.px + eps * x.nx
@@ -1313,6 +1391,9 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         row = paths.live[i]
         f = prim[i]
         depth, vertex, t_hit = path_counts(i, step, tfar[i], paths)
+        if HAS_LIGHT_PATH:  # the surface this ray reached sees the path's own state
+            light_path_registers(i, paths.flags[i], np.float64(tfar[i]), np.float64(depth),
+                                 paths)
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
         if HAS_LIGHT_HITS or HAS_SUN_DISCS:
             handle_light_hits(i, row, depth, f, tfar[i], sc, paths, mis)
@@ -1363,6 +1444,9 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
                                    or k == TRANSLUCENT or k == SHEEN):
             n_shadow = sample_light(i, row, vertex, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
+            if HAS_LIGHT_PATH:  # (the light's emission was evaluated in a context of its own)
+                light_path_registers(i, paths.flags[i], np.float64(tfar[i]),
+                                     np.float64(depth), paths)
         if PROFILE:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
@@ -1372,7 +1456,10 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         if DEBUG:
             _debug_mark(paths, row, 7, t0 + wx, t1 + wy, t2 + wz)
         if ok and max(t0, max(t1, t2)) > 0:
-            spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, sc, paths)
+            flags = 0
+            if HAS_LIGHT_PATH:
+                flags = bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths)
+            spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, flags, sc, paths)
             out += 1
         if PROFILE:
             profile[2] += _cycles() - c_bsdf
@@ -1423,6 +1510,10 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
             continue
         mat = sc.geometry.material_index[f]
         weight = (1.0, 1.0, 1.0)
+        if HAS_LIGHT_PATH:  # a shadow ray: only its flag, one bounce on (svm_node_light_path)
+            b = shadow.bounces[j]
+            shading.set_light_path(paths.svm, shading.RAY_SHADOW, np.float64(tfar[j]),
+                                   np.float64(b[0] + 1), b[1], b[2], crossed - 1, b[3])
         if HAS_MIXES:
             seed = hash_combine(paths.pseed[row], np.uint64(SHADOW_CLOSURE_SALT + crossed))
             u = sample_1d(seed, rev_sample, bounce_dim(shadow.vertex[j], CLOSURE))
@@ -1448,6 +1539,9 @@ def cross_transparent(rev_sample, transparent_max, sc, prim, tfar, bu, bv, count
         shadow.row[out] = row
         shadow.transparent[out] = crossed
         shadow.vertex[out] = shadow.vertex[j]
+        if HAS_LIGHT_PATH:
+            for c in range(4):
+                shadow.bounces[out, c] = shadow.bounces[j, c]
         if HAS_VOLUMES:
             media.carry(shadow.media, j, shadow.media, out, sc.materials.medium,
                         sc.geometry.material_index[f], cos_in < 0.0, True)
@@ -1480,8 +1574,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     lit_side, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,
     medium_transmittance, queue_shadow, traverse_medium, spawn_in_medium,
-    path_counts, write_passes, pass_through, cross_surface,
-    spawn)}
+    path_counts, light_path_registers, bounce_flags, count_bounce, write_passes, pass_through,
+    cross_surface, spawn)}
 # perturbed_normal runs programs (a bump's height three times): compiled once and called
 # from its sites rather than inlined into each, which cut compiling the generic and a
 # diffuse plan's kernels from 171 s to 109 s (test_kernel's diffuse-only test, no cache).

@@ -333,14 +333,15 @@ class Tracer:
                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
                      np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n),
-                     np.zeros(n, np.int64))
+                     np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 3), np.int64))
 
     @staticmethod
     def shadow_rays(n: int) -> ShadowRays:
         """Room for n shadow rays: at most one per path and bounce."""
         return ShadowRays(np.empty(n, np.int64), np.empty((n, 3), F32), np.empty((n, 3), F32),
                           np.empty(n, F32), np.empty((n, 3)), np.empty(n, np.int64),
-                          np.empty(n, np.int64), np.full((n, MEDIA_STACK), -1, np.int64))
+                          np.empty(n, np.int64), np.full((n, MEDIA_STACK), -1, np.int64),
+                          np.zeros((n, 4), np.int64))
 
     def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
         """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):

@@ -32,7 +32,7 @@ from .scene import (
     RenderSettings,
     Scene,
 )
-from .shading import SLOTS
+from .shading import OP_LIGHT_PATH, SLOTS
 
 
 @dataclass(frozen=True)
@@ -90,6 +90,8 @@ class Plan:
     translucent: bool = False
     # Some material used is (or mixes in) a microfiber sheen (Sheen BSDF, Principled sheen).
     sheen: bool = False
+    # Some shader program reads the path's state (the Light Path node).
+    light_path: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -115,6 +117,8 @@ class Plan:
         if self.volumes:
             s.append("absorb in media" + (", scatter (phase functions)" if self.scattering
                                           else ""))
+        if self.light_path:
+            s.append("keep the path's state (Light Path)")
         if self.mixes:
             s.append("choose one of mixed shaders" + (" (coats)" if self.coats else ""))
         if self.transparency:
@@ -162,7 +166,7 @@ class Plan:
             HAS_SCATTERING=self.scattering, HAS_MIXES=self.mixes,
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
-            HAS_SHEEN=self.sheen,
+            HAS_SHEEN=self.sheen, HAS_LIGHT_PATH=self.light_path,
             PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -223,6 +227,10 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     volumes = bool(entered)
     scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
+    programs = scene.programs
+    light_path = programs is not None and any(
+        (programs.code[first:end, 0] == OP_LIGHT_PATH).any()
+        for slot in SLOTS for first, end, _ in getattr(programs, slot)[used] if first >= 0)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
@@ -242,20 +250,21 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         normal_maps=normal_maps, volumes=volumes, scattering=scattering, mixes=mixes,
         transparency=transparency,
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
-        translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds,
+        translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds, light_path=light_path,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
         # be the path tracer's read backwards, which exact Fresnel is (Schlick is not), and
         # a normal map's shadowing term is not (light paths are not weighted by it), nor
         # are paths through media (light paths carry no volume stack), mixed shaders
-        # (light paths do not choose among them) or transparent and translucent surfaces
-        # (nor cross them).
+        # (light paths do not choose among them), transparent and translucent surfaces
+        # (nor cross them) or programs reading the path's state (light paths have none).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
                            and not volumes and not mixes and not transparency
                            and TRANSLUCENT not in kinds and SHEEN not in kinds
+                           and not light_path
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

@@ -104,6 +104,8 @@ OP_VORONOI = 35     # reg[out:out+3] Color, reg[out+3] Distance, reg[out+4:out+7
 OP_BLACKBODY = 36   # reg[out:out+3] = the Blackbody node's colour of temperature reg[a] (K)
 OP_WAVELENGTH = 37  # reg[out:out+3] = the Wavelength node's colour of reg[a] nm; params[p:p+9]
 #                     the CIE XYZ to scene-linear matrix (row-major)
+OP_LIGHT_PATH = 38  # reg[out] = the Light Path node's output d (LIGHT_PATH_OUTPUTS): a register
+#                     of the path state block set_light_path fills
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -231,6 +233,20 @@ RAMP_TABLE_SIZE = 256
 # the surface is seen from its back (1), Cycles' sd->N, sd->wi and SD_BACKFACING.
 MAX_REGISTERS = 256
 GEOMETRY = MAX_REGISTERS - 7
+# Before them, the state of the path being shaded for the Light Path node
+# (set_light_path), one register per output in this order: Cycles' path flags (the type
+# of the ray that arrived: PATH_RAY_CAMERA ... PATH_RAY_VOLUME_SCATTER, as 0 or 1), the
+# ray's length and the bounce counters (svm_node_light_path). Portal Depth is always 0:
+# Specula has no light portals.
+LIGHT_PATH_OUTPUTS = ("Is Camera Ray", "Is Shadow Ray", "Is Diffuse Ray", "Is Glossy Ray",
+                      "Is Singular Ray", "Is Reflection Ray", "Is Transmission Ray",
+                      "Is Volume Scatter Ray", "Ray Length", "Ray Depth", "Diffuse Depth",
+                      "Glossy Depth", "Transparent Depth", "Transmission Depth")
+LIGHT_PATH = GEOMETRY - len(LIGHT_PATH_OUTPUTS)
+# The path flags (bit j: output j), as the integrator keeps them per path.
+RAY_CAMERA, RAY_SHADOW, RAY_DIFFUSE, RAY_GLOSSY, RAY_SINGULAR, RAY_REFLECT, RAY_TRANSMIT, \
+    RAY_VOLUME_SCATTER = (1 << j for j in range(8))
+RAY_FLAG_COUNT = 8
 WIDTH = 8  # int64 columns of an instruction
 
 
@@ -275,8 +291,8 @@ class Program:
     def register(self, width: int) -> int:
         r = self.registers
         self.registers += width
-        if self.registers > GEOMETRY:
-            raise ValueError(f"the node chain needs more than {GEOMETRY} registers")
+        if self.registers > LIGHT_PATH:
+            raise ValueError(f"the node chain needs more than {LIGHT_PATH} registers")
         return r
 
     def emit(self, op, width, a=0, b=0, c=0, d=0, e=0, params=()) -> int:
@@ -560,6 +576,27 @@ def set_geometry(reg, nx, ny, nz, ix, iy, iz, backfacing):
     reg[GEOMETRY], reg[GEOMETRY + 1], reg[GEOMETRY + 2] = nx, ny, nz
     reg[GEOMETRY + 3], reg[GEOMETRY + 4], reg[GEOMETRY + 5] = ix, iy, iz
     reg[GEOMETRY + 6] = 1.0 if backfacing else 0.0
+
+
+@njit(**JIT)
+def set_light_path(reg, flags, length, depth, diffuse, glossy, transparent, transmission):
+    """The state of the path being shaded into the registers the Light Path node reads:
+    its flags (RAY_*), the arriving ray's length and its bounce counters (Ray Depth as
+    Cycles reports it in this context: one more for a shadow ray or a light's emission)."""
+    for j in range(RAY_FLAG_COUNT):
+        reg[LIGHT_PATH + j] = 1.0 if flags & (1 << j) else 0.0
+    reg[LIGHT_PATH + 8] = length
+    reg[LIGHT_PATH + 9] = depth
+    reg[LIGHT_PATH + 10] = diffuse
+    reg[LIGHT_PATH + 11] = glossy
+    reg[LIGHT_PATH + 12] = transparent
+    reg[LIGHT_PATH + 13] = transmission
+
+
+@njit(**JIT)
+def set_ray_length(reg, length):
+    """The Light Path node's Ray Length alone (a light's emission: the distance to it)."""
+    reg[LIGHT_PATH + 8] = length
 
 
 @njit(**JIT)
@@ -1279,6 +1316,8 @@ def run(first, end, pt, uv, f, u, v, reg):
             node_converter(ins, reg, pt.params)
         elif op in GEOMETRY_OPS:
             node_view_coordinates(ins, reg)
+        elif op == OP_LIGHT_PATH:
+            reg[out] = reg[LIGHT_PATH + ins[5]]
         elif op == OP_COLOUR_SPACE:
             a = ins[2]
             reg[out], reg[out + 1], reg[out + 2] = convert_colour(ins[5], reg[a], reg[a + 1],
@@ -1422,15 +1461,17 @@ def result_at(rows, mat, f, u, v, pt, uv, reg, c0, c1, c2):
 
 
 def evaluate(program: Program, uv=(0.0, 0.0), normal=(0.0, 0.0, 1.0), incoming=(0.0, 0.0, 1.0),
-             backfacing=False):
+             backfacing=False, light_path=(0, 0.0, 0, 0, 0, 0, 0)):
     """Run a program outside the kernel (tests, constant folding): the registers after it
     ran at coordinates `uv` (u, v or u, v, w) on every map, at a hit of that shading
-    normal, direction toward the viewer and side."""
+    normal, direction toward the viewer and side, by a path of that state (flags, ray
+    length, depth, diffuse, glossy, transparent and transmission depth)."""
     pt = pack([program], None, lambda name: 0)
     w = uv[2] if len(uv) > 2 else 0.0
     corners = np.broadcast_to(np.asarray([[uv[0], uv[1], w]] * 3, np.float32),
                               (max(len(program.uv_maps), 1), 1, 3, 3)).copy()
     reg = np.zeros(MAX_REGISTERS)
     set_geometry(reg, *normal, *incoming, backfacing)
+    set_light_path(reg, *light_path)
     run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
     return reg

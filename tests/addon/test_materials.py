@@ -1288,3 +1288,73 @@ def test_a_map_range_of_constants_folds_exactly(fresh):
     t = 0.3 / 0.8
     assert warnings == []
     assert spec.kwargs["roughness"] == pytest.approx(t ** 3 * (t * (6 * t - 15) + 10))
+
+
+def _light_path_mix(second_shader, output, first_inputs):
+    """A Mix Shader of an Emission (first) and `second_shader` by Light Path `output`."""
+    mat, mix = node_material("Pathed", "ShaderNodeMixShader")
+    tree = mat.node_tree
+    emission = tree.nodes.new("ShaderNodeEmission")
+    for key, value in first_inputs.items():
+        emission.inputs[key].default_value = value
+    tree.links.new(emission.outputs[0], mix.inputs[1])
+    tree.links.new(tree.nodes.new(second_shader).outputs[0], mix.inputs[2])
+    path = tree.nodes.new("ShaderNodeLightPath")
+    tree.links.new(path.outputs[output], mix.inputs["Fac"])
+    return mat
+
+
+def test_light_path_mixes_an_emission_per_ray(fresh):
+    """The invisible emitter (Emission and Transparent mixed by Is Camera Ray): the mix's
+    factor and its emission are programs of the ray's state, exact for each kind of ray,
+    and nothing is warned; an emission mixed by a factor that reads the view keeps its
+    mean, warned."""
+    from engine import shading
+    mat = _light_path_mix("ShaderNodeBsdfTransparent", "Is Camera Ray",
+                          {"Color": (1.0, 0.5, 0.25, 1.0), "Strength": 4.0})
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["second"].ctor == "transparent"
+    assert spec.kwargs["first"].kwargs["strength"] == 0.0  # moved onto the mix
+    program = spec.kwargs["emission_program"]
+    for flags, expected in ((shading.RAY_CAMERA, (0.0, 0.0, 0.0)),
+                            (shading.RAY_CAMERA | shading.RAY_SHADOW, (0.0, 0.0, 0.0)),
+                            (shading.RAY_DIFFUSE | shading.RAY_REFLECT, (4.0, 2.0, 1.0)),
+                            (0, (4.0, 2.0, 1.0))):  # a light's emission, sampled
+        reg = shading.evaluate(program, light_path=(flags, 1.0, 1, 0, 0, 0, 0))
+        assert tuple(reg[program.out:program.out + 3]) == pytest.approx(expected)
+        fac = spec.kwargs["fac_program"]
+        reg = shading.evaluate(fac, light_path=(flags, 1.0, 1, 0, 0, 0, 0))
+        assert reg[fac.out] == float(flags & shading.RAY_CAMERA != 0)
+    viewed = _light_path_mix("ShaderNodeBsdfDiffuse", "Is Camera Ray", {"Strength": 2.0})
+    fresnel = viewed.node_tree.nodes.new("ShaderNodeFresnel")
+    mix = next(n for n in viewed.node_tree.nodes if n.bl_idname == "ShaderNodeMixShader")
+    viewed.node_tree.links.new(fresnel.outputs[0], mix.inputs["Fac"])
+    spec, warnings = convert(viewed)
+    assert "emission_program" not in spec.kwargs
+    assert any("mixed by its mean" in w for w in warnings), warnings
+
+
+@pytest.mark.parametrize("output", ["Ray Length", "Ray Depth", "Diffuse Depth", "Glossy Depth",
+                                    "Transparent Depth", "Transmission Depth", "Portal Depth",
+                                    "Is Singular Ray", "Is Volume Scatter Ray"])
+def test_light_path_outputs_read_the_path_state(fresh, output):
+    """Each Light Path output reads its own register of the path state (Portal Depth: 0,
+    no portals)."""
+    from engine import shading
+    mat, node = node_material("Depths", "ShaderNodeBsdfDiffuse")
+    path = mat.node_tree.nodes.new("ShaderNodeLightPath")
+    mat.node_tree.links.new(path.outputs[output], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    state = (shading.RAY_SINGULAR | shading.RAY_VOLUME_SCATTER, 2.5, 3, 4, 5, 6, 7)
+    value = _program_at_state(spec.kwargs["colour_program"], state)
+    expected = {"Ray Length": 2.5, "Ray Depth": 3, "Diffuse Depth": 4, "Glossy Depth": 5,
+                "Transparent Depth": 6, "Transmission Depth": 7, "Portal Depth": 0,
+                "Is Singular Ray": 1, "Is Volume Scatter Ray": 1}[output]
+    assert value == pytest.approx(expected)
+
+
+def _program_at_state(program, state):
+    from engine import shading
+    return shading.evaluate(program, light_path=state)[program.out]

@@ -467,6 +467,44 @@ def _wavelength_5nm_longer():
 
 
 @contextmanager
+def _light_path_read(change):
+    """Each Light Path output as `change(compiler, name, register)` makes it from the
+    correct register."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeLightPath"]
+
+    def changed(c, node, out):
+        reg, kind = compile_node(c, node, out)
+        return change(c, out.name, reg), kind
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeLightPath", changed)
+        yield
+
+
+def _shadow_rays_unseen(c, name, reg):
+    """Is Shadow Ray never 1 (shadow rays evaluated as the path's own ray)."""
+    return c.program.const([0.0]) if name == "Is Shadow Ray" else reg
+
+
+def _glossy_rays_as_diffuse(c, name, reg):
+    """Is Glossy Ray reading the Is Diffuse Ray flag."""
+    if name != "Is Glossy Ray":
+        return reg
+    sh = c.sh
+    return c.program.emit(sh.OP_LIGHT_PATH, 1, d=sh.LIGHT_PATH_OUTPUTS.index("Is Diffuse Ray"))
+
+
+def _ray_depth_one_less(c, name, reg):
+    """Ray Depth counted from -1 (the camera ray's hit at depth -1)."""
+    if name != "Ray Depth":
+        return reg
+    sh, p = c.sh, c.program
+    return p.emit(sh.OP_MATH, 1, a=reg, b=p.const([-1.0]), c=reg, d=sh.MATHS.index("ADD"))
+
+
+@contextmanager
 def _normal_node_unnormalised():
     """The Normal node's direction used as it is set, not normalised."""
     from addon import shader_nodes
@@ -1026,6 +1064,14 @@ INJECTIONS = {
     "blackbody_in_celsius": ("blackbody_and_normal", None, _blackbody_in_celsius),
     "normal_node_unnormalised": ("blackbody_and_normal", None, _normal_node_unnormalised),
     "wavelength_5nm_longer": ("wavelength", None, _wavelength_5nm_longer),
+    # Light Path: the shadow rays' flag never set; glossy rays read as diffuse ones; the
+    # depth one less.
+    "light_path_shadow_rays_unseen": ("light_path", None,
+                                      lambda: _light_path_read(_shadow_rays_unseen)),
+    "light_path_glossy_as_diffuse": ("light_path", None,
+                                     lambda: _light_path_read(_glossy_rays_as_diffuse)),
+    "light_path_depth_one_less": ("light_path", None,
+                                  lambda: _light_path_read(_ray_depth_one_less)),
     # Attribute: a colour's Alpha read as 1; Fac as the mean of the vector (a 2D
     # attribute's Fac is its x in Cycles).
     "attribute_alpha_as_one": ("attributes", None,

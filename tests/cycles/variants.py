@@ -2167,6 +2167,61 @@ def translucency():
             (0.45, -0.1, 0.3), 0.3, "Foliage")
 
 
+def _light_path_colour(mat):
+    """`mat`'s Diffuse Color made of its ray's Light Path outputs: red, 0.3 x Ray Length
+    for camera rays (0 for others); green, Is Glossy Ray (seen in a mirror or through
+    glass); blue, 0.35 x Ray Depth; each clamped to [0, 1], plus 0.1 grey."""
+    tree = mat.node_tree
+    path = tree.nodes.new("ShaderNodeLightPath")
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    combine = tree.nodes.new("ShaderNodeCombineColor")
+
+    def math(operation, a, b):
+        node = tree.nodes.new("ShaderNodeMath")
+        node.operation, node.use_clamp = operation, True
+        for sock, value in zip(node.inputs, (a, b)):
+            if isinstance(value, float):
+                sock.default_value = value
+            else:
+                tree.links.new(value, sock)
+        return node.outputs[0]
+
+    length = math("MULTIPLY", path.outputs["Ray Length"], 0.3)
+    channels = (math("MULTIPLY", length, path.outputs["Is Camera Ray"]),
+                path.outputs["Is Glossy Ray"], math("MULTIPLY", path.outputs["Ray Depth"], 0.35))
+    for channel, sock in zip(channels, combine.inputs):
+        tree.links.new(math("ADD", channel, 0.1), sock)
+    tree.links.new(combine.outputs[0], diffuse.inputs["Color"])
+    return mat
+
+
+def light_path():
+    """The Light Path node (issue 14, point 1) as scenes use it: an orange emitter the
+    camera sees through (a Mix Shader of Emission and Transparent by Is Camera Ray) lighting
+    the box from the front left; a glass ball whose shadow rays pass (Is Shadow Ray mixes
+    in a Transparent BSDF: the classic light-shadow trick); a mirror ball; and a cube
+    whose colour is made of Is Camera Ray, Ray Length, Is Glossy Ray and Ray Depth, seen
+    directly, in the mirror and through the glass."""
+    _box()
+    col = bpy.context.scene.collection
+    hidden = _view_factor(_mix_of("Hidden", "ShaderNodeMixShader",
+                                  ("ShaderNodeEmission", {"Color": (1.0, 0.5, 0.2, 1.0),
+                                                          "Strength": 6.0}),
+                                  ("ShaderNodeBsdfTransparent", {})),
+                          "ShaderNodeLightPath", "Is Camera Ray")
+    bs.quad("Hidden", [(-0.9, -0.4, 0.45), (-0.45, -0.4, 0.45), (-0.45, -0.4, 0.9),
+                       (-0.9, -0.4, 0.9)], hidden, col)
+    glass = _view_factor(_mix_of("ShadowlessGlass", "ShaderNodeMixShader",
+                                 ("ShaderNodeBsdfGlass", {"IOR": 1.5, "Roughness": 0.0}),
+                                 ("ShaderNodeBsdfTransparent", {})),
+                         "ShaderNodeLightPath", "Is Shadow Ray")
+    _sphere(glass, (-0.4, 0.25, 0.3), 0.3, "Glass")
+    _sphere(bs.material("Mirror", "ShaderNodeBsdfGlossy", Roughness=0.0), (0.5, 0.4, 0.3), 0.3,
+            "Mirror")
+    _cube("Paths", (0.25, -0.35, 0.15), (0.3, 0.3, 0.3),
+          _light_path_colour(bs.diffuse("PathColour", (0.5, 0.5, 0.5))))
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -2819,6 +2874,8 @@ _add(Variant("attributes", attributes, resolution=(224, 64), max_bounces=0, samp
 _add(Variant("wavelength", wavelength, resolution=(128, 32), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
+_add(Variant("light_path", light_path, resolution=(96, 72), max_bounces=8, samples=1024,
+             cycles_samples=2048))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
              cycles_samples=1024))
 _add(Variant("refraction", refraction, max_bounces=8, samples=2048, cycles_samples=4096))
