@@ -17,7 +17,7 @@ Fallbacks:
     emission of Volume Absorption, Volume Scatter, Principled Volume, Volume
     Coefficients and Emission, added and mixed); other volume shaders warned, ignored.
   * Displacement linked beside a Surface: ignored, warned.
-  * Diffuse BSDF with roughness > 0 (Oren-Nayar): Lambert.
+  * Diffuse BSDF: Lambert, or Oren-Nayar (Cycles' improved model) at Roughness > 0.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
   * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
     and a Lambert base under a GGX dielectric layer (the rest), mixed as Cycles mixes them
@@ -26,7 +26,8 @@ Fallbacks:
     and a Sheen Weight > 0 (or textured) Cycles' microfiber sheen over that.
     Specular Tint bends the metal's F82 Fresnel and scales the dielectric and glass
     Fresnel's F0 (Cycles' generalized Schlick). Inputs Specula does not render
-    (Subsurface, Anisotropic, Thin Film, Diffuse Roughness) warn when used.
+    (Subsurface, Anisotropic, Thin Film) warn when used; Diffuse Roughness makes the base
+    Oren-Nayar.
   * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
@@ -65,7 +66,6 @@ PRINCIPLED_IGNORED = (
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
     ("Anisotropic", 0.0, "rendered isotropic"),
     ("Thin Film Thickness", 0.0, "rendered without thin film"),
-    ("Diffuse Roughness", 0.0, "rendered Lambert"),
 )
 # Material Output inputs beside Surface that Specula ignores, with what that means.
 OUTPUT_IGNORED = (("Displacement", "displacement is not applied"),
@@ -145,7 +145,8 @@ def _is_medium(medium):
 # The MaterialSpec keywords holding shader programs (a mix's factor among them): a material
 # with one reads UV maps.
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
-                "roughness_program", "height_program", "tint_program")
+                "roughness_program", "height_program", "tint_program",
+                "diffuse_roughness_program")
 
 
 def default_material():
@@ -877,12 +878,12 @@ class _Reader:
         if kind in ("ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlass",
                     "ShaderNodeBsdfRefraction") or kind in GLOSSY_NODES:
             self.normal(node)
-        if kind == "ShaderNodeBsdfDiffuse":
-            if self.unit(node, "Roughness") > ROUGHNESS_EPSILON:
-                self.warn(f"node '{node.name}' roughness > 0 (Oren-Nayar) is not supported; "
-                          f"rendered as Lambert (roughness 0)")
+        if kind == "ShaderNodeBsdfDiffuse":  # Oren-Nayar where its Roughness is above 0
             colour, program = self.textured_colour(node, "Color")
-            return MaterialSpec("diffuse", name, {"colour": colour, **_with(program)})
+            roughness, rough_program = self.textured_unit(node, "Roughness", 0.0)
+            return MaterialSpec("diffuse", name, {"colour": colour, **_with(program),
+                                                  "roughness": roughness,
+                                                  **_with(rough_program, "roughness_program")})
         if kind in GLOSSY_NODES:
             # Rough Glossy is GGX; at Cycles' delta threshold it is a perfect mirror.
             colour, program = self.textured_colour(node, "Color")
@@ -1180,10 +1181,15 @@ class _Reader:
                       f"dielectric layer; rendered as Multiscatter GGX")
         level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
             if "Specular IOR Level" in node.inputs else 0.5
+        diffuse = {}
+        if "Diffuse Roughness" in node.inputs:  # (since 4.3) Oren-Nayar on the base
+            sigma, sigma_program = self.textured_unit(node, "Diffuse Roughness", 0.0)
+            diffuse = {"diffuse_roughness": sigma,
+                       **_with(sigma_program, "diffuse_roughness_program")}
         return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), **self.roughness(node),
             "ior": self.ior(node), "specular_ior_level": level,
-            **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)})})
+            **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)}), **diffuse})
 
 
 def world_volume(world, image_cache=None):

@@ -27,7 +27,7 @@ from .fresnel import fresnel_dielectric, glass_fresnel, tinted_fresnel
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import (build_frame, concentric_disk, cosine_hemisphere, guided_interp,
                        interp_guide)
-from .scene import GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL
+from .scene import DIFFUSE, GLOSSY, PRINCIPLED, ROUGH_GLASS, ROUGH_METAL, SHEEN, TRANSLUCENT
 from .sheen_table import A as _SHEEN_A, ALBEDO as _SHEEN_ALBEDO, B as _SHEEN_B
 
 DELTA_PDF = np.inf
@@ -124,7 +124,64 @@ def sample_lambert(sx, sy, sz, nx, ny, nz, ua, ub):
     return wx, wy, wz, lz / np.pi, wx * nx + wy * ny + wz * nz > 0.0 and lz > 0.0
 
 
+# Cycles' Diffuse BSDF with Roughness (bsdf_oren_nayar.h): Fujii's improved Oren-Nayar
+# (https://mimosa-pudica.net/improved-oren-nayar.html) with the OpenPBR specification's
+# energy-preserving multiple-scattering term, sampled as Lambert. At roughness below
+# OREN_NAYAR_MIN Cycles sets up Lambert itself.
+OREN_NAYAR_MIN = 1e-5
+
+
+@njit(**JIT)
+def oren_nayar_g(cos):
+    """Fujii's G(theta) for a direction of cosine `cos` (bsdf_oren_nayar_G): the
+    directional albedo's roughness term; a Taylor expansion at grazing angles."""
+    if cos < 1e-6:
+        return (0.5 * np.pi - 2.0 / 3.0) - cos
+    sin = math.sqrt(max(1.0 - cos * cos, 0.0))
+    theta = math.acos(min(cos, 1.0))
+    return sin * (theta - 2.0 / 3.0 - sin * cos) + 2.0 / 3.0 * (sin / cos) * (1.0 - sin ** 3)
+
+
+@njit(**JIT)
+def oren_nayar_albedo_term(albedo, e_avg):
+    """The multiple-scattering term's colour factor of one channel of albedo in [0, 1]."""
+    a = min(max(albedo, 0.0), 1.0)
+    if not e_avg < 1.0:  # roughness 0: Lambert, nothing lost
+        return 0.0
+    return a * a * (e_avg / (1.0 - e_avg)) / (np.pi * (1.0 - a * (1.0 - e_avg)))
+
+
+@njit(**JIT)
+def oren_nayar_ratio(wox, woy, woz, wx, wy, wz, sx, sy, sz, roughness, c0, c1, c2):
+    """Cycles' Oren-Nayar of `roughness` (clamped to [0, 1]) and colour c over Lambert's
+    f * cos (3 values): f * cos is colour x nl x (A + B t + M(colour) (1 - E(nl))), M the
+    multiple scattering of colour's albedo times 1 - E(nv), about the shading normal s for
+    the view wo and light w; Lambert's is colour x nl / pi."""
+    sigma = min(max(roughness, 0.0), 1.0)
+    a = 1.0 / (np.pi + sigma * (0.5 * np.pi - 2.0 / 3.0))
+    b = sigma * a
+    nl = max(wx * sx + wy * sy + wz * sz, 0.0)
+    nv = max(wox * sx + woy * sy + woz * sz, 0.0)
+    t = wx * wox + wy * woy + wz * woz - nl * nv
+    if t > 0.0:
+        t /= max(nl, nv) + 1.1754943508222875e-38  # FLT_MIN
+    single = a + b * t
+    e_avg = a * np.pi + (2.0 * np.pi - 5.6) / 3.0 * b
+    lost = (1.0 - (a * np.pi + b * oren_nayar_g(nl))) * (1.0 - (a * np.pi + b * oren_nayar_g(nv)))
+    return (np.pi * (single + oren_nayar_albedo_term(c0, e_avg) * lost),
+            np.pi * (single + oren_nayar_albedo_term(c1, e_avg) * lost),
+            np.pi * (single + oren_nayar_albedo_term(c2, e_avg) * lost))
+
+
 # ----------------------------------------------------------------- specular
+@njit(**INLINE)
+def is_delta_kind(k):
+    """Whether material kind k reflects or refracts in delta lobes only (a mirror, a smooth
+    metal or glass: no light sampling there), or is no BSDF at all."""
+    return not (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY or k == ROUGH_GLASS
+                or k == ROUGH_METAL or k == TRANSLUCENT or k == SHEEN)
+
+
 @njit(**JIT)
 def reflect(wox, woy, woz, nx, ny, nz):
     """Mirror wo about n: 2 (n . wo) n - wo, and n . wo."""
@@ -444,22 +501,24 @@ ROUGHNESS_WARP = 1.5
 # Tint's Fresnel needs (tinted_layer_at).
 LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_guide alpha fms "
                                         "missing albedo e_avg fms_back missing_back "
-                                        "e_avg_back spread fss")
+                                        "e_avg_back spread fss diffuse_roughness")
 
 # One rough vertex's lobe: the diffuse weight dw and specular (reflection) tint (3 each),
 # alpha, eta, fresnel_on, the compensation per channel at mu_o (3), the chance of the
 # specular lobe, the transmission tint (3; rough glass, else 0), the F82 model's b
 # (3; rough metal, fresnel_f82, else 0) and the Principled BSDF's Specular Tint on a
-# dielectric Fresnel (3; fresnel.tinted_fresnel; 1 elsewhere).
+# dielectric Fresnel (3; fresnel.tinted_fresnel; 1 elsewhere); the Principled base's
+# Oren-Nayar roughness (0: Lambert) and colour, its albedo (3).
 Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
-                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2 st0 st1 st2")
+                            "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2 st0 st1 st2 "
+                            "sigma base0 base1 base2", defaults=(0.0, 0.0, 0.0, 0.0))
 
 
 @njit(**INLINE)
 def no_layer():
     """The Layer of a vertex without a rough lobe."""
     return Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+                 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
 
 
 def layer_tables(materials, used) -> LayerTables:
@@ -492,9 +551,11 @@ def layer_tables(materials, used) -> LayerTables:
     mu = np.linspace(1e-3, 1.0, ALBEDO_TABLE_SIZE)
     alpha, fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back, spread = \
         (np.array(column, np.float64) for column in zip(*rows))
+    diffuse_roughness = materials.diffuse_roughness if materials.diffuse_roughness is not None \
+        else np.zeros(k)
     return LayerTables(base, tint, fresnel, first, count, mu, interp_guide(mu, 256), alpha,
                        fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back,
-                       spread, fss)
+                       spread, fss, np.ascontiguousarray(diffuse_roughness, np.float64))
 
 
 def _lobe_row(materials, j, roughness, rough=True) -> tuple:
@@ -595,14 +656,16 @@ def fms_at(fms, r0, r1, w):
 
 
 @njit(**INLINE)
-def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
+def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0):
     """The layered lobe of rough material `mat` at view cosine mu (to its specular normal)
     from its LayerTables lt; with `textured`, its colour at this point is c (the Principled
     base, or the Glossy tint and, through Fss, its Fms) instead of the table's; roughness
     is the hit's where it is textured (lobe_rows); st (3) the Principled BSDF's Specular
-    Tint here (tinted_layer_at)."""
+    Tint here (tinted_layer_at); sigma its Diffuse Roughness here (< 0: the table's)."""
+    if sigma < 0.0:
+        sigma = lt.diffuse_roughness[mat]
     if lt.fresnel[mat] and (st[0] != 1.0 or st[1] != 1.0 or st[2] != 1.0):
-        return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st)
+        return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma)
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
     albedo = table_at(mu, lt, lt.albedo, r0, r1, w)
@@ -623,11 +686,11 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, alpha, eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, sigma, b0, b1, b2)
 
 
 @njit(**JIT)
-def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
+def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma):
     """layer_at for a Principled layer under a Specular Tint st (3): Cycles' generalized
     Schlick Fresnel from F0 x st to 1 (fresnel.tinted_fresnel). Per channel, its estimated
     albedo is F0 st + (1 - F0 st) s(mu), s the real Fresnel's mean place between F0 and 1
@@ -652,7 +715,7 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st):
     sd = (dw0 + dw1 + dw2) / 3.0
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, 1.0, 1.0, 1.0, alpha, eta, True, c0, c1, c2, p_spec,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2])
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2], sigma, b0, b1, b2)
 
 
 @njit(**INLINE)
@@ -698,7 +761,7 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness, edge):
                       multiscatter_fresnel(f82_fss(c2, b2), e))
     return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, alpha, 1.0, False,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0)
+                 0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit(**INLINE)
@@ -727,7 +790,8 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
                       multiscatter_fresnel(max(t_tint[2], 0.0), e))
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0, st[0], st[1], st[2])
+                 t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0, st[0], st[1], st[2], 0.0,
+                 0.0, 0.0, 0.0)
 
 
 @njit(**INLINE)
@@ -813,9 +877,14 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
         if not sampled:
             shadowing = bump_shadowing(bx, by, bz, sx, sy, sz, wix, wiy, wiz, False, True)
             spec0, spec1, spec2 = spec0 * shadowing, spec1 * shadowing, spec2 * shadowing
-    return (lobe.dw0 * c + lobe.tint0 * (spec0 * lobe.comp0),
-            lobe.dw1 * c + lobe.tint1 * (spec1 * lobe.comp1),
-            lobe.dw2 * c + lobe.tint2 * (spec2 * lobe.comp2),
+    c0 = c1 = c2 = c
+    if lobe.sigma >= OREN_NAYAR_MIN and c > 0.0:  # the Principled's Diffuse Roughness
+        k0, k1, k2 = oren_nayar_ratio(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, lobe.sigma,
+                                      lobe.base0, lobe.base1, lobe.base2)
+        c0, c1, c2 = c * k0, c * k1, c * k2
+    return (lobe.dw0 * c0 + lobe.tint0 * (spec0 * lobe.comp0),
+            lobe.dw1 * c1 + lobe.tint1 * (spec1 * lobe.comp1),
+            lobe.dw2 * c2 + lobe.tint2 * (spec2 * lobe.comp2),
             lobe.p_spec * pdf_s + (1.0 - lobe.p_spec) * cos_d / np.pi)
 
 

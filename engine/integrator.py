@@ -81,7 +81,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
-                  "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "PROFILE", "DEBUG")
+                  "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "HAS_OREN_NAYAR", "PROFILE",
+                  "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -99,6 +100,7 @@ HAS_TRANSPARENCY = True  # transparent surfaces: per-path bounce counts, shadow 
 HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen layers)
 HAS_LIGHT_PATH = True  # programs read the path's state (the Light Path node): paths keep it
+HAS_OREN_NAYAR = True  # Diffuse BSDFs with roughness (bsdf.oren_nayar_ratio)
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -675,8 +677,12 @@ def rough_lobe(x, k, c, sc, paths):
         roughness = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
                                          paths.svm, roughness)
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
+        sigma = -1.0  # the table's Diffuse Roughness
+        if HAS_OREN_NAYAR and HAS_TEXTURES:
+            sigma = shading.diffuse_roughness_at(x.mat, x.f, x.u, x.v, mt.programs,
+                                                 sc.geometry.uv, paths.svm, sigma)
         return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
-                             roughness, specular_tint_at(x, sc, paths))
+                             roughness, specular_tint_at(x, sc, paths), sigma)
     if HAS_ROUGH_METAL and k == ROUGH_METAL:  # (a varying tint needs its own Fss too)
         return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured or tinted, c[0], c[1],
                                    c[2], roughness, metal_edge_at(x, sc, paths))
@@ -905,9 +911,12 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
     ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, LIGHT_POINT))
     if HAS_LIGHT_PATH:  # a light's emission: no flags, one bounce on (PATH_RAY_EMISSION)
         bounce = paths.bounce[i] if HAS_TRANSPARENCY else depth
-        light_path_registers(i, 0, 0.0, np.float64(bounce + 1), paths)
+        length = paths.svm[shading.LIGHT_PATH + 8]  # the surface's, put back below
+        light_path_registers(i, 0, 0.0, bounce + 1, paths)
     wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
                                                                       paths)
+    if HAS_LIGHT_PATH:  # the surface's own state again, for its BSDF's programs
+        light_path_registers(i, paths.flags[i], length, bounce, paths)
     g0 = g1 = g2 = pdf_b = 0.0
     k = sc.materials.kind[x.mat]
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
@@ -933,6 +942,9 @@ def sample_light(i, row, depth, x, lobe, c, sc, paths, shadow, n_shadow, rev_sam
         pdf_b = bsdf.eval_lambert(wx, wy, wz, x.sx, x.sy, x.sz)
         shadowing = pdf_b * diffuse_shadowing(x, 1.0, wx, wy, wz, True)
         g0, g1, g2 = c[0] * shadowing, c[1] * shadowing, c[2] * shadowing
+        if HAS_OREN_NAYAR and k == DIFFUSE:
+            r0, r1, r2 = oren_nayar_at(x, wx, wy, wz, c, sc, paths)
+            g0, g1, g2 = g0 * r0, g1 * r1, g2 * r2
     if HAS_NORMAL_MAPS and (k == ROUGH_GLASS or k == ROUGH_METAL):
         shadowing = bsdf.bump_shadowing(x.bx, x.by, x.bz, x.sx, x.sy, x.sz, wx, wy, wz, False,
                                         True)
@@ -1018,7 +1030,11 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         wx, wy, wz, pdf, ok = bsdf.sample_lambert(x.sx, x.sy, x.sz, x.nx, x.ny, x.nz, ua, ub)
         shadowing = diffuse_shadowing(x, 1.0, wx, wy, wz, False)
-        return wx, wy, wz, c[0] * shadowing, c[1] * shadowing, c[2] * shadowing, pdf, ok
+        k0 = k1 = k2 = shadowing
+        if HAS_OREN_NAYAR:
+            r0, r1, r2 = oren_nayar_at(x, wx, wy, wz, c, sc, paths)
+            k0, k1, k2 = k0 * r0, k1 * r1, k2 * r2
+        return wx, wy, wz, c[0] * k0, c[1] * k1, c[2] * k2, pdf, ok
     if HAS_SHEEN and k == SHEEN:
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(depth, BSDF))
         a, b, albedo = sheen_at(x, sc, paths)
@@ -1053,6 +1069,21 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     if HAS_MIRROR and k == MIRROR:
         return wx, wy, wz, c[0], c[1], c[2], DELTA_PDF, True
     return wx, wy, wz, 0.0, 0.0, 0.0, DELTA_PDF, False
+
+
+def oren_nayar_at(x, wx, wy, wz, c, sc, paths):
+    """A Diffuse BSDF's f * cos toward w over Lambert's at vertex x of colour c (3 values):
+    Oren-Nayar's at its roughness there (its program's where it varies), 1 where that is
+    below Cycles' Lambert threshold."""
+    mt = sc.materials
+    r = mt.roughness[x.mat]
+    if HAS_TEXTURES:
+        r = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv, paths.svm,
+                                 r)
+    if not r >= bsdf.OREN_NAYAR_MIN:
+        return 1.0, 1.0, 1.0
+    return bsdf.oren_nayar_ratio(x.wox, x.woy, x.woz, wx, wy, wz, x.sx, x.sy, x.sz, r, c[0],
+                                 c[1], c[2])
 
 
 def diffuse_shadowing(x, side, wx, wy, wz, evaluated):
@@ -1181,7 +1212,7 @@ def scatter_in_medium(i, out, row, depth, vertex, ts, sc, paths, shadow, n_shado
         u_sel = sample_1d(ps, rev_sample, bounce_dim(vertex, LIGHT_SELECT))
         ua, ub = sample_2d(ps, rev_sample, bounce_dim(vertex, LIGHT_POINT))
         if HAS_LIGHT_PATH:  # as at a surface (sample_light)
-            light_path_registers(i, 0, 0.0, np.float64(depth + 1), paths)
+            light_path_registers(i, 0, 0.0, depth + 1, paths)
         wx, wy, wz, dist, q0, q1, q2, pdf_l, light_scale = sample_emitter(x, u_sel, ua, ub, sc,
                                                                           paths)
         f0, f1, f2, pdf_p = media.eval_phase(paths.media, i, mt, dx, dy, dz, wx, wy, wz)
@@ -1244,8 +1275,8 @@ def light_path_registers(i, flags, length, depth, paths):
     bounce counters."""
     kb = paths.kind_bounces
     crossed = paths.transparent[i] if HAS_TRANSPARENCY else 0
-    shading.set_light_path(paths.svm, flags, length, depth, kb[i, 0], kb[i, 1], crossed,
-                           kb[i, 2])
+    shading.set_light_path(paths.svm, flags, np.float64(length), np.float64(depth), kb[i, 0],
+                           kb[i, 1], crossed, kb[i, 2])
 
 
 def bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths):
@@ -1339,11 +1370,13 @@ def cross_surface(i, out, row, x, k, tfar, transparent_max, sc, paths):
     return k == BOUNDARY, out
 
 
-def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, flags, sc, paths):
-    """Continue path i (at bounce depth, on a surface of kind k) as row `out` of the
-    compacted batch: leave the surface toward the side of the new direction, into embree's
-    buffers, with the path's light-tracing weight state, media and counters (and, for the
-    Light Path node, the bounce's `flags`)."""
+def spawn(i, out, row, depth, vertex, x, k, lobe, wx, wy, wz, t0, t1, t2, pdf, rev_sample, sc,
+          paths):
+    """Continue path i (at bounce depth, sampler vertex `vertex`, on a surface of kind k
+    whose rough lobe is `lobe`) as row `out` of the compacted batch: leave the surface
+    toward the side of the new direction, into embree's buffers, with the path's
+    light-tracing weight state, media and counters (and, for the Light Path node, the
+    bounce's flags)."""
     if HAS_LIGHT_TRACING:
         cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
         paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
@@ -1357,7 +1390,8 @@ def spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, flags, sc, path
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
     if HAS_LIGHT_PATH:
-        count_bounce(i, out, flags, paths)
+        count_bounce(i, out, bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths),
+                     paths)
     side = 1.0 if wx * x.nx + wy * x.ny + wz * x.nz >= 0.0 else -1.0
     eps = side * ray_offset(x.scale)
     paths.o64[out, 0] = x.px + eps * x.nx
@@ -1392,8 +1426,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         f = prim[i]
         depth, vertex, t_hit = path_counts(i, step, tfar[i], paths)
         if HAS_LIGHT_PATH:  # the surface this ray reached sees the path's own state
-            light_path_registers(i, paths.flags[i], np.float64(tfar[i]), np.float64(depth),
-                                 paths)
+            light_path_registers(i, paths.flags[i], tfar[i], depth, paths)
         mis = HAS_LIGHT_SAMPLING and not math.isinf(paths.prev_pdf[i])
         if HAS_LIGHT_HITS or HAS_SUN_DISCS:
             handle_light_hits(i, row, depth, f, tfar[i], sc, paths, mis)
@@ -1426,8 +1459,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             ended, out = cross_surface(i, out, row, x, k, tfar[i], transparent_max, sc, paths)
             if ended:
                 continue
-        # Vertex max_bounces + 1 only adds emission; a pure emitter ends the path.
-        if depth > max_bounces or k == NONE:
+        if depth > max_bounces or k == NONE:  # (vertex max_bounces + 1 only adds emission)
             continue
         alive, t0, t1, t2 = russian_roulette(depth, vertex, paths.throughput[i, 0],
                                              paths.throughput[i, 1], paths.throughput[i, 2],
@@ -1439,14 +1471,9 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         lobe = rough_lobe(x, k, c, sc, paths)
         if PROFILE:
             c_light = _cycles()
-        if HAS_LIGHT_SAMPLING and (k == DIFFUSE or k == PRINCIPLED or k == GLOSSY
-                                   or k == ROUGH_GLASS or k == ROUGH_METAL
-                                   or k == TRANSLUCENT or k == SHEEN):
+        if HAS_LIGHT_SAMPLING and not bsdf.is_delta_kind(k):
             n_shadow = sample_light(i, row, vertex, x, lobe, c, sc, paths, shadow, n_shadow,
                                     rev_sample)
-            if HAS_LIGHT_PATH:  # (the light's emission was evaluated in a context of its own)
-                light_path_registers(i, paths.flags[i], np.float64(tfar[i]),
-                                     np.float64(depth), paths)
         if PROFILE:
             c_bsdf = _cycles()
             profile[1] += c_bsdf - c_light
@@ -1456,10 +1483,8 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
         if DEBUG:
             _debug_mark(paths, row, 7, t0 + wx, t1 + wy, t2 + wz)
         if ok and max(t0, max(t1, t2)) > 0:
-            flags = 0
-            if HAS_LIGHT_PATH:
-                flags = bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths)
-            spawn(i, out, row, depth, x, k, wx, wy, wz, t0, t1, t2, pdf, flags, sc, paths)
+            spawn(i, out, row, depth, vertex, x, k, lobe, wx, wy, wz, t0, t1, t2, pdf,
+                  rev_sample, sc, paths)
             out += 1
         if PROFILE:
             profile[2] += _cycles() - c_bsdf
@@ -1572,7 +1597,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, textured_emitter,
-    shadow_origin, sample_light, sample_bsdf, diffuse_shadowing, sheen_at, caustic_state,
+    shadow_origin, sample_light, sample_bsdf, oren_nayar_at, diffuse_shadowing, sheen_at,
+    caustic_state,
     medium_transmittance, queue_shadow, traverse_medium, spawn_in_medium,
     path_counts, light_path_registers, bounce_flags, count_bounce, write_passes, pass_through,
     cross_surface, spawn)}

@@ -11,6 +11,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .bsdf import OREN_NAYAR_MIN
 from .lights import traces_light_paths
 from .media import SIGMA_S, has_medium
 from .scene import (
@@ -92,6 +93,8 @@ class Plan:
     sheen: bool = False
     # Some shader program reads the path's state (the Light Path node).
     light_path: bool = False
+    # Some Diffuse BSDF or Principled base used has a roughness (Oren-Nayar).
+    oren_nayar: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -131,7 +134,8 @@ class Plan:
             s += ["sample light", "trace shadow rays"
                   + (" (shadow terminator offset)" if self.terminator else "")
                   + (" through transparent surfaces" if self.transparency else "")]
-        kinds = [n for n, f in (("diffuse", self.diffuse), ("principled", self.principled),
+        kinds = [n for n, f in (("diffuse" + (", Oren-Nayar" if self.oren_nayar else ""),
+                                 self.diffuse), ("principled", self.principled),
                                 ("rough glossy", self.glossy), ("mirror", self.mirror),
                                 ("metal", self.metal), ("glass", self.glass),
                                 ("rough glass", self.rough_glass),
@@ -167,6 +171,7 @@ class Plan:
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen, HAS_LIGHT_PATH=self.light_path,
+            HAS_OREN_NAYAR=self.oren_nayar,
             PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -195,6 +200,27 @@ def entered_media(scene: Scene, medium=None) -> list:
             if has_medium(medium[top:top + 1])[0]
             and bool(np.any(np.isin(m.kind[m.reachable([top])],
                                     (GLASS, ROUGH_GLASS, TRANSPARENT, BOUNDARY))))]
+
+
+def _light_path(scene: Scene, used) -> bool:
+    """Whether a program of a material used reads the path's state (Light Path)."""
+    programs = scene.programs
+    return programs is not None and any(
+        (programs.code[first:end, 0] == OP_LIGHT_PATH).any()
+        for slot in SLOTS for first, end, _ in getattr(programs, slot)[used] if first >= 0)
+
+
+def _oren_nayar(scene: Scene, used) -> bool:
+    """Whether a Diffuse BSDF or a Principled base used is rough (Oren-Nayar), or may be
+    (a roughness program)."""
+    m, programs = scene.materials, scene.programs
+    diffuse, principled = used[m.kind[used] == DIFFUSE], used[m.kind[used] == PRINCIPLED]
+    sigma = m.diffuse_roughness if m.diffuse_roughness is not None else np.zeros(len(m.kind))
+    textured = programs is not None and bool(
+        np.any(programs.roughness[diffuse, 0] >= 0)
+        or np.any(programs.diffuse_roughness[principled, 0] >= 0))
+    return textured or bool(np.any(m.roughness[diffuse] >= OREN_NAYAR_MIN)
+                            or np.any(sigma[principled] >= OREN_NAYAR_MIN))
 
 
 def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
@@ -227,10 +253,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     volumes = bool(entered)
     scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
-    programs = scene.programs
-    light_path = programs is not None and any(
-        (programs.code[first:end, 0] == OP_LIGHT_PATH).any()
-        for slot in SLOTS for first, end, _ in getattr(programs, slot)[used] if first >= 0)
+    light_path, oren_nayar = _light_path(scene, used), _oren_nayar(scene, used)
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
@@ -251,6 +274,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         transparency=transparency,
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
         translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds, light_path=light_path,
+        oren_nayar=oren_nayar,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
@@ -258,13 +282,14 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         # a normal map's shadowing term is not (light paths are not weighted by it), nor
         # are paths through media (light paths carry no volume stack), mixed shaders
         # (light paths do not choose among them), transparent and translucent surfaces
-        # (nor cross them) or programs reading the path's state (light paths have none).
+        # (nor cross them), programs reading the path's state (light paths have none) or
+        # Oren-Nayar diffuse (light paths connect to the camera from Lambertian vertices).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
                            and not volumes and not mixes and not transparency
                            and TRANSLUCENT not in kinds and SHEEN not in kinds
-                           and not light_path
+                           and not light_path and not oren_nayar
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

@@ -37,9 +37,9 @@ DELTA_IOR = 1e-4
 # The kinds whose colour may come from a shader program (Material.colour_program).
 TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_metal", "glass",
                   "rough_glass", "translucent", "sheen")
-# The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes
-# and the sheen.
-ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass", "sheen")
+# The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes,
+# the sheen and Oren-Nayar diffuse.
+ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass", "sheen", "diffuse")
 # The kinds with a Specular Tint that may vary (Material.tint_program); a coat's mix has its
 # Coat Tint there.
 TINTED_KINDS = ("principled", "metal", "rough_metal", "glass", "rough_glass")
@@ -227,6 +227,10 @@ class Material:
     # A Program whose result replaces the Specular Tint (principled, glass kinds:
     # `specular_tint`; metal kinds: `reflection_tint`, at most 1) or a coat's `coat_tint`.
     tint_program: Program | None = field(default=None, compare=False)
+    # The Principled BSDF's Diffuse Roughness: its base is Oren-Nayar of this roughness
+    # (bsdf.oren_nayar_ratio, Lambert at 0), which may vary (a program).
+    diffuse_roughness: float = 0.0
+    diffuse_roughness_program: Program | None = field(default=None, compare=False)
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
     sheen_layer: bool = False  # mix: Cycles' Principled sheen over components[0] (see above)
@@ -291,9 +295,12 @@ class Material:
 
     @classmethod
     def diffuse(cls, name, colour, emission=(0, 0, 0), colour_program=None,
-                emission_program=None):
+                emission_program=None, roughness=0.0, roughness_program=None):
+        """Cycles' Diffuse BSDF: Lambert, or at Roughness > 0 Oren-Nayar
+        (bsdf.oren_nayar_ratio); the roughness may vary (a program)."""
         return cls(name, "diffuse", tuple(colour), emission=tuple(emission),
-                   colour_program=colour_program, emission_program=emission_program)
+                   colour_program=colour_program, emission_program=emission_program,
+                   roughness=float(roughness), roughness_program=roughness_program)
 
     @classmethod
     def mirror(cls, name, colour=(1, 1, 1), emission=(0, 0, 0), colour_program=None,
@@ -357,8 +364,10 @@ class Material:
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
                    emission_program=None, roughness_program=None, multiscatter=True,
-                   specular_tint=(1.0, 1.0, 1.0), tint_program=None):
-        """Principled BSDF (metallic 0, transmission 0): Lambert base under a GGX dielectric
+                   specular_tint=(1.0, 1.0, 1.0), tint_program=None, diffuse_roughness=0.0,
+                   diffuse_roughness_program=None):
+        """Principled BSDF (metallic 0, transmission 0): a Lambert base (Oren-Nayar at a
+        Diffuse Roughness > 0, clamped to 1 as Cycles does) under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
         the Specular Tint scales F0 too (tinted_fresnel)."""
         ior = float(ior)
@@ -371,7 +380,9 @@ class Material:
                    roughness=float(roughness), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
                    multiscatter=bool(multiscatter), specular_tint=tuple(specular_tint),
-                   tint_program=tint_program)
+                   tint_program=tint_program,
+                   diffuse_roughness=min(max(float(diffuse_roughness), 0.0), 1.0),
+                   diffuse_roughness_program=diffuse_roughness_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -553,6 +564,8 @@ class Materials:
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
     height_programs: list | None = None  # per row a Bump node's height Program or None
     tint_programs: list | None = None  # per row a Specular or Coat Tint Program or None
+    diffuse_roughness: np.ndarray | None = None  # (k,), Material.diffuse_roughness
+    diffuse_roughness_programs: list | None = None  # per row its Program or None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -653,12 +666,18 @@ class Materials:
                     not m.coat_ior > 0:
                 raise ValueError(f"material '{m.name}': a {m.kind} material has no specular or "
                                  f"coat tint to vary")
+        for m in materials:
+            if m.diffuse_roughness_program is not None and m.kind != "principled":
+                raise ValueError(f"material '{m.name}': only a Principled BSDF has a Diffuse "
+                                 f"Roughness to vary")
         lists = (programs, emission_programs, normal_programs,
                  [m.fac_program for m in materials], [m.roughness_program for m in materials],
-                 [m.height_program for m in materials], [m.tint_program for m in materials])
+                 [m.height_program for m in materials], [m.tint_program for m in materials],
+                 [m.diffuse_roughness_program for m in materials])
         textured = any(p is not None for progs in lists for p in progs)
         (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
-         height_programs, tint_programs) = lists if textured else (None,) * len(lists)
+         height_programs, tint_programs, diffuse_roughness_programs) = \
+            lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -667,6 +686,8 @@ class Materials:
                    np.array([float(m.normal_strength) for m in materials]), *medium,
                    fac_programs=fac_programs, roughness_programs=roughness_programs,
                    height_programs=height_programs, tint_programs=tint_programs,
+                   diffuse_roughness_programs=diffuse_roughness_programs,
+                   diffuse_roughness=np.array([float(m.diffuse_roughness) for m in materials]),
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
@@ -686,10 +707,11 @@ class Materials:
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness, height, tint), each a list with one Program or None per row."""
+        roughness, height, tint, diffuse roughness), each a list with one Program or None
+        per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
                 self.fac_programs, self.roughness_programs, self.height_programs,
-                self.tint_programs)
+                self.tint_programs, self.diffuse_roughness_programs)
 
     def __len__(self):
         return len(self.kind)
@@ -1217,9 +1239,10 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        colour, emission, normal, fac, roughness, height, tint = materials.program_lists()
+        colour, emission, normal, fac, roughness, height, tint, diffuse_roughness = \
+            materials.program_lists()
         return uv, pack(colour, emission, names.index, normal, fac, roughness, height,
-                        tint), names
+                        tint, diffuse_roughness), names
 
 
 def _corner_coordinates(m, t) -> np.ndarray:

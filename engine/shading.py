@@ -322,22 +322,26 @@ class Program:
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
 #   colour, emission, normal, fac, roughness, height, tint (k, 3) int64 per material: that
 #   input's program as first instruction (-1: none), end, result register. tint: the
-#   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint.
-SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint")
+#   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint; diffuse_roughness:
+#   the Principled BSDF's Diffuse Roughness.
+SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint",
+         "diffuse_roughness")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
 def pack(colour_programs: list, emission_programs: list | None, uv_index,
          normal_programs: list | None = None, fac_programs: list | None = None,
          roughness_programs: list | None = None, height_programs: list | None = None,
-         tint_programs: list | None = None) -> ProgramTable:
+         tint_programs: list | None = None,
+         diffuse_roughness_programs: list | None = None) -> ProgramTable:
     """Pack the materials' colour, emission, normal-map, mix-factor, roughness, bump
-    height and tint programs (one per material, or None) into a ProgramTable; each
-    program's UV map names become scene-wide map indices through `uv_index(name)`."""
+    height, tint and diffuse roughness programs (one per material, or None) into a
+    ProgramTable; each program's UV map names become scene-wide map indices through
+    `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
                                        fac_programs, roughness_programs, height_programs,
-                                       tint_programs)]
+                                       tint_programs, diffuse_roughness_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -1363,6 +1367,14 @@ def roughness_at(mat, f, u, v, pt, uv, reg, r):
     """Material mat's roughness at the hit: its roughness program's first channel in
     [0, 1] (Cycles clamps it), or r where the roughness is constant."""
     x, _, _ = result_at(pt.roughness, mat, f, u, v, pt, uv, reg, r, r, r)
+    return min(x, 1.0)
+
+
+@njit(**INLINE)
+def diffuse_roughness_at(mat, f, u, v, pt, uv, reg, r):
+    """Material mat's Diffuse Roughness at the hit: its program's first channel in [0, 1],
+    or r where it is constant."""
+    x, _, _ = result_at(pt.diffuse_roughness, mat, f, u, v, pt, uv, reg, r, r, r)
     return min(x, 1.0)
 
 

@@ -17,7 +17,9 @@ def convert(mat):
 
 @pytest.mark.parametrize("shader, inputs, ctor, kwargs", [
     ("ShaderNodeBsdfDiffuse", {"Color": (0.6, 0.2, 0.2, 1), "Roughness": 0.0}, "diffuse",
-     {"colour": (0.6, 0.2, 0.2)}),
+     {"colour": (0.6, 0.2, 0.2), "roughness": 0.0}),
+    ("ShaderNodeBsdfDiffuse", {"Color": (0.6, 0.2, 0.2, 1), "Roughness": 0.7}, "diffuse",
+     {"colour": (0.6, 0.2, 0.2), "roughness": 0.7}),
     ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.0}, "glossy",
      {"colour": (1.0, 0.8, 0.4), "roughness": 0.0, "multiscatter": True}),
     ("ShaderNodeBsdfGlossy", {"Color": (1.0, 0.8, 0.4, 1), "Roughness": 0.3}, "glossy",
@@ -29,7 +31,11 @@ def convert(mat):
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
                                   "IOR": 1.45}, "principled",
      {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.45,
-      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0)}),
+      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0), "diffuse_roughness": 0.0}),
+    ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
+                                  "Diffuse Roughness": 0.8}, "principled",
+     {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.5,
+      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0), "diffuse_roughness": 0.8}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.9, 0.6, 0.2, 1), "Metallic": 1.0,
                                   "Roughness": 0.0}, "metal",
      {"base_colour": (0.9, 0.6, 0.2), "roughness": 0.0, "multiscatter": True,
@@ -41,7 +47,7 @@ def convert(mat):
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.1, 0.1, 0.1, 1), "Emission Color":
                                   (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "principled",
      {"base_colour": (0.1, 0.1, 0.1), "roughness": 0.5, "ior": 1.5, "specular_ior_level": 0.5,
-      "specular_tint": (1.0, 1.0, 1.0), "emission": (4.0, 2.0, 0.0)}),
+      "specular_tint": (1.0, 1.0, 1.0), "emission": (4.0, 2.0, 0.0), "diffuse_roughness": 0.0}),
 ])
 def test_supported_nodes(fresh, shader, inputs, ctor, kwargs):
     mat, _ = node_material("M", shader, **inputs)

@@ -67,6 +67,9 @@ TINY_ROUGHNESS = 0.02
 MATERIAL_KINDS = ("diffuse", "glossy", "glass", "principled", "metal", "principled_glass",
                   "emission")
 SHAPES = ("sphere", "cube", "monkey", "slab")
+# The Light Path outputs a mix's factor may be (0 or 1 per ray).
+LIGHT_PATH_FLAGS = ("Is Camera Ray", "Is Shadow Ray", "Is Diffuse Ray", "Is Glossy Ray",
+                    "Is Singular Ray", "Is Reflection Ray", "Is Transmission Ray")
 LIGHT_TYPES = ("POINT", "SPOT", "SUN", "AREA")
 # Shape -> radius of its bounding sphere at scale 1 (for placing objects apart).
 _EXTENT = {"sphere": 1.0, "cube": math.sqrt(3.0), "monkey": 1.4, "slab": math.sqrt(2.0)}
@@ -349,6 +352,20 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if o["material"]["kind"] in ("diffuse", "glossy", "principled", "metal") and \
                 textures.random() < 0.3:
             o["material"]["colour_texture"] = _draw_colour_texture(textures)
+    # Some mixes' factors from the ray's Light Path flags, from a stream of their own; not
+    # where the surface emits.
+    paths = np.random.default_rng([seed, 0x1a70])
+    for o in params["objects"]:
+        m = o["material"]
+        if m.get("mix") and not m["mix"].get("factor") and not m.get("emission_strength") \
+                and paths.random() < 0.3:
+            m["mix"]["factor"] = {"kind": "light_path", "value": str(paths.choice(
+                LIGHT_PATH_FLAGS))}
+    # Some Diffuse BSDFs and Principled bases rough (Oren-Nayar), from a stream of their own.
+    rough = np.random.default_rng([seed, 0x0e1a])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("diffuse", "principled") and rough.random() < 0.3:
+            o["material"]["diffuse_roughness"] = _r(rough.uniform(0.05, 1.0), 3)
     if avoid_known:
         params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
@@ -383,6 +400,8 @@ def features(params) -> list[str]:
                  + (f":fac_{m['mix']['factor']['kind']}" if m.get("mix", {}).get("factor")
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
+                 + (f":oren_nayar={m['diffuse_roughness']}" if m.get("diffuse_roughness")
+                    else "")
                  + (f":{m['colour_texture']['node'][13:].lower()}_colour"
                     if m.get("colour_texture") else "")
                  + (":alpha" if m.get("alpha") else "")
@@ -581,6 +600,9 @@ def _simpler_material(m):
     if m.get("colour_texture"):
         out.append(("untextured colour",
                     {k: v for k, v in m.items() if k != "colour_texture"}))
+    if m.get("diffuse_roughness"):
+        out.append(("Lambert diffuse",
+                    {k: v for k, v in m.items() if k != "diffuse_roughness"}))
     if m.get("roughness_checker"):
         out.append(("untextured roughness",
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
@@ -742,7 +764,10 @@ def _mix_surface(mat, mix):
         second.inputs["Roughness"].default_value = mix["roughness"] \
             if mix["shader"] == "glossy" else 0.0
     factor = mix.get("factor")
-    if factor:
+    if factor and factor["kind"] == "light_path":
+        source = tree.nodes.new("ShaderNodeLightPath")
+        tree.links.new(source.outputs[factor["value"]], node.inputs["Fac"])
+    elif factor:
         kind = "ShaderNodeFresnel" if factor["kind"] == "fresnel" else "ShaderNodeLayerWeight"
         source = tree.nodes.new(kind)
         source.inputs["IOR" if factor["kind"] == "fresnel" else "Blend"].default_value = \
@@ -784,7 +809,8 @@ def _bpy_surface_shader(name, m):
     rgba = (*m.get("colour", (0.8, 0.8, 0.8)), 1.0)
     kind = m["kind"]
     if kind == "diffuse":
-        return bs.material(name, "ShaderNodeBsdfDiffuse", Color=rgba, Roughness=0.0)
+        return bs.material(name, "ShaderNodeBsdfDiffuse", Color=rgba,
+                           Roughness=m.get("diffuse_roughness", 0.0))
     if kind == "glossy":
         return bs.material(name, "ShaderNodeBsdfGlossy", Color=rgba, Roughness=m["roughness"])
     if kind == "glass" and m.get("refraction"):
@@ -800,7 +826,8 @@ def _bpy_surface_shader(name, m):
         return bs.material(name, "ShaderNodeEmission", Color=rgba, Strength=m["strength"])
     inputs = {"Base Color": rgba, "Roughness": m.get("roughness", 0.0)}
     if kind == "principled":
-        inputs.update({"IOR": m["ior"], "Specular IOR Level": m["specular_ior_level"]})
+        inputs.update({"IOR": m["ior"], "Specular IOR Level": m["specular_ior_level"],
+                       "Diffuse Roughness": m.get("diffuse_roughness", 0.0)})
     elif kind == "metal":
         inputs["Metallic"] = 1.0
         if m.get("specular_tint"):

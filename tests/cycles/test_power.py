@@ -504,6 +504,32 @@ def _ray_depth_one_less(c, name, reg):
     return p.emit(sh.OP_MATH, 1, a=reg, b=p.const([-1.0]), c=reg, d=sh.MATHS.index("ADD"))
 
 
+def _diffuse_roughness_scaled(factor):
+    """Every Diffuse BSDF's roughness times `factor` (0: Lambert, the old fallback, its
+    textured roughness dropped too)."""
+    def inject(scene, settings):
+        m = scene.materials
+        diffuse = m.kind == renderers.core().scene.DIFFUSE
+        scene.materials = dataclasses.replace(
+            m, roughness=np.where(diffuse, m.roughness * factor, m.roughness))
+        if factor == 0.0 and scene.programs is not None:
+            rows = scene.programs.roughness.copy()
+            rows[diffuse] = -1
+            scene.programs = scene.programs._replace(roughness=rows)
+        return scene, settings
+    return inject
+
+
+def _principled_base_lambert(scene, settings):
+    """The Principled BSDF's Diffuse Roughness ignored (its base Lambert, as before)."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, diffuse_roughness=np.zeros_like(m.roughness))
+    if scene.programs is not None:
+        scene.programs = scene.programs._replace(
+            diffuse_roughness=np.full_like(scene.programs.diffuse_roughness, -1))
+    return scene, settings
+
+
 @contextmanager
 def _normal_node_unnormalised():
     """The Normal node's direction used as it is set, not normalised."""
@@ -1064,6 +1090,10 @@ INJECTIONS = {
     "blackbody_in_celsius": ("blackbody_and_normal", None, _blackbody_in_celsius),
     "normal_node_unnormalised": ("blackbody_and_normal", None, _normal_node_unnormalised),
     "wavelength_5nm_longer": ("wavelength", None, _wavelength_5nm_longer),
+    # Oren-Nayar: rendered as Lambert (the old fallback); its constant roughness halved.
+    "oren_nayar_as_lambert": ("oren_nayar", _diffuse_roughness_scaled(0.0), None),
+    "oren_nayar_roughness_halved": ("oren_nayar", _diffuse_roughness_scaled(0.5), None),
+    "principled_diffuse_roughness_ignored": ("oren_nayar", _principled_base_lambert, None),
     # Light Path: the shadow rays' flag never set; glossy rays read as diffuse ones; the
     # depth one less.
     "light_path_shadow_rays_unseen": ("light_path", None,

@@ -2222,6 +2222,56 @@ def light_path():
           _light_path_colour(bs.diffuse("PathColour", (0.5, 0.5, 0.5))))
 
 
+def _unit_checker(tree, scale):
+    """A Checker Texture of 1 and 0 at `scale` on Object coordinates: (its Fac output, the
+    Texture Coordinate node)."""
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = scale
+    checker.inputs["Color1"].default_value = (1.0, 1.0, 1.0, 1.0)
+    checker.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Object"], checker.inputs["Vector"])
+    return checker.outputs["Fac"], coords
+
+
+def oren_nayar():
+    """The Diffuse BSDF's Roughness (Cycles' Oren-Nayar with its multiple-scattering term):
+    balls of roughness 1 (white, lit by the ceiling and by an emitter high on the front
+    left, toward which rough surfaces glow) and 0.5 (orange), and
+    a grey cube whose roughness is a Checker Texture's (0 and 1); and the Principled
+    BSDF's Diffuse Roughness on a blue ball (1, and a Checker's 0 and 1 on its lower
+    half) under its rough specular layer."""
+    _box()
+    _emitter_quad("Front", (-0.7, -0.95, 1.25), 0.25, 16.0)
+    white = bs.material("RoughWhite", "ShaderNodeBsdfDiffuse", Color=(0.9, 0.9, 0.9, 1.0),
+                        Roughness=1.0)
+    _sphere(white, (-0.45, 0.2, 0.35), 0.35, "RoughWhite")
+    orange = bs.material("RoughOrange", "ShaderNodeBsdfDiffuse", Color=(0.9, 0.45, 0.1, 1.0),
+                         Roughness=0.5)
+    _sphere(orange, (0.5, 0.35, 0.3), 0.3, "RoughOrange")
+    grey = bs.material("Checked", "ShaderNodeBsdfDiffuse", Color=(0.7, 0.7, 0.7, 1.0))
+    tree = grey.node_tree
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    tree.links.new(_unit_checker(tree, 3.0)[0], diffuse.inputs["Roughness"])
+    _cube("Checked", (0.2, -0.3, 0.2), (0.4, 0.4, 0.4), grey)
+    blue = _principled("RoughBase", **{"Base Color": (0.2, 0.45, 0.9, 1.0), "Roughness": 0.4})
+    tree = blue.node_tree
+    fac, coords = _unit_checker(tree, 4.0)
+    below = tree.nodes.new("ShaderNodeMath")  # 1 above the ball's equator, the checker below
+    below.operation = "GREATER_THAN"
+    separate = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coords.outputs["Object"], separate.inputs[0])
+    tree.links.new(separate.outputs["Z"], below.inputs[0])
+    below.inputs[1].default_value = 0.0
+    top = tree.nodes.new("ShaderNodeMath")
+    top.operation, top.use_clamp = "ADD", True
+    tree.links.new(below.outputs[0], top.inputs[0])
+    tree.links.new(fac, top.inputs[1])
+    principled = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    tree.links.new(top.outputs[0], principled.inputs["Diffuse Roughness"])
+    _sphere(blue, (-0.5, -0.45, 0.22), 0.22, "RoughBase")
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -2874,6 +2924,7 @@ _add(Variant("attributes", attributes, resolution=(224, 64), max_bounces=0, samp
 _add(Variant("wavelength", wavelength, resolution=(128, 32), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
+_add(Variant("oren_nayar", oren_nayar, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("light_path", light_path, resolution=(96, 72), max_bounces=8, samples=1024,
              cycles_samples=2048))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,

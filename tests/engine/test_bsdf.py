@@ -1,4 +1,6 @@
-"""Delta lobes by exact values; Lambert by its closed forms."""
+"""Delta lobes by exact values; Lambert by its closed forms; Oren-Nayar by its energy."""
+
+import math
 
 import numpy as np
 import pytest
@@ -230,3 +232,40 @@ def test_a_specular_tint_moves_f0_and_keeps_the_curve():
             pytest.approx(0.5 * f0)
         assert tinted_fresnel(f0, eta, 100.0) == 1.0
         assert tinted_fresnel(1.0, eta, 0.2) == 1.0  # grazing, total internal reflection
+
+
+def _oren_nayar_albedo(roughness, cos_o, colour, n=16384, seed=7):
+    """The directional albedo of Oren-Nayar (colour `colour`) at a view of cosine cos_o,
+    estimated with cosine-weighted directions (the ratio over Lambert is the weight)."""
+    rng = np.random.default_rng(seed)
+    u = rng.random((n, 2))
+    r, phi = np.sqrt(u[:, 0]), 2.0 * np.pi * u[:, 1]
+    wi = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(1.0 - u[:, 0])], 1)
+    wo = (math.sqrt(1.0 - cos_o ** 2), 0.0, cos_o)
+    k = np.array([bsdf.oren_nayar_ratio(*wo, *w, 0.0, 0.0, 1.0, roughness, *colour)
+                  for w in wi])
+    return colour * k.mean(axis=0)
+
+
+@pytest.mark.parametrize("roughness", [0.3, 1.0])
+@pytest.mark.parametrize("cos_o", [1.0, 0.5, 0.1])
+def test_oren_nayar_keeps_a_white_surfaces_energy(roughness, cos_o):
+    """Cycles' Oren-Nayar with its multiple-scattering term reflects all the light a white
+    surface gets, at every view (the single-scattering model alone loses up to 22 %), and
+    a grey one less than white; at roughness 0 it is Lambert."""
+    white = _oren_nayar_albedo(roughness, cos_o, np.ones(3))
+    # (the OpenPBR term is a fit: within 1.5 % of 1, against 0.78 without it)
+    assert white == pytest.approx(1.0, abs=0.015)
+    grey = _oren_nayar_albedo(roughness, cos_o, np.full(3, 0.5))
+    assert np.all(grey < 0.5 * white)
+    assert bsdf.oren_nayar_ratio(0.0, 0.0, 1.0, 0.6, 0.0, 0.8, 0.0, 0.0, 1.0, 0.0,
+                                 0.5, 0.5, 0.5) == pytest.approx((1.0, 1.0, 1.0))
+
+
+def test_oren_nayar_brightens_toward_the_light_as_rough_surfaces_do():
+    """Rough surfaces back-scatter: seen from beside the light (retro-reflection) a rough
+    surface is brighter than Lambert, seen from the far side darker."""
+    light = (0.6, 0.0, 0.8)
+    back = bsdf.oren_nayar_ratio(0.6, 0.0, 0.8, *light, 0.0, 0.0, 1.0, 1.0, 0.5, 0.5, 0.5)
+    away = bsdf.oren_nayar_ratio(-0.6, 0.0, 0.8, *light, 0.0, 0.0, 1.0, 1.0, 0.5, 0.5, 0.5)
+    assert back[0] > 1.0 > away[0]
