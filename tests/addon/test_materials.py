@@ -128,11 +128,25 @@ def test_a_glass_colour_may_vary(fresh, core, shader, socket, tints):
     assert m.colour_program is not None
 
 
-def test_rough_diffuse_warns_and_renders_lambert(fresh):
+def test_rough_diffuse_keeps_its_roughness_constant_or_textured(fresh):
+    """A Diffuse BSDF's Roughness is Oren-Nayar's (no warning): its value, or where a
+    texture drives it, that texture's program (first channel)."""
     mat, node = node_material("Rough", "ShaderNodeBsdfDiffuse", Roughness=0.4)
     spec, warnings = convert(mat)
-    assert spec.ctor == "diffuse"
-    assert len(warnings) == 1 and "roughness" in warnings[0] and "'Rough'" in warnings[0]
+    assert (spec.ctor, warnings) == ("diffuse", [])
+    assert spec.kwargs["roughness"] == pytest.approx(0.4)
+    assert "roughness_program" not in spec.kwargs
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (0.9, 0.9, 0.9, 1.0)
+    checker.inputs["Color2"].default_value = (0.1, 0.1, 0.1, 1.0)
+    mat.node_tree.links.new(mat.node_tree.nodes.new("ShaderNodeTexCoord").outputs["UV"],
+                            checker.inputs["Vector"])
+    mat.node_tree.links.new(checker.outputs["Fac"], node.inputs["Roughness"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    program = spec.kwargs["roughness_program"]
+    assert {round(float(_program_at(program, uv)[0]), 6)
+            for uv in [(0.05, 0.05), (0.3, 0.05)]} == {0.0, 1.0}
 
 
 @pytest.mark.parametrize("distribution, multiscatter, warned", [
