@@ -148,12 +148,26 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
         out[sh.OBJECT] = co[tri_verts]
     if sh.NORMAL in spaces and normals is not None:
         out[sh.NORMAL] = normals.astype(np.float32)
-    if sh.GENERATED in spaces:
+    radial = [name for name in spaces if name.startswith(sh.RADIAL)]
+    if sh.GENERATED in spaces or radial:
         loc = np.array(mesh.texspace_location, np.float32)
         size = np.array(mesh.texspace_size, np.float32)
         scale = np.divide(0.5, size, out=np.zeros(3, np.float32), where=size != 0)
-        out[sh.GENERATED] = co[tri_verts] * scale - (loc * scale - 0.5)
+        generated = co[tri_verts] * scale - (loc * scale - 0.5)
+        if sh.GENERATED in spaces:
+            out[sh.GENERATED] = generated
+        for name in radial:  # object space here; _instance_uvs turns them into the world's
+            out[name] = _radial(generated - 0.5, name[len(sh.RADIAL):])
     return out
+
+
+def _radial(g, axis):
+    """(t, 3, 3) the direction around `axis` at centred texture-space points g (Cycles'
+    svm_node_tangent: Z gives (-g_y, g_x, 0))."""
+    x, y, z = g[..., 0], g[..., 1], g[..., 2]
+    zero = np.zeros_like(x)
+    v = {"X": (zero, -z, y), "Y": (-z, zero, x), "Z": (-y, x, zero)}[axis]
+    return np.stack(v, axis=-1).astype(np.float32)
 
 
 def _colour_attribute(mesh, name, tri_verts, tri_loops, alpha=False):
@@ -223,8 +237,8 @@ def _tangents(mesh, tri_loops, names, warn) -> dict:
         try:
             mesh.calc_tangents(uvmap=layer.name)
         except RuntimeError as exc:
-            warn(f"mesh '{mesh.name}': no tangents for UV map '{layer.name}' ({exc}): its "
-                 f"normal map is not applied")
+            warn(f"mesh '{mesh.name}': no tangents for UV map '{layer.name}' ({exc}): "
+                 f"normal maps and Tangent nodes reading it are not applied")
             continue
         n = len(mesh.loops)
         tangent, sign = np.zeros(n * 3, np.float32), np.zeros(n, np.float32)
@@ -258,8 +272,15 @@ def read_mesh(mesh, material_lut, uv=False, tangent_maps=(), warn=None, spaces=(
     # Custom normals apply to flat faces too (4.1+ keeps them regardless of sharp_face).
     if getattr(mesh, "has_custom_normals", False):
         smooth[:] = True
-    tangents = _tangents(mesh, tri_loops, tangent_maps, warn or (lambda msg: None))
+    sh = core.load().shading
+    uv_tangents = [name[len(sh.UV_TANGENT):] for name in spaces
+                   if name.startswith(sh.UV_TANGENT)] if uv else []
+    tangents = _tangents(mesh, tri_loops, sorted(set(tangent_maps) | set(uv_tangents)),
+                         warn or (lambda msg: None))
     maps = _uv_maps(mesh, tri_loops) if uv else {}
+    maps.update({sh.UV_TANGENT + name: tangents[name][..., :3] for name in uv_tangents
+                 if name in tangents})  # (object space; _instance_uvs turns them)
+    tangents = {name: t for name, t in tangents.items() if name in tangent_maps}
     if uv:
         maps.update(_texture_spaces(mesh, co.reshape(-1, 3), tri_verts.reshape(-1, 3), spaces,
                                     tri_loops, normals))
@@ -337,7 +358,8 @@ class _Exporter:
         self.spaces = sorted({name for p in programs for name in p.uv_maps
                               if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
-                                                  sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS))})
+                                                  sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS,
+                                                  sh.RADIAL, sh.UV_TANGENT))})
         self.out.object_maps = [n for n in sh.OBJECT_MAPS if any(n in p.uv_maps
                                                                  for p in programs)]
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
@@ -724,9 +746,14 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
     mirroring matrix flips the winding), and the Object Info maps `object_maps` (each
     instance's values on all its corners)."""
     mirrored = np.linalg.det(insts[0].matrix_world[:3, :3]) < 0
-    maps = {name: np.tile(m[:, [0, 2, 1]] if mirrored else m, (len(insts), 1, 1))
-            for name, m in mesh.uv_maps.items()}
     sh = core.load().shading
+    maps = {name: np.tile(m[:, [0, 2, 1]] if mirrored else m, (len(insts), 1, 1))
+            for name, m in mesh.uv_maps.items()
+            if not name.startswith((sh.RADIAL, sh.UV_TANGENT))}
+    for name, m in mesh.uv_maps.items():
+        if name.startswith((sh.RADIAL, sh.UV_TANGENT)):
+            local = m[:, [0, 2, 1]] if mirrored else m
+            maps[name] = np.concatenate([_as_normals(local, i.matrix_world) for i in insts])
     per_instance = {
         sh.OBJECT_LOCATION: lambda i: np.asarray(i.matrix_world, np.float64)[:3, 3],
         sh.OBJECT_COLOUR: lambda i: i.colour[:3],
@@ -737,6 +764,14 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
         maps[name] = np.broadcast_to(np.repeat(values, t, axis=0)[:, None, :],
                                      (len(insts) * t, 3, 3))
     return maps
+
+
+def _as_normals(local, matrix_world) -> np.ndarray:
+    """Object-space directions (t, 3, 3) turned into world space as normals turn (Cycles'
+    object_normal_transform of the Tangent node's and primitive_tangent's directions):
+    row vectors n^T M^-1, as to_world's normals."""
+    linear = np.asarray(matrix_world, np.float64)[:3, :3]
+    return (local @ np.linalg.pinv(linear)).astype(np.float32)
 
 
 def _instance_tangents(mesh: MeshData, insts, mat_index, specs):

@@ -64,7 +64,6 @@ MEAN_SIDE = 512
 # no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
 PRINCIPLED_IGNORED = (
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
-    ("Anisotropic", 0.0, "rendered isotropic"),
     ("Thin Film Thickness", 0.0, "rendered without thin film"),
 )
 # Material Output inputs beside Surface that Specula ignores, with what that means.
@@ -125,7 +124,10 @@ class MaterialSpec:
         kwargs.pop("normal_uv", None)
         normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength",
                                              "height_program", *MEDIUM_KEYS) if k in kwargs}
+        anisotropy = {k: kwargs.pop(k) for k in ANISOTROPY_KEYS if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
+        if anisotropy:  # (a Glossy BSDF at zero roughness is a mirror: it ignores them)
+            m = m.with_anisotropy(**anisotropy)
         return dataclasses.replace(m, **normal) if normal else m
 
 
@@ -146,7 +148,10 @@ def _is_medium(medium):
 # with one reads UV maps.
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
                 "roughness_program", "height_program", "tint_program",
-                "diffuse_roughness_program")
+                "diffuse_roughness_program", "anisotropy_program", "tangent_program")
+# The MaterialSpec keywords of an anisotropic GGX lobe (scene.Material.with_anisotropy).
+ANISOTROPY_KEYS = ("specular_anisotropy", "anisotropic_rotation", "tangent_program",
+                   "anisotropy_program")
 
 
 def default_material():
@@ -889,7 +894,9 @@ class _Reader:
             colour, program = self.textured_colour(node, "Color")
             return MaterialSpec("glossy", name, {"colour": colour, **_with(program),
                                                  **self.roughness(node),
-                                                 "multiscatter": self.multiscatter(node)})
+                                                 "multiscatter": self.multiscatter(node),
+                                                 **self.anisotropy(node, "Anisotropy",
+                                                                   "Rotation")})
         if kind == "ShaderNodeBsdfGlass":
             colour, program = self.textured_colour(node, "Color")
             return MaterialSpec("glass", name, {"colour": colour, **_with(program),
@@ -1025,6 +1032,38 @@ class _Reader:
             ior = 1.5
         return ior
 
+    def anisotropy(self, node, socket_name, rotation_name):
+        """A GGX node's anisotropy, its rotation and its Tangent as keywords (none where
+        the node is isotropic): constants, or a program of both where either varies (the
+        constants then stand for their means), and the tangent's program (Cycles' default,
+        radial about Z, where the Tangent is unlinked or its chain does not compile,
+        warned)."""
+        sock = enabled_input(node, socket_name)
+        if sock is None:
+            return {}
+        rotation = enabled_input(node, rotation_name)
+        program, why = shader_nodes.compile_anisotropy(sock, rotation,
+                                                       self.constants.image_cache)
+        warned = len(self.warnings)
+        a = self.number(node, socket_name, 0.0)
+        r = self.number(node, rotation_name, 0.0) if rotation is not None else 0.0
+        if program is not None:
+            del self.warnings[warned:]  # the constants only stand in; the program is exact
+        elif why:
+            self.warn(f"node '{node.name}' {socket_name} or {rotation_name} cannot be "
+                      f"evaluated per point ({why} is not supported); rendered with their "
+                      f"constants {a:.3g}, {r:.3g}")
+        if program is None and a == 0.0:
+            return {}
+        tangent_socket = enabled_input(node, "Tangent")
+        tangent, why = shader_nodes.compile_tangent(tangent_socket,
+                                                    self.constants.image_cache)
+        if why:
+            self.warn(f"node '{node.name}' Tangent cannot be evaluated ({why} is not "
+                      f"supported); rendered with the default tangent (radial about Z)")
+        return {"specular_anisotropy": a, "anisotropic_rotation": r, "tangent_program": tangent,
+                **_with(program, "anisotropy_program")}
+
     def principled_ignored(self, node):
         self.normal(node)
         for socket_name, neutral, rendered in PRINCIPLED_IGNORED:
@@ -1090,8 +1129,12 @@ class _Reader:
             return either(lambda: self.dielectric(node, tint), glass, transmission,
                           glass_program)
 
-        spec = self.sheen(node, self.coat(node, either(non_metal, metal, metallic,
-                                                       metal_program)))
+        spec = either(non_metal, metal, metallic, metal_program)
+        anisotropy = self.anisotropy(node, "Anisotropic", "Anisotropic Rotation")
+        for leaf in spec.leaves():  # its metal and specular lobes (not the glass, as Cycles)
+            if leaf.ctor in ("metal", "principled"):
+                leaf.kwargs.update(anisotropy)
+        spec = self.sheen(node, self.coat(node, spec))
         if spec.ctor != "mix":
             spec.kwargs.update(kwargs)
             return spec

@@ -26,7 +26,8 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
-           "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath")
+           "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath",
+           "ShaderNodeTangent")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -423,6 +424,8 @@ def _n_geometry(c, node, out):
     sh, p, name = c.sh, c.program, out.name
     if name == "Position":
         return p.uv(sh.POSITION), "VECTOR"
+    if name == "Tangent":  # Cycles' primitive_tangent: Radial Z of the texture space
+        return _tangent(c, node, "Z")
     if name not in ("Normal", "True Normal", "Incoming", "Backfacing"):
         raise Unsupported(f"geometry '{node.name}' output {name}")
     if not c.view_dependent:
@@ -432,6 +435,23 @@ def _n_geometry(c, node, out):
     if name == "Backfacing":
         return p.emit(sh.OP_GEOMETRY, 1, d=2), "VALUE"
     return p.emit(sh.OP_GEOMETRY, 3, d=0 if name == "Normal" else 1), "VECTOR"
+
+
+def _tangent(c, node, axis, uv_map=None):
+    """The radial tangent about the texture space's `axis`, or the tangent of `uv_map`,
+    across the shading normal."""
+    if not c.view_dependent:
+        raise Unsupported(f"node '{node.name}' tangent in an emission")
+    p = c.program
+    direction = c.sh.RADIAL + axis if uv_map is None else c.sh.UV_TANGENT + uv_map
+    return p.emit(c.sh.OP_GEOMETRY, 3, a=p.uv(direction), d=3), "VECTOR"
+
+
+def _n_tangent(c, node, out):
+    """Tangent: Radial about X, Y or Z, or a UV map's tangents (Cycles' svm_node_tangent)."""
+    if node.direction_type == "UV_MAP":
+        return _tangent(c, node, None, node.uv_map)
+    return _tangent(c, node, node.axis)
 
 
 def _n_object_info(c, node, out):
@@ -903,6 +923,7 @@ NODES = {
     "ShaderNodeVectorRotate": _n_vector_rotate,
     "ShaderNodeRGBToBW": _n_rgb_to_bw,
     "ShaderNodeNewGeometry": _n_geometry,
+    "ShaderNodeTangent": _n_tangent,
     "ShaderNodeObjectInfo": _n_object_info,
     "ShaderNodeMapRange": _n_map_range,
     "ShaderNodeClamp": _n_clamp,
@@ -954,20 +975,28 @@ def constant(colour):
     return program
 
 
+def _attempt(build):
+    """(build()'s program, "") or, where a node in its chain does not compile or a value
+    does not fit, (None, why not)."""
+    try:
+        return build(), ""
+    except Unsupported as exc:
+        return None, str(exc)
+    except (ValueError, ArithmeticError) as exc:  # a program too large, an odd value
+        return None, f"{type(exc).__name__}: {exc}"
+
+
 def compile_product(colour, strength, texture_cache):
     """(program or None, why not): colour socket x strength socket per point (an emission
     whose colour, strength or both vary), in one program; no view-dependent nodes."""
-    try:
+    def build():
         c = Compiler(texture_cache, view_dependent=False)
         a = c.input(colour, "RGBA")
         b = c.convert(c.input(strength, "VALUE"), "VALUE", "RGBA")  # as compile()
         c.program.out = c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
                                        d=c.sh.BLENDS.index("MULTIPLY"))
-        return c.program, ""
-    except Unsupported as exc:
-        return None, str(exc)
-    except (ValueError, ArithmeticError) as exc:
-        return None, f"{type(exc).__name__}: {exc}"
+        return c.program
+    return _attempt(build)
 
 
 def compile_bump(node, texture_cache):
@@ -979,7 +1008,8 @@ def compile_bump(node, texture_cache):
     height = enabled_input(node, "Height")
     if height is None or live_link(height) is None:
         return None, ""
-    try:
+
+    def build():
         c = Compiler(texture_cache)
         p, multiply = c.program, c.sh.MATHS.index("MULTIPLY")
         distance = c.input(enabled_input(node, "Distance"), "VALUE")
@@ -990,11 +1020,35 @@ def compile_bump(node, texture_cache):
                     d=multiply)
         strength = c.input(enabled_input(node, "Strength"), "VALUE")
         p.out = p.emit(c.sh.OP_COMBINE, 3, a=dh, b=strength, c=strength)
-        return (p, "") if varies(height) else (None, "")
-    except Unsupported as exc:
-        return None, str(exc)
-    except (ValueError, ArithmeticError) as exc:
-        return None, f"{type(exc).__name__}: {exc}"
+        return p
+    program, why = _attempt(build)
+    return (program, why) if program is None or varies(height) else (None, "")
+
+
+def compile_anisotropy(anisotropy, rotation, texture_cache):
+    """(program or None, why not): where a GGX node's anisotropy or its rotation (sockets;
+    rotation may be None) varies, the program of both (its first two channels)."""
+    if not (varies(anisotropy) or (rotation is not None and varies(rotation))):
+        return None, ""
+
+    def build():
+        c = Compiler(texture_cache)
+        a = c.input(anisotropy, "VALUE")
+        r = c.input(rotation, "VALUE") if rotation is not None else c.program.const([0.0])
+        c.program.out = c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=r, c=r)
+        return c.program
+    return _attempt(build)
+
+
+def compile_tangent(socket, texture_cache):
+    """(program, why not): a GGX node's Tangent input: its chain's program where linked,
+    else Cycles' default, the Geometry node's Tangent (Radial Z); that default too, with
+    the reason, where the chain does not compile."""
+    default = core.load().shading.radial_tangent("Z")
+    if socket is None or live_link(socket) is None:
+        return default, ""
+    program, why = _attempt(lambda: Compiler(texture_cache).compile(socket, "VECTOR"))
+    return program or default, why
 
 
 def compile_colour(socket, texture_cache, view_dependent=True):
@@ -1004,10 +1058,4 @@ def compile_colour(socket, texture_cache, view_dependent=True):
     handles it exactly)."""
     if not varies(socket):
         return None, ""
-    try:
-        return Compiler(texture_cache, view_dependent).compile(socket, "RGBA"), ""
-    except Unsupported as exc:
-        return None, str(exc)
-    except (ValueError, ArithmeticError) as exc:  # a program too large, an odd value
-        return None, f"{type(exc).__name__}: {exc}"
-
+    return _attempt(lambda: Compiler(texture_cache, view_dependent).compile(socket, "RGBA"))

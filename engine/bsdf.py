@@ -275,9 +275,10 @@ def eval_ggx(cos_o, cos_i, cos_h, cos_hv, a2, eta, fresnel_on):
 
 
 @njit(**JIT)
-def ggx_visible_normal(v0, v1, v2, alpha, ua, ub):
-    """A visible normal of GGX (Heitz 2018) for the local view direction v, z up."""
-    a, b, c = alpha * v0, alpha * v1, v2
+def ggx_visible_normal(v0, v1, v2, ax, ay, ua, ub):
+    """A visible normal of GGX (Heitz 2018) of roughness ax along x and ay along y, for the
+    local view direction v, z up."""
+    a, b, c = ax * v0, ay * v1, v2
     norm = math.sqrt(a * a + b * b + c * c)
     a, b, c = a / norm, b / norm, c / norm
     lensq = a * a + b * b
@@ -294,8 +295,8 @@ def ggx_visible_normal(v0, v1, v2, alpha, ua, ub):
     sv = 0.5 * (1.0 + c)
     p2 = (1.0 - sv) * math.sqrt(max(0.0, 1.0 - p1 * p1)) + sv * p2
     p3 = math.sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2))
-    hx = alpha * (p1 * t1x + p2 * t2x + p3 * a)
-    hy = alpha * (p1 * t1y + p2 * t2y + p3 * b)
+    hx = ax * (p1 * t1x + p2 * t2x + p3 * a)
+    hy = ay * (p1 * t1y + p2 * t2y + p3 * b)
     hz = max(p1 * t1z + p2 * t2z + p3 * c, 1e-12)
     norm = math.sqrt(hx * hx + hy * hy + hz * hz)
     return hx / norm, hy / norm, hz / norm
@@ -307,9 +308,110 @@ def sample_visible_normal(wox, woy, woz, mx, my, mz, alpha, ua, ub):
     s, t = build_frame(mx, my, mz)
     hx, hy, hz = ggx_visible_normal(wox * s[0] + woy * s[1] + woz * s[2],
                                     wox * t[0] + woy * t[1] + woz * t[2],
-                                    wox * mx + woy * my + woz * mz, alpha, ua, ub)
+                                    wox * mx + woy * my + woz * mz, alpha, alpha, ua, ub)
     return (hx * s[0] + hy * t[0] + hz * mx, hx * s[1] + hy * t[1] + hz * my,
             hx * s[2] + hy * t[2] + hz * mz)
+
+
+# ----------------------------------------------------------------- anisotropic GGX
+# Cycles' anisotropic GGX (bsdf_microfacet.h: bsdf_aniso_D, bsdf_aniso_lambda, the VNDF
+# sampled with alpha_x along the tangent, alpha_y along N x T): for reflection lobes only
+# (Cycles keeps transmission isotropic). Its energy compensation reads the isotropic
+# tables at roughness (alpha_x alpha_y)^(1/4), as Cycles' microfacet_ggx_preserve_energy.
+
+
+@njit(**JIT)
+def anisotropic_alphas(roughness, anisotropy, principled):
+    """(alpha_x, alpha_y) of a GGX lobe of `roughness` and `anisotropy`, each at most 1 as
+    bsdf_microfacet_ggx_setup clamps them. Principled (and its metal): aspect
+    sqrt(1 - 0.9 anisotropy), anisotropy in [0, 1], alpha_x = r^2 / aspect; the Glossy
+    BSDF: anisotropy in [-0.99, 0.99], alpha_x = r^2 (1 - a) for a >= 0, r^2 / (1 + a)
+    below (svm_node_closure_bsdf)."""
+    r2 = roughness * roughness
+    if principled:
+        aspect = math.sqrt(1.0 - min(max(anisotropy, 0.0), 1.0) * 0.9)
+        ax, ay = r2 / aspect, r2 * aspect
+    else:
+        a = min(max(anisotropy, -0.99), 0.99)
+        if a < 0.0:
+            ax, ay = r2 / (1.0 + a), r2 * (1.0 + a)
+        else:
+            ax, ay = r2 * (1.0 - a), r2 / (1.0 - a)
+    return min(ax, 1.0), min(ay, 1.0)
+
+
+@njit(**JIT)
+def is_anisotropic(anisotropy, principled):
+    """Whether Cycles renders this anisotropy as such: Principled's above 0, the Glossy
+    BSDF's beyond 1e-4 either way."""
+    return anisotropy > 0.0 if principled else abs(anisotropy) > 1e-4
+
+
+@njit(**JIT)
+def tangent_frame(mx, my, mz, tx, ty, tz):
+    """The lobe's frame about its normal m from the tangent t (Cycles'
+    make_orthonormals_tangent): y = normalize(m x t), x = y x m. ok False where t lies
+    along m."""
+    yx, yy, yz = my * tz - mz * ty, mz * tx - mx * tz, mx * ty - my * tx
+    length = math.sqrt(yx * yx + yy * yy + yz * yz)
+    if not length > 1e-12:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False
+    yx, yy, yz = yx / length, yy / length, yz / length
+    return (yy * mz - yz * my, yz * mx - yx * mz, yx * my - yy * mx, yx, yy, yz, True)
+
+
+@njit(**JIT)
+def ggx_aniso_d(hx, hy, hz, ax, ay):
+    """The anisotropic GGX distribution D at the local half vector h (z the normal)."""
+    x, y = hx / ax, hy / ay
+    ll = x * x + y * y + hz * hz
+    return 1.0 / (np.pi * ax * ay * ll * ll)
+
+
+@njit(**JIT)
+def ggx_aniso_lambda(vx, vy, vz, ax, ay):
+    """Smith's Lambda of anisotropic GGX for the local direction v."""
+    t = ((ax * vx) ** 2 + (ay * vy) ** 2) / max(vz * vz, 1e-300)
+    return 0.5 * (math.sqrt(1.0 + t) - 1.0)
+
+
+@njit(**JIT)
+def eval_lobe_ggx(wox, woy, woz, wix, wiy, wiz, hx, hy, hz, mx, my, mz, lobe, eta,
+                  fresnel_on):
+    """eval_ggx for the layer `lobe` about its normal m with half vector h: anisotropic
+    where the lobe is (lobe.ax > 0: alpha_x, alpha_y along the frame of its tangent),
+    else isotropic of lobe.alpha."""
+    cos_o = mx * wox + my * woy + mz * woz
+    cos_i = mx * wix + my * wiy + mz * wiz
+    cos_hv = hx * wox + hy * woy + hz * woz
+    if not lobe.ax > 0.0:
+        return eval_ggx(cos_o, cos_i, mx * hx + my * hy + mz * hz, cos_hv,
+                        lobe.alpha * lobe.alpha, eta, fresnel_on)
+    if not (cos_o > 0 and cos_i > 0):
+        return 0.0, 0.0
+    xx, xy, xz, yx, yy, yz, _ = tangent_frame(mx, my, mz, lobe.tx, lobe.ty, lobe.tz)
+    d = ggx_aniso_d(xx * hx + xy * hy + xz * hz, yx * hx + yy * hy + yz * hz,
+                    mx * hx + my * hy + mz * hz, lobe.ax, lobe.ay)
+    lo = ggx_aniso_lambda(xx * wox + xy * woy + xz * woz, yx * wox + yy * woy + yz * woz,
+                          cos_o, lobe.ax, lobe.ay)
+    li = ggx_aniso_lambda(xx * wix + xy * wiy + xz * wiz, yx * wix + yy * wiy + yz * wiz,
+                          cos_i, lobe.ax, lobe.ay)
+    f = fresnel_dielectric(cos_hv, eta, True)[0] if fresnel_on else 1.0
+    common = d / (4.0 * cos_o)
+    return f * common / (1.0 + lo + li), common / (1.0 + lo)
+
+
+@njit(**JIT)
+def sample_lobe_normal(wox, woy, woz, mx, my, mz, lobe, ua, ub):
+    """sample_visible_normal for the layer `lobe`: anisotropic where it is."""
+    if not lobe.ax > 0.0:
+        return sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
+    xx, xy, xz, yx, yy, yz, _ = tangent_frame(mx, my, mz, lobe.tx, lobe.ty, lobe.tz)
+    hx, hy, hz = ggx_visible_normal(wox * xx + woy * xy + woz * xz,
+                                    wox * yx + woy * yy + woz * yz,
+                                    wox * mx + woy * my + woz * mz, lobe.ax, lobe.ay, ua, ub)
+    return (hx * xx + hy * yx + hz * mx, hx * xy + hy * yy + hz * my,
+            hx * xz + hy * yz + hz * mz)
 
 
 @njit(**ALLOCATING)
@@ -326,7 +428,7 @@ def _lobe_integrands(alpha, fresnel_on, eta, mu, u):
     v0 = math.sqrt(max(0.0, 1 - mu * mu))
     lo = ggx_lambda(mu, a2)
     for k in range(len(u)):
-        hx, hy, hz = ggx_visible_normal(v0, 0.0, mu, alpha, u[k, 0], u[k, 1])
+        hx, hy, hz = ggx_visible_normal(v0, 0.0, mu, alpha, alpha, u[k, 0], u[k, 1])
         cos_hv = max(hx * v0 + hz * mu, 0.0)
         cos_i = 2.0 * cos_hv * hz - mu
         if cos_i > 0:
@@ -347,7 +449,7 @@ def _glass_integrands(alpha, eta, mu, u):
     v0 = math.sqrt(max(0.0, 1 - mu * mu))
     lo = ggx_lambda(mu, a2)
     for k in range(len(u)):
-        hx, hy, hz = ggx_visible_normal(v0, 0.0, mu, alpha, u[k, 0], u[k, 1])
+        hx, hy, hz = ggx_visible_normal(v0, 0.0, mu, alpha, alpha, u[k, 0], u[k, 1])
         cos_hv = max(hx * v0 + hz * mu, 0.0)
         fr, cos_t = fresnel_dielectric(cos_hv, eta, True)
         cos_r = 2.0 * cos_hv * hz - mu
@@ -508,17 +610,30 @@ LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_gui
 # specular lobe, the transmission tint (3; rough glass, else 0), the F82 model's b
 # (3; rough metal, fresnel_f82, else 0) and the Principled BSDF's Specular Tint on a
 # dielectric Fresnel (3; fresnel.tinted_fresnel; 1 elsewhere); the Principled base's
-# Oren-Nayar roughness (0: Lambert) and colour, its albedo (3).
+# Oren-Nayar roughness (0: Lambert) and colour, its albedo (3); an anisotropic lobe's
+# alpha_x, alpha_y (ax 0: isotropic, alpha) and tangent t (3; anisotropic_layer).
 Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
                             "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2 st0 st1 st2 "
-                            "sigma base0 base1 base2", defaults=(0.0, 0.0, 0.0, 0.0))
+                            "sigma base0 base1 base2 ax ay tx ty tz",
+                  defaults=(0.0,) * 9)
 
 
 @njit(**INLINE)
 def no_layer():
     """The Layer of a vertex without a rough lobe."""
     return Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                 0.0)
+
+
+@njit(**INLINE)
+def anisotropic_layer(lobe, ax, ay, tx, ty, tz):
+    """`lobe` made anisotropic: alpha_x ax along tangent t, alpha_y across it (Cycles
+    keeps the compensation the tables give at its isotropic roughness)."""
+    return Layer(lobe.dw0, lobe.dw1, lobe.dw2, lobe.tint0, lobe.tint1, lobe.tint2, lobe.alpha,
+                 lobe.eta, lobe.fresnel_on, lobe.comp0, lobe.comp1, lobe.comp2, lobe.p_spec,
+                 lobe.tt0, lobe.tt1, lobe.tt2, lobe.b0, lobe.b1, lobe.b2, lobe.st0, lobe.st1,
+                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, ax, ay, tx, ty, tz)
 
 
 def layer_tables(materials, used) -> LayerTables:
@@ -531,6 +646,9 @@ def layer_tables(materials, used) -> LayerTables:
     first, count = np.arange(k, dtype=np.int64), np.ones(k, np.int64)
     roughness = materials.roughness if materials.roughness is not None else np.zeros(k)
     textured = materials.roughness_programs or [None] * k
+    # An anisotropic lobe reads its tables at (alpha_x alpha_y)^(1/4), which differs from
+    # its roughness where an alpha is clamped to 1: it gets the rows over roughness too.
+    anisotropic = materials.anisotropic()
     rows = [_lobe_row(materials, j, 0.0, False) for j in range(k)]  # zeros but for `used`
     fss = np.ones(k)
     for j in used:
@@ -544,7 +662,7 @@ def layer_tables(materials, used) -> LayerTables:
         base[j] = materials.colour[j] if principled else 0.0
         tint[j] = materials.colour[j] if kind in (GLOSSY, ROUGH_METAL) else float(principled)
         rows[j] = _lobe_row(materials, j, float(roughness[j]))
-        if textured[j] is not None:
+        if textured[j] is not None or anisotropic[j]:
             first[j], count[j] = len(rows), ROUGHNESS_GRID
             rows += [_lobe_row(materials, j, float(t ** ROUGHNESS_WARP))
                      for t in np.linspace(0.0, 1.0, ROUGHNESS_GRID)]
@@ -686,7 +804,8 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0):
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, alpha, eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, sigma, b0, b1, b2)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, sigma, b0, b1, b2,
+                 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit(**JIT)
@@ -715,7 +834,8 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma
     sd = (dw0 + dw1 + dw2) / 3.0
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, 1.0, 1.0, 1.0, alpha, eta, True, c0, c1, c2, p_spec,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2], sigma, b0, b1, b2)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2], sigma, b0, b1, b2,
+                 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit(**INLINE)
@@ -761,7 +881,8 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness, edge):
                       multiscatter_fresnel(f82_fss(c2, b2), e))
     return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, alpha, 1.0, False,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
-                 0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                 0.0, 0.0, 0.0)
 
 
 @njit(**INLINE)
@@ -791,7 +912,7 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0, st[0], st[1], st[2], 0.0,
-                 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @njit(**INLINE)
@@ -856,9 +977,8 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
     hx, hy, hz = hx / hl, hy / hl, hz / hl
     cos_hv = hx * wox + hy * woy + hz * woz
     tinted = lobe.fresnel_on and (lobe.st0 != 1.0 or lobe.st1 != 1.0 or lobe.st2 != 1.0)
-    spec, pdf_s = eval_ggx(mx * wox + my * woy + mz * woz, mx * wix + my * wiy + mz * wiz,
-                           mx * hx + my * hy + mz * hz, cos_hv, lobe.alpha * lobe.alpha,
-                           lobe.eta, lobe.fresnel_on and not tinted)
+    spec, pdf_s = eval_lobe_ggx(wox, woy, woz, wix, wiy, wiz, hx, hy, hz, mx, my, mz, lobe,
+                                lobe.eta, lobe.fresnel_on and not tinted)
     spec0 = spec1 = spec2 = spec
     if tinted:  # the Specular Tint's Fresnel per channel
         f = fresnel_dielectric(cos_hv, lobe.eta, True)[0]
@@ -894,7 +1014,7 @@ def sample_layered(wox, woy, woz, sx, sy, sz, mx, my, mz, nx, ny, nz, lobe, u_lo
     """Sample the layered lobe: pick the specular or the diffuse layer, then evaluate the
     mixture (one-sample MIS over the lobes). Returns (w, weight (3 values), pdf, ok)."""
     if u_lobe < lobe.p_spec:
-        hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
+        hwx, hwy, hwz = sample_lobe_normal(wox, woy, woz, mx, my, mz, lobe, ua, ub)
         wx, wy, wz, _ = reflect(wox, woy, woz, hwx, hwy, hwz)
     else:
         s, t = build_frame(sx, sy, sz)
@@ -1015,9 +1135,8 @@ def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, l
     hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
     hx, hy, hz = hx / hl, hy / hl, hz / hl
     cos_hv = hx * wox + hy * woy + hz * woz
-    spec, pdf = eval_ggx(mx * wox + my * woy + mz * woz, mx * wix + my * wiy + mz * wiz,
-                         mx * hx + my * hy + mz * hz, cos_hv, lobe.alpha * lobe.alpha, 1.0,
-                         False)
+    spec, pdf = eval_lobe_ggx(wox, woy, woz, wix, wiy, wiz, hx, hy, hz, mx, my, mz, lobe, 1.0,
+                              False)
     if not wix * nx + wiy * ny + wiz * nz > 0.0:
         return 0.0, 0.0, 0.0, 0.0
     return (spec * fresnel_f82(cos_hv, lobe.tint0, lobe.b0) * lobe.comp0,
@@ -1029,7 +1148,7 @@ def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, l
 def sample_rough_conductor(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, ua, ub):
     """Sample the rough metal lobe about m: a visible normal, the mirror direction.
     Returns (w, weight (3 values), pdf, ok)."""
-    hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
+    hwx, hwy, hwz = sample_lobe_normal(wox, woy, woz, mx, my, mz, lobe, ua, ub)
     wx, wy, wz, _ = reflect(wox, woy, woz, hwx, hwy, hwz)
     g0, g1, g2, pdf = eval_rough_conductor(wox, woy, woz, wx, wy, wz, mx, my, mz, nx, ny, nz,
                                            lobe)

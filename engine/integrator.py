@@ -81,8 +81,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_ENVIRONMENT", "HAS_WORLD_COLOUR", "HAS_TERMINATOR", "HAS_LIGHT_GRID",
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
-                  "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "HAS_OREN_NAYAR", "PROFILE",
-                  "DEBUG")
+                  "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "HAS_OREN_NAYAR",
+                  "HAS_ANISOTROPY", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -101,6 +101,7 @@ HAS_TRANSLUCENT = True  # Lambertian transmission (the Translucent BSDF)
 HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen layers)
 HAS_LIGHT_PATH = True  # programs read the path's state (the Light Path node): paths keep it
 HAS_OREN_NAYAR = True  # Diffuse BSDFs with roughness (bsdf.oren_nayar_ratio)
+HAS_ANISOTROPY = True  # anisotropic GGX lobes (bsdf.anisotropic_layer)
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -126,14 +127,15 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # each sheen lobe's layer (k,) int (-1: a Sheen BSDF) and bsdf.sheen_table (3, 32, 32);
 # the Principled BSDF's Specular Tint on its dielectric Fresnel (k, 3; white elsewhere);
 # each row's layer dimming its emission's share under a sheen or coat (k,) and that share
-# (k, 3) (scene.Materials.emission_root, emission_share).
+# (k, 3) (scene.Materials.emission_root, emission_share); with anisotropy, each row's
+# anisotropy and rotation (k,) (scene.Materials.specular_anisotropy, anisotropic_rotation).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength medium mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
                                             "sheen_ltc specular_tint emission_root "
-                                            "emission_share")
+                                            "emission_share anisotropy rotation")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
 # exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's). A setting,
@@ -665,7 +667,8 @@ def surface_colour(x, sc, paths):
 def rough_lobe(x, k, c, sc, paths):
     """The rough lobe (bsdf.Layer) of vertex x of kind k with surface colour c: the
     Principled or Glossy layer, rough metal, or rough glass on the side wo sees, at the
-    roughness its program gives here where it has one; empty for others."""
+    roughness its program gives here where it has one (anisotropic where it is); empty for
+    others."""
     mt = sc.materials
     mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
     textured = tinted = False
@@ -676,22 +679,60 @@ def rough_lobe(x, k, c, sc, paths):
         tinted = mt.programs.tint[x.mat, 0] >= 0
         roughness = shading.roughness_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
                                          paths.svm, roughness)
+    ax = ay = tx = ty = tz = 0.0
+    if HAS_ANISOTROPY and (k == PRINCIPLED or k == GLOSSY or k == ROUGH_METAL):
+        ax, ay, tx, ty, tz = anisotropy_at(x, k, roughness, sc, paths)
+        if ax > 0.0:  # the tables at Cycles' roughness for them, (alpha_x alpha_y)^(1/4)
+            roughness = math.sqrt(math.sqrt(ax * ay))
     if HAS_ROUGH and (k == PRINCIPLED or k == GLOSSY):
         sigma = -1.0  # the table's Diffuse Roughness
         if HAS_OREN_NAYAR and HAS_TEXTURES:
             sigma = shading.diffuse_roughness_at(x.mat, x.f, x.u, x.v, mt.programs,
                                                  sc.geometry.uv, paths.svm, sigma)
-        return bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
+        lobe = bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
                              roughness, specular_tint_at(x, sc, paths), sigma)
+        if HAS_ANISOTROPY and ax > 0.0:
+            return bsdf.anisotropic_layer(lobe, ax, ay, tx, ty, tz)
+        return lobe
     if HAS_ROUGH_METAL and k == ROUGH_METAL:  # (a varying tint needs its own Fss too)
-        return bsdf.metal_layer_at(x.mat, mu, mt.layers, textured or tinted, c[0], c[1],
+        lobe = bsdf.metal_layer_at(x.mat, mu, mt.layers, textured or tinted, c[0], c[1],
                                    c[2], roughness, metal_edge_at(x, sc, paths))
+        if HAS_ANISOTROPY and ax > 0.0:
+            return bsdf.anisotropic_layer(lobe, ax, ay, tx, ty, tz)
+        return lobe
     if HAS_ROUGH_GLASS and k == ROUGH_GLASS:
         tints = glass_tints_at(x, c, textured, sc)
         return bsdf.glass_layer_at(x.mat, mu, x.front, mt.ior[x.mat], mt.layers, tints[:3],
                                    tints[3:], roughness, mt.fresnel[x.mat], textured,
                                    specular_tint_at(x, sc, paths))
     return bsdf.no_layer()
+
+
+def anisotropy_at(x, k, roughness, sc, paths):
+    """Vertex x's anisotropic GGX: (alpha_x, alpha_y, tangent (3)) from its anisotropy,
+    rotation and tangent here (their programs' results where they vary) and its roughness
+    (< 0: the material's constant), as Cycles' svm_node_closure_bsdf makes them: the
+    tangent turned by the rotation about the Principled BSDF's normal (its shading
+    normal) or the Glossy BSDF's (the valid specular one); alpha_x 0 where the lobe is
+    isotropic, or its tangent lies along the normal."""
+    mt = sc.materials
+    if mt.programs.tangent[x.mat, 0] < 0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    principled = k != GLOSSY
+    a, rotation = shading.anisotropy_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                        paths.svm, mt.anisotropy[x.mat], mt.rotation[x.mat])
+    if not bsdf.is_anisotropic(a, principled):
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    r = roughness if roughness >= 0.0 else mt.roughness[x.mat]
+    ax, ay = bsdf.anisotropic_alphas(r, a, principled)
+    tx, ty, tz = shading.tangent_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                    paths.svm)
+    if rotation != 0.0:
+        nx, ny, nz = (x.sx, x.sy, x.sz) if principled else (x.mx, x.my, x.mz)
+        tx, ty, tz = shading.axis_rotation(tx, ty, tz, nx, ny, nz, rotation * 2.0 * np.pi)
+    if not bsdf.tangent_frame(x.mx, x.my, x.mz, tx, ty, tz)[6]:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    return ax, ay, tx, ty, tz
 
 
 def specular_tint_at(x, sc, paths):
@@ -1593,7 +1634,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, shading_normal,
     mapped_normal, bumped_normal,
-    surface_colour, rough_lobe, glass_tints_at, specular_tint_at, metal_edge_at,
+    surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_tint_at, metal_edge_at,
     handle_emission, caustic_weight,
     russian_roulette, emitter_pmf,
     lit_side, textured_emitter,

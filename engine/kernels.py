@@ -236,7 +236,8 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.sheen_layer if plan.sheen or generic else None,
                               m.sheen_parent if plan.sheen or generic else None,
                               sheen_table() if plan.sheen or generic else None,
-                              m.specular_tint, m.emission_root, m.emission_share)
+                              m.specular_tint, m.emission_root, m.emission_share,
+                              *_anisotropy_columns(m, plan.anisotropy or generic))
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -283,6 +284,15 @@ def c_contiguous(data):
     if isinstance(data, tuple) and hasattr(data, "_fields"):
         return type(data)(*(c_contiguous(x) for x in data))
     return data
+
+
+def _anisotropy_columns(m, needed) -> tuple:
+    """The MaterialTable's anisotropy and rotation columns (None where not needed)."""
+    if not needed:
+        return None, None
+    k = len(m.kind)
+    return (m.specular_anisotropy if m.specular_anisotropy is not None else np.zeros(k),
+            m.anisotropic_rotation if m.anisotropic_rotation is not None else np.zeros(k))
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:

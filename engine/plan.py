@@ -95,6 +95,8 @@ class Plan:
     light_path: bool = False
     # Some Diffuse BSDF or Principled base used has a roughness (Oren-Nayar).
     oren_nayar: bool = False
+    # Some GGX lobe used is anisotropic (bsdf.anisotropic_layer).
+    anisotropy: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -141,7 +143,8 @@ class Plan:
                                 ("rough glass", self.rough_glass),
                                 ("rough metal", self.rough_metal),
                                 ("translucent", self.translucent),
-                                ("sheen", self.sheen)) if f]
+                                ("sheen", self.sheen), ("anisotropic GGX", self.anisotropy))
+                 if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
         if self.light_tracing:
@@ -171,7 +174,7 @@ class Plan:
             HAS_COATS=self.coats,
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen, HAS_LIGHT_PATH=self.light_path,
-            HAS_OREN_NAYAR=self.oren_nayar,
+            HAS_OREN_NAYAR=self.oren_nayar, HAS_ANISOTROPY=self.anisotropy,
             PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
@@ -274,7 +277,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         transparency=transparency,
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
         translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds, light_path=light_path,
-        oren_nayar=oren_nayar,
+        oren_nayar=oren_nayar, anisotropy=bool(np.any(m.anisotropic()[used])),
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must

@@ -40,6 +40,8 @@ TEXTURED_KINDS = ("diffuse", "principled", "glossy", "mirror", "metal", "rough_m
 # The kinds whose roughness may come from one (Material.roughness_program): the GGX lobes,
 # the sheen and Oren-Nayar diffuse.
 ROUGH_KINDS = ("principled", "glossy", "rough_metal", "rough_glass", "sheen", "diffuse")
+# The kinds whose GGX lobe may be anisotropic (Material.with_anisotropy).
+ANISOTROPIC_KINDS = ("principled", "glossy", "rough_metal")
 # The kinds with a Specular Tint that may vary (Material.tint_program); a coat's mix has its
 # Coat Tint there.
 TINTED_KINDS = ("principled", "metal", "rough_metal", "glass", "rough_glass")
@@ -231,6 +233,16 @@ class Material:
     # (bsdf.oren_nayar_ratio, Lambert at 0), which may vary (a program).
     diffuse_roughness: float = 0.0
     diffuse_roughness_program: Program | None = field(default=None, compare=False)
+    # An anisotropic GGX lobe (principled, rough_metal: the Principled BSDF's Anisotropic;
+    # glossy: the Glossy BSDF's Anisotropy, each in Cycles' own convention,
+    # bsdf.anisotropic_alphas), turned by `anisotropic_rotation` (of a full turn) about the
+    # normal from the tangent the `tangent_program` gives (a vector; the Tangent input, by
+    # default shading.radial_tangent("Z")); `anisotropy_program` may give both per point
+    # (its first two channels). See Material.with_anisotropy.
+    specular_anisotropy: float = 0.0
+    anisotropic_rotation: float = 0.0
+    anisotropy_program: Program | None = field(default=None, compare=False)
+    tangent_program: Program | None = field(default=None, compare=False)
     coat_ior: float = 0.0  # mix: > 0 makes it a coat layer of this IOR (see above)
     coat_tint: tuple = (1.0, 1.0, 1.0)  # coat: the colour light keeps through it head-on
     sheen_layer: bool = False  # mix: Cycles' Principled sheen over components[0] (see above)
@@ -395,6 +407,32 @@ class Material:
                    roughness=float(roughness), multiscatter=bool(multiscatter),
                    colour_program=colour_program, emission_program=emission_program,
                    roughness_program=roughness_program)
+
+    def with_anisotropy(self, specular_anisotropy, anisotropic_rotation=0.0,
+                        tangent_program=None, anisotropy_program=None) -> "Material":
+        """This material with an anisotropic GGX lobe: for a Principled BSDF (its metal and
+        dielectric lobes: a mix's components of those kinds) or a rough Glossy BSDF; delta
+        and other lobes stay as they are, as in Cycles (its glass and coat are isotropic).
+        `tangent_program` is required (shading.radial_tangent("Z") is Cycles' default)."""
+        anisotropy, rotation = specular_anisotropy, anisotropic_rotation
+        if self.kind == "mix":  # a coat's own lobe (components[1]) stays isotropic
+            parts = tuple(c if j == 1 and self.coat_ior > 0 else
+                          c.with_anisotropy(anisotropy, rotation, tangent_program,
+                                            anisotropy_program)
+                          for j, c in enumerate(self.components))
+            return dataclasses.replace(self, components=parts)
+        if self.kind not in ANISOTROPIC_KINDS:
+            return self
+        if tangent_program is None:
+            raise ValueError(f"material '{self.name}': an anisotropic lobe needs a tangent "
+                             f"program (shading.radial_tangent)")
+        a, r = float(anisotropy), float(rotation)
+        if not (math.isfinite(a) and math.isfinite(r)):
+            raise ValueError(f"material '{self.name}': anisotropy and rotation must be finite, "
+                             f"got {anisotropy!r}, {rotation!r}")
+        return dataclasses.replace(self, specular_anisotropy=a, anisotropic_rotation=r,
+                                   tangent_program=tangent_program,
+                                   anisotropy_program=anisotropy_program)
 
     @classmethod
     def translucent(cls, name, colour, colour_program=None):
@@ -566,6 +604,12 @@ class Materials:
     tint_programs: list | None = None  # per row a Specular or Coat Tint Program or None
     diffuse_roughness: np.ndarray | None = None  # (k,), Material.diffuse_roughness
     diffuse_roughness_programs: list | None = None  # per row its Program or None
+    # (k,) Material.specular_anisotropy and .anisotropic_rotation, and per row the
+    # anisotropy and tangent Programs or None.
+    specular_anisotropy: np.ndarray | None = None
+    anisotropic_rotation: np.ndarray | None = None
+    anisotropy_programs: list | None = None
+    tangent_programs: list | None = None
 
     @classmethod
     def from_list(cls, materials: list[Material]) -> "Materials":
@@ -658,26 +702,17 @@ class Materials:
                   np.array([_colour(m.volume_emission, f"material '{m.name}' volume emission")
                             for m in materials]))
         for m in materials:
-            if m.roughness_program is not None and m.kind not in ROUGH_KINDS:
-                raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
-                                 f"vary (textured roughness: {', '.join(ROUGH_KINDS)})")
-        for m in materials:
-            if m.tint_program is not None and m.kind not in TINTED_KINDS and \
-                    not m.coat_ior > 0:
-                raise ValueError(f"material '{m.name}': a {m.kind} material has no specular or "
-                                 f"coat tint to vary")
-        for m in materials:
-            if m.diffuse_roughness_program is not None and m.kind != "principled":
-                raise ValueError(f"material '{m.name}': only a Principled BSDF has a Diffuse "
-                                 f"Roughness to vary")
+            _check_varying(m)
         lists = (programs, emission_programs, normal_programs,
                  [m.fac_program for m in materials], [m.roughness_program for m in materials],
                  [m.height_program for m in materials], [m.tint_program for m in materials],
-                 [m.diffuse_roughness_program for m in materials])
+                 [m.diffuse_roughness_program for m in materials],
+                 [m.anisotropy_program for m in materials],
+                 [m.tangent_program for m in materials])
         textured = any(p is not None for progs in lists for p in progs)
         (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
-         height_programs, tint_programs, diffuse_roughness_programs) = \
-            lists if textured else (None,) * len(lists)
+         height_programs, tint_programs, diffuse_roughness_programs, anisotropy_programs,
+         tangent_programs) = lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -688,6 +723,11 @@ class Materials:
                    height_programs=height_programs, tint_programs=tint_programs,
                    diffuse_roughness_programs=diffuse_roughness_programs,
                    diffuse_roughness=np.array([float(m.diffuse_roughness) for m in materials]),
+                   anisotropy_programs=anisotropy_programs, tangent_programs=tangent_programs,
+                   specular_anisotropy=np.array([float(m.specular_anisotropy)
+                                                 for m in materials]),
+                   anisotropic_rotation=np.array([float(m.anisotropic_rotation)
+                                                  for m in materials]),
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
@@ -707,11 +747,20 @@ class Materials:
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness, height, tint, diffuse roughness), each a list with one Program or None
-        per row."""
+        roughness, height, tint, diffuse roughness, anisotropy, tangent), each a list with
+        one Program or None per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
                 self.fac_programs, self.roughness_programs, self.height_programs,
-                self.tint_programs, self.diffuse_roughness_programs)
+                self.tint_programs, self.diffuse_roughness_programs,
+                self.anisotropy_programs, self.tangent_programs)
+
+    def anisotropic(self) -> np.ndarray:
+        """(k,) bool: the rows whose GGX lobe may be anisotropic."""
+        k = len(self.kind)
+        a = self.specular_anisotropy if self.specular_anisotropy is not None else np.zeros(k)
+        varying = np.array([p is not None for p in (self.anisotropy_programs or [None] * k)],
+                           bool)
+        return (a != 0.0) | varying
 
     def __len__(self):
         return len(self.kind)
@@ -1239,10 +1288,26 @@ class SceneBuilder:
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count
-        colour, emission, normal, fac, roughness, height, tint, diffuse_roughness = \
-            materials.program_lists()
-        return uv, pack(colour, emission, names.index, normal, fac, roughness, height,
-                        tint, diffuse_roughness), names
+        return uv, pack(*materials.program_lists()[:2], names.index,
+                        *materials.program_lists()[2:]), names
+
+
+def _check_varying(m: Material) -> None:
+    """A ValueError where material m varies (or has) what its kind lacks: a roughness, a
+    specular or coat tint, a Diffuse Roughness, an anisotropy (which needs a tangent)."""
+    if m.roughness_program is not None and m.kind not in ROUGH_KINDS:
+        raise ValueError(f"material '{m.name}': a {m.kind} material's roughness cannot "
+                         f"vary (textured roughness: {', '.join(ROUGH_KINDS)})")
+    if m.tint_program is not None and m.kind not in TINTED_KINDS and not m.coat_ior > 0:
+        raise ValueError(f"material '{m.name}': a {m.kind} material has no specular or "
+                         f"coat tint to vary")
+    if m.diffuse_roughness_program is not None and m.kind != "principled":
+        raise ValueError(f"material '{m.name}': only a Principled BSDF has a Diffuse "
+                         f"Roughness to vary")
+    if (m.specular_anisotropy != 0.0 or m.anisotropy_program is not None) and \
+            (m.kind not in ANISOTROPIC_KINDS or m.tangent_program is None):
+        raise ValueError(f"material '{m.name}': anisotropy needs a tangent program and "
+                         f"one of the kinds {', '.join(ANISOTROPIC_KINDS)}")
 
 
 def _corner_coordinates(m, t) -> np.ndarray:

@@ -90,7 +90,8 @@ OP_MAP_RANGE = 30   # reg[out:out+w] = Map Range of reg[a:], from reg[b:] .. reg
 #                     (MAP_RANGES), clamp, w
 OP_CLAMP = 31       # reg[out] = Clamp of reg[a] to reg[b] .. reg[c]; d: Range (else Min Max)
 OP_GEOMETRY = 32    # the hit's geometry (Geometry node): d = 0, reg[out:out+3] = the shading
-#                     normal; 1, the direction toward the viewer; 2, reg[out] = back face
+#                     normal; 1, the direction toward the viewer; 2, reg[out] = back face;
+#                     3, the tangent along reg[a:a+3] across the shading normal (Tangent)
 OP_BRICK = 33       # reg[out:out+3] Color, reg[out+3] Fac of Cycles' Brick Texture at
 #                     reg[a:a+3]: colours reg[b:], reg[c:], mortar reg[d:]; params[p:p+6] the
 #                     registers of Scale, Mortar Size, Mortar Smooth, Bias, Brick Width and Row
@@ -144,6 +145,16 @@ ATTRIBUTE, ATTRIBUTE_SCALARS = "\x00attribute:", "\x00attribute_scalars:"
 OBJECT_LOCATION, OBJECT_COLOUR = "\x00object_location", "\x00object_colour"
 OBJECT_NUMBERS = "\x00object_numbers"
 OBJECT_MAPS = (OBJECT_LOCATION, OBJECT_COLOUR, OBJECT_NUMBERS)
+# The Tangent node's Radial directions (and the Geometry node's Tangent, Radial Z): the map
+# of this prefix and the axis ("X", "Y", "Z") holds, per corner, the direction around that
+# axis of the texture space, (-(g_y - 1/2), g_x - 1/2, 0) for Z from Generated g, turned
+# into world space as a normal turns (Cycles' svm_node_tangent and primitive_tangent with
+# object_normal_transform); both steps are linear, so interpolating it is exact.
+RADIAL = "\x00radial:"
+# ... and the Tangent node's UV Map direction: the map of this prefix and the UV map's name
+# ("": the render-active one) holds Blender's tangents of that map (as normal maps read
+# them), turned into world space as a normal turns, as svm_node_tangent turns them.
+UV_TANGENT = "\x00uv_tangent:"
 
 
 def map_label(name: str) -> str:
@@ -156,6 +167,11 @@ def map_label(name: str) -> str:
         return "normals"
     if name in OBJECT_MAPS:
         return "object info"
+    if name.startswith(RADIAL):
+        return "Generated coordinates"
+    if name.startswith(UV_TANGENT):
+        uv_map = name[len(UV_TANGENT):]
+        return f"tangents of UV map '{uv_map}'" if uv_map else "UV map tangents"
     for prefix in (COLOUR_ATTRIBUTE, COLOUR_ALPHA):
         if name.startswith(prefix):
             attribute = name[len(prefix):]
@@ -317,15 +333,24 @@ class Program:
         return self.emit(OP_IMAGE, 4, a=coordinate, b=len(self.textures) - 1, c=int(unassociate))
 
 
+def radial_tangent(axis: str = "Z") -> Program:
+    """The program of the Tangent node's Radial direction about `axis` ("X", "Y", "Z"), and
+    of the Geometry node's Tangent (Z): Cycles' default for a Tangent input left unlinked."""
+    p = Program()
+    p.out = p.emit(OP_GEOMETRY, 3, a=p.uv(RADIAL + axis), d=3)
+    return p
+
+
 # The kernel's view of every program of a scene:
 #   code (n, WIDTH) int64, params (p,) float64, texels (N, 4) float32,
 #   textures (i, 6) int64 rows (first texel, width, height, interpolation, extension, srgb),
 #   colour, emission, normal, fac, roughness, height, tint (k, 3) int64 per material: that
 #   input's program as first instruction (-1: none), end, result register. tint: the
 #   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint; diffuse_roughness:
-#   the Principled BSDF's Diffuse Roughness.
+#   the Principled BSDF's Diffuse Roughness; anisotropy: a GGX lobe's anisotropy and its
+#   rotation (two registers); tangent: its Tangent input (a vector).
 SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint",
-         "diffuse_roughness")
+         "diffuse_roughness", "anisotropy", "tangent")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
@@ -333,15 +358,18 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
          normal_programs: list | None = None, fac_programs: list | None = None,
          roughness_programs: list | None = None, height_programs: list | None = None,
          tint_programs: list | None = None,
-         diffuse_roughness_programs: list | None = None) -> ProgramTable:
+         diffuse_roughness_programs: list | None = None,
+         anisotropy_programs: list | None = None,
+         tangent_programs: list | None = None) -> ProgramTable:
     """Pack the materials' colour, emission, normal-map, mix-factor, roughness, bump
-    height, tint and diffuse roughness programs (one per material, or None) into a
-    ProgramTable; each program's UV map names become scene-wide map indices through
-    `uv_index(name)`."""
+    height, tint, diffuse roughness, anisotropy and tangent programs (one per material, or
+    None) into a ProgramTable; each program's UV map names become scene-wide map indices
+    through `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
                                        fac_programs, roughness_programs, height_programs,
-                                       tint_programs, diffuse_roughness_programs)]
+                                       tint_programs, diffuse_roughness_programs,
+                                       anisotropy_programs, tangent_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -883,7 +911,13 @@ def node_view_coordinates(ins, reg):
     object-space normal normalised, negated on a back face as sd->N is) and Window (the
     homogeneous map divided through; Cycles' transform_perspective)."""
     op, a, out, g = ins[0], ins[2], ins[1], GEOMETRY
-    if op == OP_GEOMETRY:  # the normal, the view (3 registers) or the side (1)
+    if op == OP_GEOMETRY and ins[5] == 3:  # Cycles: cross(N, normalize(cross(t, N)))
+        nx, ny, nz = reg[g], reg[g + 1], reg[g + 2]
+        tx, ty, tz = reg[a], reg[a + 1], reg[a + 2]
+        cx, cy, cz = _safe_normalize(ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx)
+        reg[out], reg[out + 1], reg[out + 2] = ny * cz - nz * cy, nz * cx - nx * cz, \
+            nx * cy - ny * cx
+    elif op == OP_GEOMETRY:  # the normal, the view (3 registers) or the side (1)
         for j in range(3 if ins[5] < 2 else 1):
             reg[out + j] = reg[g + 3 * ins[5] + j]
     elif op == OP_REFLECTION:
@@ -1376,6 +1410,25 @@ def diffuse_roughness_at(mat, f, u, v, pt, uv, reg, r):
     or r where it is constant."""
     x, _, _ = result_at(pt.diffuse_roughness, mat, f, u, v, pt, uv, reg, r, r, r)
     return min(x, 1.0)
+
+
+@njit(**INLINE)
+def anisotropy_at(mat, f, u, v, pt, uv, reg, anisotropy, rotation):
+    """Material mat's anisotropy and its rotation at the hit: its anisotropy program's
+    first two channels (negative ones kept: the Glossy BSDF's anisotropy may be), or the
+    constants."""
+    if pt.anisotropy[mat, 0] < 0:
+        return anisotropy, rotation
+    a, r, _ = raw_result_at(pt.anisotropy, mat, f, u, v, pt, uv, reg)
+    return a, r
+
+
+@njit(**INLINE)
+def tangent_at(mat, f, u, v, pt, uv, reg):
+    """Material mat's tangent at the hit (its tangent program's result, a vector), or 0."""
+    if pt.tangent[mat, 0] < 0:
+        return 0.0, 0.0, 0.0
+    return raw_result_at(pt.tangent, mat, f, u, v, pt, uv, reg)
 
 
 @njit(**JIT)

@@ -149,6 +149,56 @@ def test_rough_diffuse_keeps_its_roughness_constant_or_textured(fresh):
             for uv in [(0.05, 0.05), (0.3, 0.05)]} == {0.0, 1.0}
 
 
+def test_anisotropy_reaches_the_metal_and_specular_lobes_with_its_tangent(fresh, core):
+    """The Principled BSDF's Anisotropic, Anisotropic Rotation and Tangent (default: the
+    radial tangent about Z) go to its metal and dielectric lobes, not its coat (no
+    warning); a textured Anisotropic makes a program of both; a Tangent node's Radial
+    axis or UV map is its program; a chain that does not compile is warned and the
+    default used. The Glossy BSDF keeps its own (negative) Anisotropy."""
+    sh = core.shading
+    mat, node = node_material("Brushed", "ShaderNodeBsdfPrincipled", Metallic=0.5, **{
+        "Anisotropic": 0.7, "Anisotropic Rotation": 0.2, "Coat Weight": 0.3})
+    spec, warnings = convert(mat)
+    assert warnings == []
+    m = spec.to_core(core)
+    metal, dielectric = m.components[0].components[1], m.components[0].components[0]
+    assert (metal.kind, dielectric.kind) == ("rough_metal", "principled")
+    for lobe in (metal, dielectric):
+        assert (lobe.specular_anisotropy, lobe.anisotropic_rotation) == \
+            pytest.approx((0.7, 0.2))
+        assert lobe.tangent_program.uv_maps == [sh.RADIAL + "Z"]
+        assert lobe.anisotropy_program is None
+    assert m.components[1].specular_anisotropy == 0.0  # the coat's lobe
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Fac"], node.inputs["Anisotropic"])
+    tangent = mat.node_tree.nodes.new("ShaderNodeTangent")
+    tangent.direction_type, tangent.axis = "RADIAL", "X"
+    mat.node_tree.links.new(tangent.outputs["Tangent"], node.inputs["Tangent"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    lobe = spec.to_core(core).components[0].components[0]
+    assert lobe.tangent_program.uv_maps == [sh.RADIAL + "X"]
+    values = {tuple(np.round(_program_at(lobe.anisotropy_program, uv)[:2], 6))
+              for uv in [(0.05, 0.05, 0.05), (0.3, 0.05, 0.05)]}
+    assert values == {(1.0, 0.2), (0.0, 0.2)}
+    tangent.direction_type = "UV_MAP"
+    spec, warnings = convert(mat)
+    lobe = spec.to_core(core).components[0].components[0]
+    assert warnings == [] and lobe.tangent_program.uv_maps == [sh.UV_TANGENT]
+    bevel = mat.node_tree.nodes.new("ShaderNodeBevel")  # not evaluated: the default, warned
+    mat.node_tree.links.new(bevel.outputs["Normal"], node.inputs["Tangent"])
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and "Tangent" in warnings[0] and "radial about Z" in warnings[0]
+    lobe = spec.to_core(core).components[0].components[0]
+    assert lobe.tangent_program.uv_maps == [sh.RADIAL + "Z"]
+    mat, node = node_material("Streaked", "ShaderNodeBsdfGlossy", Roughness=0.3,
+                              Anisotropy=-0.6, Rotation=0.1)
+    spec, warnings = convert(mat)
+    glossy = spec.to_core(core)
+    assert warnings == [] and glossy.kind == "glossy"
+    assert (glossy.specular_anisotropy, glossy.anisotropic_rotation) == pytest.approx((-0.6, 0.1))
+
+
 @pytest.mark.parametrize("distribution, multiscatter, warned", [
     ("MULTI_GGX", True, False), ("GGX", False, False), ("BECKMANN", False, True)])
 def test_rough_glass_keeps_its_roughness_and_distribution(fresh, core, distribution, multiscatter,
@@ -895,8 +945,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Anisotropic", 0.5),
-    ("Thin Film Thickness", 300.0),
+    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Thin Film Thickness", 300.0),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")

@@ -366,6 +366,17 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
     for o in params["objects"]:
         if o["material"]["kind"] in ("diffuse", "principled") and rough.random() < 0.3:
             o["material"]["diffuse_roughness"] = _r(rough.uniform(0.05, 1.0), 3)
+    # Some rough GGX lobes anisotropic (the Glossy BSDF's Anisotropy, either sign; the
+    # Principled BSDF's Anisotropic), turned or not, from a stream of their own.
+    stretch = np.random.default_rng([seed, 0xa150])
+    for o in params["objects"]:
+        m = o["material"]
+        if m["kind"] in ("glossy", "principled", "metal") and m.get("roughness") and \
+                stretch.random() < 0.3:
+            low = -0.9 if m["kind"] == "glossy" else 0.2
+            m["anisotropy"] = {"value": _r(stretch.uniform(low, 0.9 if low < 0 else 1.0), 3),
+                               "rotation": _r(stretch.random(), 3)
+                               if stretch.random() < 0.5 else 0.0}
     if avoid_known:
         params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
@@ -401,6 +412,8 @@ def features(params) -> list[str]:
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (f":oren_nayar={m['diffuse_roughness']}" if m.get("diffuse_roughness")
+                    else "")
+                 + (f":anisotropy={m['anisotropy']['value']}" if m.get("anisotropy")
                     else "")
                  + (f":{m['colour_texture']['node'][13:].lower()}_colour"
                     if m.get("colour_texture") else "")
@@ -603,6 +616,8 @@ def _simpler_material(m):
     if m.get("diffuse_roughness"):
         out.append(("Lambert diffuse",
                     {k: v for k, v in m.items() if k != "diffuse_roughness"}))
+    if m.get("anisotropy"):
+        out.append(("isotropic", {k: v for k, v in m.items() if k != "anisotropy"}))
     if m.get("roughness_checker"):
         out.append(("untextured roughness",
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
@@ -811,8 +826,10 @@ def _bpy_surface_shader(name, m):
     if kind == "diffuse":
         return bs.material(name, "ShaderNodeBsdfDiffuse", Color=rgba,
                            Roughness=m.get("diffuse_roughness", 0.0))
+    stretch = m.get("anisotropy") or {"value": 0.0, "rotation": 0.0}
     if kind == "glossy":
-        return bs.material(name, "ShaderNodeBsdfGlossy", Color=rgba, Roughness=m["roughness"])
+        return bs.material(name, "ShaderNodeBsdfGlossy", Color=rgba, Roughness=m["roughness"],
+                           Anisotropy=stretch["value"], Rotation=stretch["rotation"])
     if kind == "glass" and m.get("refraction"):
         mat = bs.material(name, "ShaderNodeBsdfRefraction", Color=rgba,
                           Roughness=m.get("roughness", 0.0), IOR=m["ior"])
@@ -824,7 +841,8 @@ def _bpy_surface_shader(name, m):
                            Roughness=m.get("roughness", 0.0), IOR=m["ior"])
     if kind == "emission":
         return bs.material(name, "ShaderNodeEmission", Color=rgba, Strength=m["strength"])
-    inputs = {"Base Color": rgba, "Roughness": m.get("roughness", 0.0)}
+    inputs = {"Base Color": rgba, "Roughness": m.get("roughness", 0.0),
+              "Anisotropic": stretch["value"], "Anisotropic Rotation": stretch["rotation"]}
     if kind == "principled":
         inputs.update({"IOR": m["ior"], "Specular IOR Level": m["specular_ior_level"],
                        "Diffuse Roughness": m.get("diffuse_roughness", 0.0)})

@@ -530,6 +530,48 @@ def _principled_base_lambert(scene, settings):
     return scene, settings
 
 
+def _anisotropy_changed(scale=1.0, turn=0.0):
+    """Every constant anisotropy times `scale` (0: isotropic, the old fallback, its
+    textured anisotropy and tangents dropped too) and every constant rotation `turn` more
+    (a quarter: the lobe's axes swapped)."""
+    def inject(scene, settings):
+        m = scene.materials
+        scene.materials = dataclasses.replace(
+            m, specular_anisotropy=m.specular_anisotropy * scale,
+            anisotropic_rotation=m.anisotropic_rotation + turn)
+        if scale == 0.0 and scene.programs is not None:
+            scene.programs = scene.programs._replace(
+                anisotropy=np.full_like(scene.programs.anisotropy, -1),
+                tangent=np.full_like(scene.programs.tangent, -1))
+        return scene, settings
+    return inject
+
+
+@contextmanager
+def _tangents_in_object_space():
+    """The radial tangents left in the object's own space (not turned into the world's)."""
+    from addon import exporter
+    saved = exporter._as_normals
+    exporter._as_normals = lambda local, matrix_world: local.astype(np.float32)
+    try:
+        yield
+    finally:
+        exporter._as_normals = saved
+
+
+@contextmanager
+def _uv_tangents_as_radial():
+    """A Tangent node's UV Map direction read as the default radial one (about Z)."""
+    from addon import shader_nodes
+    saved = shader_nodes.NODES["ShaderNodeTangent"]
+    shader_nodes.NODES["ShaderNodeTangent"] = lambda c, node, out: shader_nodes._tangent(
+        c, node, node.axis if node.direction_type == "RADIAL" else "Z")
+    try:
+        yield
+    finally:
+        shader_nodes.NODES["ShaderNodeTangent"] = saved
+
+
 @contextmanager
 def _normal_node_unnormalised():
     """The Normal node's direction used as it is set, not normalised."""
@@ -1094,6 +1136,15 @@ INJECTIONS = {
     "oren_nayar_as_lambert": ("oren_nayar", _diffuse_roughness_scaled(0.0), None),
     "oren_nayar_roughness_halved": ("oren_nayar", _diffuse_roughness_scaled(0.5), None),
     "principled_diffuse_roughness_ignored": ("oren_nayar", _principled_base_lambert, None),
+    # Anisotropic GGX: rendered isotropic (the old fallback); anisotropy halved; every
+    # lobe's tangent a quarter turn off (its axes swapped).
+    "anisotropy_ignored": ("anisotropic", _anisotropy_changed(scale=0.0), None),
+    "anisotropy_halved": ("anisotropic", _anisotropy_changed(scale=0.5), None),
+    "anisotropy_quarter_turn": ("anisotropic", _anisotropy_changed(turn=0.25), None),
+    "anisotropy_tangent_untransformed": ("anisotropic", None, _tangents_in_object_space),
+    "anisotropy_uv_tangent_as_radial": ("anisotropic", None, _uv_tangents_as_radial),
+    "gltf_anisotropy_ignored": ("gltf_anisotropy_strength", _anisotropy_changed(scale=0.0),
+                                None),
     # Light Path: the shadow rays' flag never set; glossy rays read as diffuse ones; the
     # depth one less.
     "light_path_shadow_rays_unseen": ("light_path", None,

@@ -2272,6 +2272,60 @@ def oren_nayar():
     _sphere(blue, (-0.5, -0.45, 0.22), 0.22, "RoughBase")
 
 
+def anisotropic():
+    """Anisotropic GGX (issue 14, point 1: the Principled BSDF's Anisotropic, Anisotropic
+    Rotation and Tangent; the Glossy BSDF's Anisotropy and Rotation): a gold Principled
+    metal ball, Anisotropic 0.9 on the default tangent (radial about its own z, the ball
+    tipped 0.5 rad about x); a Glossy ball of Anisotropy -0.7 (the other convention),
+    Rotation 0.25, squashed along z (tangents turn as normals do); and a green Principled
+    cube, turned about z, whose Anisotropic is a Checker's 0 and 1, turned by 0.125 about
+    a Tangent node's radial x direction; and a silver Principled ball whose Tangent is its
+    UV map's (a Tangent node; u runs along its meridians), tipped 0.8 rad about y. An
+    emitter above the camera's view, in front of the box, draws the highlights out."""
+    _box()
+    _emitter_quad("Front", (-0.4, -1.6, 1.4), 0.4, 12.0, (-math.pi / 3, 0.0, 0.0))
+    gold = _principled("BrushedGold", **{"Base Color": (0.9, 0.6, 0.2, 1.0), "Metallic": 1.0,
+                                         "Roughness": 0.4, "Anisotropic": 0.9})
+    ball = _sphere(gold, (-0.5, 0.25, 0.35), 0.35, "BrushedGold")
+    ball.rotation_euler = (0.5, 0.0, 0.0)
+    glossy = bs.material("Streaked", "ShaderNodeBsdfGlossy", Color=(0.8, 0.85, 0.9, 1.0),
+                         Roughness=0.5, Anisotropy=-0.7, Rotation=0.25)
+    squashed = _sphere(glossy, (0.55, 0.1, 0.3), 0.3, "Streaked")
+    squashed.scale = (1.0, 1.0, 0.7)
+    green = _principled("Checked", **{"Base Color": (0.15, 0.5, 0.25, 1.0), "Roughness": 0.3,
+                                      "Anisotropic Rotation": 0.125})
+    tree = green.node_tree
+    principled = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    tree.links.new(_unit_checker(tree, 3.0)[0], principled.inputs["Anisotropic"])
+    tangent = tree.nodes.new("ShaderNodeTangent")
+    tangent.direction_type, tangent.axis = "RADIAL", "X"
+    tree.links.new(tangent.outputs["Tangent"], principled.inputs["Tangent"])
+    cube = _cube("Checked", (-0.05, -0.45, 0.17), (0.34, 0.34, 0.34), green)
+    cube.rotation_euler = (0.0, 0.0, 0.5)
+    silver = _principled("Mapped", **{"Base Color": (0.8, 0.8, 0.85, 1.0), "Metallic": 1.0,
+                                      "Roughness": 0.35, "Anisotropic": 0.8})
+    tree = silver.node_tree
+    tangent = tree.nodes.new("ShaderNodeTangent")
+    tangent.direction_type, tangent.uv_map = "UV_MAP", "UVMap"
+    tree.links.new(tangent.outputs["Tangent"], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled").inputs["Tangent"])
+    mesh = bpy.data.meshes.new("Mapped")
+    bm = bmesh.new()
+    bm.loops.layers.uv.new("UVMap")
+    bmesh.ops.create_uvsphere(bm, u_segments=48, v_segments=24, radius=0.17, calc_uvs=True)
+    uv = bm.loops.layers.uv["UVMap"]
+    for face in bm.faces:  # u along the meridians: its tangents are not the radial ones
+        face.smooth = True
+        for loop in face.loops:
+            loop[uv].uv = (loop[uv].uv[1], loop[uv].uv[0])
+    bm.to_mesh(mesh)
+    bm.free()
+    mapped = bpy.data.objects.new("Mapped", mesh)
+    mapped.location, mapped.rotation_euler = (0.55, -0.55, 0.17), (0.0, 0.8, 0.0)
+    mapped.data.materials.append(silver)
+    bpy.context.scene.collection.objects.link(mapped)
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -2811,6 +2865,13 @@ def gltf_clear_coat():
     _gltf("ClearCoatTest", direction=(0.0, -1.0, 0.0), distance=1.6)
 
 
+def gltf_anisotropy_strength():
+    """Khronos AnisotropyStrengthTest: a grid of metal balls, Roughness 0 to 1 across and
+    Anisotropic 0 to 1 down (the importer's KHR_materials_anisotropy), on Cycles' default
+    tangent; the roughest column's alpha_x is clamped to 1."""
+    _gltf("AnisotropyStrengthTest", direction=(0.0, -1.0, 0.0), distance=2.3)
+
+
 def _bounces(n):
     def cbspheres_bounces():
         _open("cbspheres.blend")
@@ -2925,6 +2986,7 @@ _add(Variant("wavelength", wavelength, resolution=(128, 32), max_bounces=0, samp
              cycles_samples=128))
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("oren_nayar", oren_nayar, max_bounces=8, samples=1024, cycles_samples=2048))
+_add(Variant("anisotropic", anisotropic, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("light_path", light_path, resolution=(96, 72), max_bounces=8, samples=1024,
              cycles_samples=2048))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,
@@ -2950,6 +3012,10 @@ _add(Variant("gltf_transmission", gltf_transmission, max_bounces=8, samples=512,
 _add(Variant("gltf_clear_coat", gltf_clear_coat, resolution=(64, 96), max_bounces=8,
              samples=512, cycles_samples=1024,
              files=(os.path.join(GLTF_DIR, "ClearCoatTest", "ClearCoatTest.glb"),)))
+_add(Variant("gltf_anisotropy_strength", gltf_anisotropy_strength, resolution=(96, 72),
+             max_bounces=8, samples=512, cycles_samples=1024,
+             files=(os.path.join(GLTF_DIR, "AnisotropyStrengthTest",
+                                 "AnisotropyStrengthTest.glb"),)))
 _add(Variant("gltf_sheen_chair", gltf_sheen_chair, max_bounces=8,
              files=tuple(os.path.join(GLTF_DIR, "SheenChair", f) for f in (
                  "SheenChair.gltf", "SheenChair.bin", "chair_fabric_albedo.png",
