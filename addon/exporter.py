@@ -757,7 +757,12 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
     per_instance = {
         sh.OBJECT_LOCATION: lambda i: np.asarray(i.matrix_world, np.float64)[:3, 3],
         sh.OBJECT_COLOUR: lambda i: i.colour[:3],
-        sh.OBJECT_NUMBERS: lambda i: (i.colour[3], i.random, i.pass_index)}
+        sh.OBJECT_NUMBERS: lambda i: (i.colour[3], i.random, i.pass_index),
+        sh.OBJECT_INVERSE_ORIGIN: lambda i: shader_nodes.world_to_object(i.matrix_world)[:3, 3],
+        **{axis: (lambda i, j=j: np.asarray(i.matrix_world, np.float64)[:3, j])
+           for j, axis in enumerate(sh.OBJECT_AXES)},
+        **{axis: (lambda i, j=j: shader_nodes.world_to_object(i.matrix_world)[:3, j])
+           for j, axis in enumerate(sh.OBJECT_INVERSE)}}
     t = len(mesh.triangles)
     for name in object_maps:
         values = np.array([per_instance[name](i) for i in insts], np.float32)

@@ -564,6 +564,8 @@ class _Reader:
         self.warnings = []
         self.constants = _Constants({} if image_cache is None else image_cache)
         self.normal_map = None  # set by normal(): the shader's tangent-space normal map
+        # id(emission program) -> its (colour, strength) sockets, to compile a mix's again
+        self.emission_sockets = {}
 
     def warn(self, text):
         """Record a warning once (a Principled BSDF's lobes read the same inputs)."""
@@ -649,14 +651,16 @@ class _Reader:
                                                       unknown=unknown_colour, emission=True)
         if (colour_program is None and strength_program is None) or not max(colour) > 0:
             return colour, strength, None
+        sockets = (enabled_input(node, colour_socket), enabled_input(node, strength_socket))
         if strength_program is None:
-            return colour, strength, shader_nodes.scaled(colour_program, strength)
-        program, why = shader_nodes.compile_product(enabled_input(node, colour_socket),
-                                                    enabled_input(node, strength_socket),
-                                                    self.constants.image_cache)
-        if program is None:
-            self.warn(f"node '{node.name}': its emission cannot be evaluated per point "
-                      f"({why}); rendered as its constant")
+            program = shader_nodes.scaled(colour_program, strength)
+        else:
+            program, why = shader_nodes.compile_product(*sockets, self.constants.image_cache)
+            if program is None:
+                self.warn(f"node '{node.name}': its emission cannot be evaluated per point "
+                          f"({why}); rendered as its constant")
+                return colour, strength, None
+        self.emission_sockets[id(program)] = sockets  # (a mix may compile them again)
         return colour, strength, program
 
     def number(self, node, socket_name, default=0.0, unknown=None):
@@ -977,11 +981,13 @@ class _Reader:
             for leaf in second.leaves():
                 for key in ("normal_program", "normal_strength", "normal_uv"):
                     leaf.kwargs.pop(key, None)
+        kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
+        if fac_program is None:
+            kwargs.update(self.mixed_emission(first, second, fac, scale))
         for part in (*first.parts(), *second.parts()):
             if part.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
-        kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
         if fac_program is not None and any(
                 max(_leaf_emission(leaf)) > 0 for leaf in (*first.leaves(), *second.leaves())):
             program = None
@@ -1001,6 +1007,34 @@ class _Reader:
         if fac_program is not None:
             kwargs["fac_program"] = fac_program
         return MaterialSpec("mix", self.material.name, kwargs)
+
+    def mixed_emission(self, first, second, fac, scale):
+        """The emission of a Mix Shader of constant factor (or an Add Shader) over Emission
+        shaders, one or both textured, as the mix's own program: their colours times
+        strengths mixed per point, which the kernel evaluates where the mix is hit or sampled
+        as a light. {} where the parts are mixes, or a textured part is another shader (its
+        emission may be dimmed by its own coat or sheen), as the texture's mean then."""
+        parts = (first, second)
+        if not any("emission_program" in p.kwargs for p in parts) or any(
+                p.ctor != "emission_only" and ("emission_program" in p.kwargs
+                                               or max(_leaf_emission(p)) > 0)
+                for p in parts):
+            return {}
+        sources = [self.emission_sockets.get(id(p.kwargs.get("emission_program")),
+                                             tuple(_leaf_emission(p))) for p in parts]
+        program, why = shader_nodes.compile_mixed_emission(sources, fac, scale,
+                                                           self.constants.image_cache)
+        if program is None:
+            self.warn(f"a mixed textured emission cannot be evaluated per point ({why})")
+            return {}
+        mean = scale * ((1.0 - fac) * _leaf_emission(first) + fac * _leaf_emission(second))
+        if not max(mean) > 0:  # (the kernel skips a surface whose constant emits nothing)
+            mean = scale * np.maximum(_leaf_emission(first), _leaf_emission(second))
+        for p in parts:
+            if p.ctor == "emission_only":  # (now the mix's)
+                p.kwargs.pop("emission_program", None)
+                p.kwargs["strength"] = 0.0
+        return {"emission": tuple(float(x) for x in mean), "emission_program": program}
 
     def roughness(self, node):
         """A GGX node's Roughness as keywords: its constant in [0, 1] (the texture's mean

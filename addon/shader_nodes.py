@@ -27,7 +27,7 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
            "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath",
-           "ShaderNodeTangent")
+           "ShaderNodeTangent", "ShaderNodeVectorTransform", "ShaderNodeWireframe")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -384,25 +384,51 @@ def image_texels(image):
 
 # ------------------------------------------------------------------ node functions
 def _n_image(c, node, out):
-    if node.projection != "FLAT":
-        raise Unsupported(f"image texture '{node.name}' projection {node.projection}")
+    """Image Texture, in each projection: Flat; Sphere and Tube (the coordinate mapped
+    first); Box (three lookups weighted by the object-space shading normal, as Cycles'
+    svm_node_tex_image_box, so not in an emission)."""
+    sh, p = c.sh, c.program
     vec = enabled_input(node, "Vector")
-    coord = c.input(vec, "VECTOR") if live_link(vec) is not None else c.program.uv("")
+    coord = c.input(vec, "VECTOR") if live_link(vec) is not None else p.uv("")
     unassociate = (node.outputs["Alpha"].is_linked and node.image is not None
                    and not node.image.colorspace_settings.is_data
                    and node.image.alpha_mode not in ("CHANNEL_PACKED", "NONE"))
-    reg = c.program.image(c.texture(node), coord, unassociate)
+    texture = c.texture(node)
+    if node.projection in ("SPHERE", "TUBE"):
+        coord = p.emit(sh.OP_SPHERE_TUBE, 3, a=coord, d=int(node.projection == "TUBE"))
+    if node.projection != "BOX":
+        reg = p.image(texture, coord, unassociate)
+    elif not c.view_dependent:
+        raise Unsupported(f"image texture '{node.name}' box projection in an emission")
+    else:
+        normal = _through(c, p.emit(sh.OP_GEOMETRY, 3, d=0), "NORMAL", sh.OBJECT_AXES, None,
+                          into=True)
+        faces = p.emit(sh.OP_BOX, 9, a=normal, b=coord, d=0,
+                       params=[node.projection_blend])
+        first = p.image(texture, faces + 3, unassociate)
+        for k in (5, 7):  # OP_BOX reads the three lookups as consecutive registers
+            p.image(texture, faces + k, unassociate)
+        reg = p.emit(sh.OP_BOX, 4, a=faces, b=first, d=1)
     return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
 
 
+def world_to_object(matrix_world) -> np.ndarray:
+    """An object's world-to-object matrix (4, 4): the pseudo-inverse, so that a flattened
+    object's zero axis stays zero rather than making NaN."""
+    return np.linalg.pinv(np.asarray(matrix_world, np.float64))
+
+
 def _n_tex_coord(c, node, out):
-    """Texture Coordinate: UV, Generated, Object (of the shaded object), Normal, Camera,
-    Window and Reflection (Cycles' svm_node_tex_coord)."""
+    """Texture Coordinate: UV, Generated, Object (of the shaded object, or of the node's
+    own object: the world position in that object's space, Cycles' NODE_TEXCO_OBJECT with
+    its inverse transform), Normal, Camera, Window and Reflection (svm_node_tex_coord)."""
     sh, p = c.sh, c.program
     name = out.name
-    if node.from_instancer or name == "Object" and node.object is not None:
-        raise Unsupported(f"texture coordinate '{node.name}' output {name}"
-                          + (" of another object" if name == "Object" else " from the instancer"))
+    if node.from_instancer:
+        raise Unsupported(f"texture coordinate '{node.name}' output {name} from the instancer")
+    if name == "Object" and node.object is not None:
+        rows = world_to_object(node.object.matrix_world)[:3].ravel()
+        return p.emit(sh.OP_MAPPING, 3, a=p.uv(sh.POSITION), params=rows), "VECTOR"
     if name in ("Normal", "Reflection") and not c.view_dependent:
         raise Unsupported(f"texture coordinate '{node.name}' output {name} in an emission")
     maps = {"UV": "", "Generated": sh.GENERATED, "Object": sh.OBJECT, "Camera": sh.CAMERA}
@@ -858,6 +884,51 @@ def _n_vector_math(c, node, out):
     return (reg + 3, "VALUE") if out.name == "Value" else (reg, "VECTOR")
 
 
+def _n_vector_transform(c, node, out):
+    """Vector Transform between World, Object and Camera space, step by step as Cycles'
+    svm_node_vector_transform: a Point moves with the frame's origin, a Vector does not,
+    and a Normal goes through the transposed inverse and is normalised after each step."""
+    kind, source, target = node.vector_type, node.convert_from, node.convert_to
+    v = c.input(node.inputs["Vector"], "VECTOR")
+    if source == target:
+        return v, "VECTOR"
+    if source == "CAMERA":  # to world first
+        v = _through(c, v, kind, c.sh.CAMERA_AXES, c.sh.CAMERA_ORIGIN, into=False)
+    elif source == "OBJECT":
+        v = (_through(c, v, kind, c.sh.OBJECT_INVERSE, None, into=True) if kind == "NORMAL"
+             else _through(c, v, kind, c.sh.OBJECT_AXES, c.sh.OBJECT_LOCATION, into=False))
+    if target == "CAMERA":
+        return _through(c, v, kind, c.sh.CAMERA_AXES, c.sh.CAMERA_ORIGIN, into=True), "VECTOR"
+    if target == "OBJECT":
+        v = (_through(c, v, kind, c.sh.OBJECT_AXES, None, into=True) if kind == "NORMAL"
+             else _through(c, v, kind, c.sh.OBJECT_INVERSE, c.sh.OBJECT_INVERSE_ORIGIN,
+                           into=False))
+    return v, "VECTOR"
+
+
+def _through(c, v, kind, axes, origin, into):
+    """One OP_TRANSFORM step of vector register v: with the frame of the maps `axes`, the
+    components along them (`into`) or the sum of them it weights; a Point with `origin`
+    (a map) taken off before, or added after; a Normal normalised."""
+    p = c.program
+    first = p.uv(axes[0])
+    for axis in axes[1:]:  # OP_TRANSFORM reads the three as consecutive registers
+        p.uv(axis)
+    o = p.uv(origin) if kind == "POINT" and origin is not None else -1
+    return p.emit(c.sh.OP_TRANSFORM, 3, a=v, b=first, c=o, d=int(into),
+                  e=int(kind == "NORMAL"))
+
+
+def _n_wireframe(c, node, out):
+    """Wireframe at a world-space Size (Cycles' wireframe, on the triangles as rendered);
+    Pixel Size needs the ray's footprint, which Specula does not carry."""
+    if node.use_pixel_size:
+        raise Unsupported(f"wireframe '{node.name}' in pixel size")
+    p = c.program
+    size = c.input(node.inputs["Size"], "VALUE")
+    return p.emit(c.sh.OP_WIREFRAME, 1, a=p.map_index(c.sh.POSITION), b=size), "VALUE"
+
+
 def _n_light_path(c, node, out):
     """Light Path: the state of the path being shaded (shading.set_light_path), as Cycles'
     svm_node_light_path reads it; Portal Depth is 0 (Specula has no light portals)."""
@@ -921,6 +992,8 @@ NODES = {
     "ShaderNodeNormal": _n_normal,
     "ShaderNodeTexBrick": _n_brick,
     "ShaderNodeVectorRotate": _n_vector_rotate,
+    "ShaderNodeVectorTransform": _n_vector_transform,
+    "ShaderNodeWireframe": _n_wireframe,
     "ShaderNodeRGBToBW": _n_rgb_to_bw,
     "ShaderNodeNewGeometry": _n_geometry,
     "ShaderNodeTangent": _n_tangent,
@@ -996,6 +1069,28 @@ def compile_product(colour, strength, texture_cache):
         c.program.out = c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
                                        d=c.sh.BLENDS.index("MULTIPLY"))
         return c.program
+    return _attempt(build)
+
+
+def compile_mixed_emission(sources, fac, scale, texture_cache):
+    """(program or None, why not): the emission of a Mix Shader of constant factor `fac`
+    (an Add Shader: 0.5, `scale` 2) over two Emission shaders, each given as its (colour,
+    strength) sockets or as a constant colour x strength."""
+    def build():
+        c = Compiler(texture_cache, view_dependent=False)
+        p, regs = c.program, []
+        for source in sources:
+            if len(source) == 2:  # sockets: colour x strength, as compile_product
+                a = c.input(source[0], "RGBA")
+                b = c.convert(c.input(source[1], "VALUE"), "VALUE", "RGBA")
+                regs.append(p.emit(c.sh.OP_BLEND, 3, a=p.const([1.0]), b=a, c=b,
+                                   d=c.sh.BLENDS.index("MULTIPLY")))
+            else:
+                regs.append(p.const([float(x) for x in source]))
+        mixed = p.emit(c.sh.OP_LERP, 3, a=p.const([fac]), b=regs[0], c=regs[1], d=3)
+        p.out = p.emit(c.sh.OP_BLEND, 3, a=p.const([1.0]), b=mixed, c=p.const([scale] * 3),
+                       d=c.sh.BLENDS.index("MULTIPLY"))
+        return p
     return _attempt(build)
 
 

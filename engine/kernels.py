@@ -33,8 +33,8 @@ from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX, enclosing
 from .plan import entered_media
 from .environment import Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
-from .shading import (CAMERA, MAX_REGISTERS, POSITION, SLOTS, TRUE_NORMAL, VIEW_MAPS,
-                      WINDOW, ProgramTable)
+from .shading import (CAMERA, CAMERA_AXES, CAMERA_ORIGIN, MAX_REGISTERS, POSITION, SLOTS,
+                      TRUE_NORMAL, VIEW_MAPS, WINDOW, ProgramTable)
 
 F32 = np.float32
 GENERIC = {name: True for name in PLAN_CONSTANTS}
@@ -261,16 +261,20 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
 
 def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:
     """Write the maps the renderer makes into the scene's maps: the camera's (Texture
-    Coordinate's Camera and Window) for this render's camera and frame (a render at another
-    size or with another camera writes them again), and the Geometry node's Position (world
-    space) and True Normal (`tri_normal`, per triangle)."""
+    Coordinate's Camera and Window, Vector Transform's camera axes and position) for this
+    render's camera and frame (a render at another size or with another camera writes them
+    again), and the Geometry node's Position (world space) and True Normal (`tri_normal`,
+    per triangle)."""
     names = [n for n in VIEW_MAPS if n in scene.uv_names]
     if not names:
         return
     local, window = view_maps(cam, scene.vertices) if {CAMERA, WINDOW} & set(names) else \
         (None, None)
     values = {CAMERA: local, WINDOW: window, POSITION: scene.vertices + scene.origin,
-              TRUE_NORMAL: tri_normal[:, None, :]}
+              TRUE_NORMAL: tri_normal[:, None, :],
+              CAMERA_ORIGIN: (cam.position + scene.origin)[None, None, :],
+              **{axis: cam.world_from_camera[:, j][None, None, :]
+                 for j, axis in enumerate(CAMERA_AXES)}}
     for name in names:
         scene.uv[scene.uv_names.index(name)] = values[name]
 

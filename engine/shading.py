@@ -107,6 +107,18 @@ OP_WAVELENGTH = 37  # reg[out:out+3] = the Wavelength node's colour of reg[a] nm
 #                     the CIE XYZ to scene-linear matrix (row-major)
 OP_LIGHT_PATH = 38  # reg[out] = the Light Path node's output d (LIGHT_PATH_OUTPUTS): a register
 #                     of the path state block set_light_path fills
+OP_TRANSFORM = 39   # reg[out:out+3] = the vector reg[a:a+3] through the frame of columns
+#                     reg[b:b+9] (three world-space axes): d = 0, sum_j v_j axis_j, plus
+#                     reg[c:c+3] where c >= 0 (a point's origin); d = 1, the components
+#                     (v - reg[c:c+3] where c >= 0) . axis_j; e: normalised (a normal)
+OP_BOX = 40         # Image Texture's Box projection (Cycles' svm_node_tex_image_box): d = 0,
+#                     reg[out:out+3] the three faces' weights and reg[out+3:out+9] their (u, v)
+#                     for the object-space normal reg[a:a+3] at coordinate reg[b:b+3], blend
+#                     params[p]; d = 1, reg[out:out+4] = sum_j reg[a+j] reg[b+4j:b+4j+4]
+OP_SPHERE_TUBE = 41  # reg[out:out+3] = (u, v, 0) of Image Texture's Sphere (d = 0) or Tube
+#                     (d = 1) projection of reg[a:a+3] (Cycles' map_to_sphere, map_to_tube)
+OP_WIREFRAME = 42   # reg[out] = the Wireframe node's Fac: 1 where the hit lies within reg[b] / 2
+#                     of an edge of its triangle, whose corners map a holds (POSITION)
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -131,7 +143,12 @@ NORMAL, CAMERA, WINDOW = "\x00normal", "\x00camera", "\x00window"
 # The Geometry node's Position (world space) and True Normal (the triangle's, as its
 # winding gives it; OP_FACING orients it) are maps the renderer fills from the scene too.
 POSITION, TRUE_NORMAL = "\x00position", "\x00true_normal"
-VIEW_MAPS = (CAMERA, WINDOW, POSITION, TRUE_NORMAL)
+# The Vector Transform node's camera space: the render camera's axes (Cycles' camera
+# space: +z ahead, +y up, scale cleared) and position, maps of world-space vectors
+# OP_TRANSFORM reads as a frame (three consecutive registers).
+CAMERA_AXES = ("\x00camera_axis:x", "\x00camera_axis:y", "\x00camera_axis:z")
+CAMERA_ORIGIN = "\x00camera_origin"
+VIEW_MAPS = (CAMERA, WINDOW, POSITION, TRUE_NORMAL, *CAMERA_AXES, CAMERA_ORIGIN)
 # The Attribute node (of type Geometry) reads the mesh's attribute of its name (a generic
 # attribute, a colour attribute or a UV map) as two maps: ATTRIBUTE + name, its vector (the
 # Color and Vector outputs: a scalar repeated, a 2D value with z = 0, a colour's RGB), and
@@ -144,7 +161,13 @@ ATTRIBUTE, ATTRIBUTE_SCALARS = "\x00attribute:", "\x00attribute_scalars:"
 # (Cycles' object random number) and pass index.
 OBJECT_LOCATION, OBJECT_COLOUR = "\x00object_location", "\x00object_colour"
 OBJECT_NUMBERS = "\x00object_numbers"
-OBJECT_MAPS = (OBJECT_LOCATION, OBJECT_COLOUR, OBJECT_NUMBERS)
+# ... and its object space: the columns of the object's matrix M (its origin is
+# OBJECT_LOCATION), and of M^-1 with its origin -M^-1 t.
+OBJECT_AXES = ("\x00object_axis:x", "\x00object_axis:y", "\x00object_axis:z")
+OBJECT_INVERSE = ("\x00object_inverse:x", "\x00object_inverse:y", "\x00object_inverse:z")
+OBJECT_INVERSE_ORIGIN = "\x00object_inverse:t"
+OBJECT_MAPS = (OBJECT_LOCATION, OBJECT_COLOUR, OBJECT_NUMBERS, *OBJECT_AXES, *OBJECT_INVERSE,
+               OBJECT_INVERSE_ORIGIN)
 # The Tangent node's Radial directions (and the Geometry node's Tangent, Radial Z): the map
 # of this prefix and the axis ("X", "Y", "Z") holds, per corner, the direction around that
 # axis of the texture space, (-(g_y - 1/2), g_x - 1/2, 0) for Z from Generated g, turned
@@ -165,6 +188,8 @@ def map_label(name: str) -> str:
         return "Object coordinates"
     if name == NORMAL:
         return "normals"
+    if name in OBJECT_AXES + OBJECT_INVERSE + (OBJECT_INVERSE_ORIGIN,):
+        return "object transform"
     if name in OBJECT_MAPS:
         return "object info"
     if name.startswith(RADIAL):
@@ -323,14 +348,23 @@ class Program:
         values = [float(v) for v in np.atleast_1d(values)]
         return self.emit(OP_CONST, len(values), c=len(values), params=values)
 
-    def uv(self, name: str) -> int:
+    def map_index(self, name: str) -> int:
+        """The program's index of per-corner map `name` (pack makes it the scene's)."""
         if name not in self.uv_maps:
             self.uv_maps.append(name)
-        return self.emit(OP_UV, 3, a=self.uv_maps.index(name))
+        return self.uv_maps.index(name)
+
+    def uv(self, name: str) -> int:
+        return self.emit(OP_UV, 3, a=self.map_index(name))
 
     def image(self, texture: Texture, coordinate: int, unassociate: bool) -> int:
-        self.textures.append(texture)
-        return self.emit(OP_IMAGE, 4, a=coordinate, b=len(self.textures) - 1, c=int(unassociate))
+        """A lookup of `texture`; one the program already reads (a Box projection's three
+        faces, the same image on two nodes) keeps its one copy of the texels."""
+        index = next((k for k, t in enumerate(self.textures) if t is texture), None)
+        if index is None:
+            self.textures.append(texture)
+            index = len(self.textures) - 1
+        return self.emit(OP_IMAGE, 4, a=coordinate, b=index, c=int(unassociate))
 
 
 def radial_tangent(axis: str = "Z") -> Program:
@@ -385,7 +419,7 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
             texels.append(t.texels.reshape(-1, 4))
             n_texels += w * h
         for op, out, a, b, c, d, e, p in prog.code:
-            if op == OP_UV:
+            if op in (OP_UV, OP_WIREFRAME):
                 a = uv_index(prog.uv_maps[a])
             elif op == OP_IMAGE:
                 b += first_tex
@@ -759,6 +793,73 @@ def node_image(ins, reg, pt):
     reg[out + 3] = alpha
 
 
+@njit(**JIT)
+def box_weights(nx, ny, nz, blend):
+    """The weights of the three faces of Cycles' box projection for the object-space
+    normal n and the blend: one face near an axis, two or three mixed in between."""
+    x, y, z = abs(nx), abs(ny), abs(nz)
+    total = x + y + z
+    if not total > 0.0:
+        return 1.0, 0.0, 0.0
+    x, y, z = x / total, y / total, z / total
+    limit = 0.5 * (1.0 + blend)
+    if x > limit * (x + y) and x > limit * (x + z):
+        return 1.0, 0.0, 0.0
+    if y > limit * (x + y) and y > limit * (y + z):
+        return 0.0, 1.0, 0.0
+    if z > limit * (x + z) and z > limit * (y + z):
+        return 0.0, 0.0, 1.0
+    if not blend > 0.0:
+        return 1.0, 0.0, 0.0  # (Cycles' fallback to one side)
+    if z < (1.0 - limit) * (x + y):
+        w = min(max((x / (x + y) - 0.5 * (1.0 - blend)) / blend, 0.0), 1.0)
+        return w, 1.0 - w, 0.0
+    if x < (1.0 - limit) * (y + z):
+        w = min(max((y / (y + z) - 0.5 * (1.0 - blend)) / blend, 0.0), 1.0)
+        return 0.0, w, 1.0 - w
+    if y < (1.0 - limit) * (x + z):
+        w = min(max((x / (x + z) - 0.5 * (1.0 - blend)) / blend, 0.0), 1.0)
+        return w, 0.0, 1.0 - w
+    k = 2.0 * limit - 1.0
+    return (((2.0 - limit) * x + (limit - 1.0)) / k, ((2.0 - limit) * y + (limit - 1.0)) / k,
+            ((2.0 - limit) * z + (limit - 1.0)) / k)
+
+
+@njit(**INLINE)
+def node_box(ins, reg, params):
+    """OP_BOX: the faces' weights and coordinates (d = 0), mapped so that no face's image
+    is mirrored, as Cycles maps them; or the lookups' weighted sum (d = 1)."""
+    a, b, out = ins[2], ins[3], ins[1]
+    if ins[5] == 0:
+        nx, ny, nz = reg[a], reg[a + 1], reg[a + 2]
+        x, y, z = reg[b], reg[b + 1], reg[b + 2]
+        reg[out], reg[out + 1], reg[out + 2] = box_weights(nx, ny, nz, params[ins[7]])
+        reg[out + 3], reg[out + 4] = (1.0 - y if nx < 0.0 else y), z
+        reg[out + 5], reg[out + 6] = (1.0 - x if ny > 0.0 else x), z
+        reg[out + 7], reg[out + 8] = (1.0 - y if nz > 0.0 else y), x
+        return
+    for ch in range(4):
+        reg[out + ch] = (reg[a] * reg[b + ch] + reg[a + 1] * reg[b + 4 + ch]
+                         + reg[a + 2] * reg[b + 8 + ch])
+
+
+@njit(**JIT)
+def sphere_tube(kind, x, y, z):
+    """(u, v) of the Sphere (kind 0) or Tube (1) projection of a coordinate in the 0..1
+    box, remapped to -1..1 first (Cycles' texco_remap_square, map_to_sphere, map_to_tube)."""
+    x, y, z = 2.0 * x - 1.0, 2.0 * y - 1.0, 2.0 * z - 1.0
+    if kind == 0:
+        length2 = x * x + y * y + z * z
+        if not length2 > 0.0:
+            return 0.0, 0.0
+        u = 0.0 if x == 0.0 and y == 0.0 else 0.5 - math.atan2(x, y) / (2.0 * math.pi)
+        return u, 1.0 - math.acos(min(max(z / math.sqrt(length2), -1.0), 1.0)) / math.pi
+    length = math.sqrt(x * x + y * y)
+    if not length > 0.0:
+        return 0.0, 0.0
+    return (1.0 - math.atan2(x / length, y / length) / math.pi) * 0.5, (z + 1.0) * 0.5
+
+
 @njit(**INLINE)
 def node_uv(ins, reg, uv, f, u, v):
     """The hit's coordinates on map a (a UV map, w = 0, or a texture space), interpolated
@@ -771,6 +872,28 @@ def node_uv(ins, reg, uv, f, u, v):
                         + v * np.float64(uv[m, f, 2, j]))
 
 
+@njit(**JIT)
+def node_wireframe(ins, reg, uv, f, u, v):
+    """The Wireframe node at world-space size reg[b] (Cycles' wireframe: the squared
+    distance to each edge, |edge x (P - corner)|^2 / |edge|^2, against (size / 2)^2)."""
+    m, w0 = ins[2], 1.0 - u - v
+    c = uv[m, f]
+    px = w0 * np.float64(c[0, 0]) + u * np.float64(c[1, 0]) + v * np.float64(c[2, 0])
+    py = w0 * np.float64(c[0, 1]) + u * np.float64(c[1, 1]) + v * np.float64(c[2, 1])
+    pz = w0 * np.float64(c[0, 2]) + u * np.float64(c[1, 2]) + v * np.float64(c[2, 2])
+    half = 0.5 * reg[ins[3]]
+    reg[ins[1]] = 0.0
+    for i in range(3):
+        k = i - 1 if i > 0 else 2
+        dx, dy, dz = px - c[i, 0], py - c[i, 1], pz - c[i, 2]
+        ex, ey, ez = (np.float64(c[i, 0]) - c[k, 0], np.float64(c[i, 1]) - c[k, 1],
+                      np.float64(c[i, 2]) - c[k, 2])
+        cx, cy, cz = ey * dz - ez * dy, ez * dx - ex * dz, ex * dy - ey * dx
+        if cx * cx + cy * cy + cz * cz < (ex * ex + ey * ey + ez * ez) * half * half:
+            reg[ins[1]] = 1.0
+            return
+
+
 @njit(**INLINE)
 def node_mapping(ins, reg, params):
     a, out, p = ins[2], ins[1], ins[7]
@@ -778,6 +901,32 @@ def node_mapping(ins, reg, params):
     for j in range(3):
         q = p + 4 * j
         reg[out + j] = params[q] * x + params[q + 1] * y + params[q + 2] * z + params[q + 3]
+
+
+@njit(**INLINE)
+def node_transform(ins, reg):
+    """One step of the Vector Transform node (OP_TRANSFORM): a vector through a frame,
+    as Cycles' transform_point, transform_direction and, for a normal, the transposed
+    transform normalised. A zero normal stays zero (Cycles' normalize would make NaN)."""
+    a, b, c, out = ins[2], ins[3], ins[4], ins[1]
+    x, y, z = reg[a], reg[a + 1], reg[a + 2]
+    if ins[5] == 0:
+        rx = x * reg[b] + y * reg[b + 3] + z * reg[b + 6]
+        ry = x * reg[b + 1] + y * reg[b + 4] + z * reg[b + 7]
+        rz = x * reg[b + 2] + y * reg[b + 5] + z * reg[b + 8]
+        if c >= 0:
+            rx, ry, rz = rx + reg[c], ry + reg[c + 1], rz + reg[c + 2]
+    else:
+        if c >= 0:
+            x, y, z = x - reg[c], y - reg[c + 1], z - reg[c + 2]
+        rx = x * reg[b] + y * reg[b + 1] + z * reg[b + 2]
+        ry = x * reg[b + 3] + y * reg[b + 4] + z * reg[b + 5]
+        rz = x * reg[b + 6] + y * reg[b + 7] + z * reg[b + 8]
+    if ins[6] != 0:
+        length = math.sqrt(rx * rx + ry * ry + rz * rz)
+        if length > 0.0:
+            rx, ry, rz = rx / length, ry / length, rz / length
+    reg[out], reg[out + 1], reg[out + 2] = rx, ry, rz
 
 
 @njit(**JIT)
@@ -1255,7 +1404,7 @@ def node_colour_ops(ins, reg):
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
                OP_VORONOI)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
-                 OP_BLACKBODY, OP_WAVELENGTH)
+                 OP_BLACKBODY, OP_WAVELENGTH, OP_TRANSFORM, OP_BOX, OP_SPHERE_TUBE)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
 
 
@@ -1287,7 +1436,8 @@ def node_texture(ins, reg, params):
 
 @njit(**JIT)
 def node_converter(ins, reg, params):
-    """Mapping, Vector Rotate, the Curves, Map Range, Clamp, Blackbody and Wavelength."""
+    """Mapping, Vector Rotate, the Curves, Map Range, Clamp, Blackbody, Wavelength,
+    Vector Transform and the Image Texture's projections."""
     op = ins[0]
     if op == OP_VECTOR_MAPPING:
         node_vector_mapping(ins, reg)
@@ -1302,6 +1452,14 @@ def node_converter(ins, reg, params):
     elif op == OP_WAVELENGTH:
         reg[ins[1]], reg[ins[1] + 1], reg[ins[1] + 2] = wavelength(
             reg[ins[2]], params[ins[7]:ins[7] + 9])
+    elif op == OP_TRANSFORM:
+        node_transform(ins, reg)
+    elif op == OP_BOX:
+        node_box(ins, reg, params)
+    elif op == OP_SPHERE_TUBE:
+        reg[ins[1]], reg[ins[1] + 1] = sphere_tube(ins[5], reg[ins[2]], reg[ins[2] + 1],
+                                                   reg[ins[2] + 2])
+        reg[ins[1] + 2] = 0.0
     else:
         reg[ins[1]] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)
 
@@ -1320,6 +1478,8 @@ def run(first, end, pt, uv, f, u, v, reg):
                 reg[out + j] = pt.params[ins[7] + j]
         elif op == OP_UV:
             node_uv(ins, reg, uv, f, u, v)
+        elif op == OP_WIREFRAME:
+            node_wireframe(ins, reg, uv, f, u, v)
         elif op == OP_MAPPING:
             node_mapping(ins, reg, pt.params)
         elif op == OP_IMAGE:

@@ -491,10 +491,9 @@ def test_color_ramp_on_a_texture_follows_blenders_ramp(fresh, interpolation):
 def test_a_node_without_an_instruction_falls_back_to_the_mean_and_says_so(fresh):
     mat, node = node_material("Tinted", "ShaderNodeBsdfDiffuse")
     img, stored = make_image("Tint")
-    hue = mat.node_tree.nodes.new("ShaderNodeVectorTransform")  # world to world
-    hue.convert_from = hue.convert_to = "WORLD"
-    texture(mat, img, hue, "Vector")
-    mat.node_tree.links.new(hue.outputs["Vector"], node.inputs["Color"])
+    hue = mat.node_tree.nodes.new("ShaderNodeAmbientOcclusion")  # traces rays: no program
+    texture(mat, img, hue, "Color")
+    mat.node_tree.links.new(hue.outputs["Color"], node.inputs["Color"])
     spec, warnings = convert(mat)
     assert "colour_program" not in spec.kwargs
     assert spec.kwargs["colour"] == pytest.approx(
@@ -659,15 +658,15 @@ def test_transparent_bsdf_is_transparent(fresh):
 
 
 def test_unreducible_chains_keep_what_the_object_is(fresh):
-    """A Vector Transform cannot be reduced: Base Color keeps its own value, emission is off
-    (the socket's own white would turn the surface into a light)."""
+    """An Ambient Occlusion node cannot be reduced: Base Color keeps its own value, emission
+    is off (the socket's own white would turn the surface into a light)."""
     mat, node = node_material("Painted", "ShaderNodeBsdfPrincipled",
                               **{"Base Color": (0.2, 0.4, 0.6, 1.0), "Emission Strength": 1.0})
-    attr = mat.node_tree.nodes.new("ShaderNodeVectorTransform")
+    attr = mat.node_tree.nodes.new("ShaderNodeAmbientOcclusion")
     mat.node_tree.links.new(mat.node_tree.nodes.new("ShaderNodeTexCoord").outputs["UV"],
-                            attr.inputs["Vector"])
-    mat.node_tree.links.new(attr.outputs["Vector"], node.inputs["Base Color"])
-    mat.node_tree.links.new(attr.outputs["Vector"], node.inputs["Emission Color"])
+                            attr.inputs["Color"])
+    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Base Color"])
+    mat.node_tree.links.new(attr.outputs["Color"], node.inputs["Emission Color"])
     spec, warnings = convert(mat)
     assert spec.ctor == "principled" and "emission" not in spec.kwargs
     assert spec.kwargs["base_colour"] == pytest.approx((0.2, 0.4, 0.6), abs=1e-6)
@@ -1427,3 +1426,60 @@ def test_light_path_outputs_read_the_path_state(fresh, output):
 def _program_at_state(program, state):
     from engine import shading
     return shading.evaluate(program, light_path=state)[program.out]
+
+
+def test_texture_coordinate_of_another_object_is_the_position_in_its_space(fresh):
+    """Texture Coordinate's Object output with an object set: the world position taken into
+    that object's space (scaled, turned, moved), as Cycles' NODE_TEXCO_OBJECT with its
+    inverse transform; From Instancer is still warned, naming the node."""
+    from mathutils import Euler, Matrix
+
+    mat, node = node_material("Projected", "ShaderNodeBsdfDiffuse")
+    empty = bpy.data.objects.new("Projector", None)
+    m = Matrix.LocRotScale((0.3, -1.0, 2.0), Euler((0.2, 0.5, 0.9)), (0.5, 1.5, 2.0))
+    empty.matrix_world = m
+    coordinates = mat.node_tree.nodes.new("ShaderNodeTexCoord")
+    coordinates.object = empty
+    mat.node_tree.links.new(coordinates.outputs["Object"], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    position = (0.7, -0.2, 1.1)
+    want = np.linalg.inv(np.array(m)) @ np.array([*position, 1.0])
+    np.testing.assert_allclose(_program_at(spec.kwargs["colour_program"], position), want[:3],
+                               atol=1e-5)
+    coordinates.from_instancer = True
+    spec, warnings = convert(mat)
+    assert "colour_program" not in spec.kwargs
+    assert any(coordinates.name in w and "instancer" in w for w in warnings), warnings
+
+
+@pytest.mark.parametrize("shader", ["ShaderNodeAddShader", "ShaderNodeMixShader"])
+def test_a_textured_emission_in_a_constant_mix_is_the_mix_s_own_program(fresh, shader):
+    """Diffuse and an Emission whose Strength is a texture, in an Add Shader (each counted
+    whole) or a Mix Shader of factor 0.3: the mix emits colour x strength per point, scaled
+    as the mix scales it, from a program of its own; the Emission part no longer emits by
+    itself and nothing is warned."""
+    mat, diffuse = node_material("Glow", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    glow = tree.nodes.new("ShaderNodeEmission")
+    glow.inputs["Color"].default_value = (0.3, 0.9, 0.4, 1.0)
+    img, stored = make_image("GlowMask", colorspace="Non-Color")
+    texture(mat, img, glow, "Strength")
+    mix = tree.nodes.new(shader)
+    first = 0 if shader == "ShaderNodeAddShader" else 1
+    if shader == "ShaderNodeMixShader":
+        mix.inputs["Fac"].default_value = 0.3
+    tree.links.new(diffuse.outputs[0], mix.inputs[first])
+    tree.links.new(glow.outputs[0], mix.inputs[first + 1])
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(mix.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and "emission_program" in spec.kwargs
+    assert spec.kwargs["second"].kwargs["strength"] == 0.0
+    weight = 1.0 if shader == "ShaderNodeAddShader" else 0.3
+    for uv, texel in zip(TEXEL_CENTRES, stored):
+        strength = float(np.dot(texel[:3], (0.2126, 0.7152, 0.0722)))  # colour -> float
+        want = weight * strength * np.array([0.3, 0.9, 0.4])
+        np.testing.assert_allclose(_program_at(spec.kwargs["emission_program"], uv), want,
+                                   atol=1e-5)

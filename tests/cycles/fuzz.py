@@ -352,6 +352,16 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if o["material"]["kind"] in ("diffuse", "glossy", "principled", "metal") and \
                 textures.random() < 0.3:
             o["material"]["colour_texture"] = _draw_colour_texture(textures)
+    # Some of those textures' coordinates through a Vector Transform of random type and
+    # spaces (World, Object, Camera), from a stream of their own.
+    spaces = np.random.default_rng([seed, 0x7f0])
+    for o in params["objects"]:
+        t = o["material"].get("colour_texture")
+        if t is not None and spaces.random() < 0.4:
+            source, target = (str(x) for x in spaces.choice(["WORLD", "OBJECT", "CAMERA"], 2,
+                                                           replace=False))
+            t["transform"] = [str(spaces.choice(["POINT", "VECTOR", "NORMAL"])), source,
+                              target]
     # Some mixes' factors from the ray's Light Path flags, from a stream of their own; not
     # where the surface emits.
     paths = np.random.default_rng([seed, 0x1a70])
@@ -570,6 +580,11 @@ def _colour_texture(mat, t):
         if key in node.inputs:
             node.inputs[key].default_value = value
     coords = tree.nodes.new("ShaderNodeTexCoord").outputs[t["coords"]]
+    if t.get("transform"):
+        transform = tree.nodes.new("ShaderNodeVectorTransform")
+        transform.vector_type, transform.convert_from, transform.convert_to = t["transform"]
+        tree.links.new(coords, transform.inputs["Vector"])
+        coords = transform.outputs["Vector"]
     if t.get("cells"):
         scaled = tree.nodes.new("ShaderNodeVectorMath")
         scaled.operation, scaled.inputs["Scale"].default_value = "SCALE", t["cells"]
@@ -613,6 +628,9 @@ def _simpler_material(m):
     if m.get("colour_texture"):
         out.append(("untextured colour",
                     {k: v for k, v in m.items() if k != "colour_texture"}))
+        if m["colour_texture"].get("transform"):
+            out.append(("untransformed coordinates", {**m, "colour_texture": {
+                k: v for k, v in m["colour_texture"].items() if k != "transform"}}))
     if m.get("diffuse_roughness"):
         out.append(("Lambert diffuse",
                     {k: v for k, v in m.items() if k != "diffuse_roughness"}))

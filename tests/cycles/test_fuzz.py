@@ -76,6 +76,8 @@ def _all_features(seeds, avoid_known=False):
                      if o["material"].get("roughness_checker"))
         found.update(f"factor:{o['material']['mix']['factor']['kind']}" for o in p["objects"]
                      if o["material"].get("mix", {}).get("factor"))
+        found.update("vector transform" for o in p["objects"]
+                     if o["material"].get("colour_texture", {}).get("transform"))
         found.update("translucent mix" for o in p["objects"]
                      if o["material"].get("mix", {}).get("shader") == "translucent")
         found.update("smooth monkey" for o in p["objects"]
@@ -92,7 +94,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
-              "coat", "refraction", "bump", "specular tint", "sheen",
+              "coat", "refraction", "bump", "specular tint", "sheen", "vector transform",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c", "known:d",
               "known:e"}
 

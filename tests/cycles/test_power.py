@@ -437,6 +437,154 @@ def _backfacing_ignored():
 
 
 @contextmanager
+def _vector_transform_read_as(**changes):
+    """Every Vector Transform node compiled as if its vector_type, convert_from or
+    convert_to were `changes` (e.g. vector_type={"NORMAL": "VECTOR"}: normals transformed
+    as directions)."""
+    from types import SimpleNamespace
+
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeVectorTransform"]
+
+    def changed(c, node, out):
+        fields = {name: changes.get(name, {}).get(getattr(node, name), getattr(node, name))
+                  for name in ("vector_type", "convert_from", "convert_to")}
+        return compile_node(c, SimpleNamespace(inputs=node.inputs, **fields), out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeVectorTransform", changed)
+        yield
+
+
+@contextmanager
+def _object_space_unscaled():
+    """Object space without the object's scale: world_to_object inverts the matrix with its
+    axes normalised (Vector Transform into an object's space, and Texture Coordinate's
+    Object of the empty)."""
+    from addon import shader_nodes
+
+    inverse = shader_nodes.world_to_object
+
+    def unscaled(matrix_world):
+        m = np.array(matrix_world, np.float64)
+        m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0)
+        return inverse(m)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shader_nodes, "world_to_object", unscaled)
+        yield
+
+
+@contextmanager
+def _camera_space_as_blender():
+    """Vector Transform's camera space as Blender's (looking down -z), not Cycles'."""
+    kernels = renderers.core().kernels
+    sh = renderers.core().shading
+    fill = kernels.fill_view_maps
+
+    def flipped(scene, cam, tri_normal):
+        fill(scene, cam, tri_normal)
+        if sh.CAMERA_AXES[2] in scene.uv_names:
+            scene.uv[scene.uv_names.index(sh.CAMERA_AXES[2])] *= -1.0
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(kernels, "fill_view_maps", flipped)
+        yield
+
+
+@contextmanager
+def _projector_ignored():
+    """Texture Coordinate's Object output of another object read as the shaded object's."""
+    from types import SimpleNamespace
+
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeTexCoord"]
+
+    def own(c, node, out):
+        plain = SimpleNamespace(name=node.name, from_instancer=node.from_instancer,
+                                object=None)
+        return compile_node(c, plain, out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeTexCoord", own)
+        yield
+
+
+@contextmanager
+def _image_read_as(projection=None, blend=None):
+    """Every Image Texture compiled as if its projection (a dict: from -> to) or its Box
+    blend (`blend`) were other."""
+    from types import SimpleNamespace
+
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeTexImage"]
+
+    def changed(c, node, out):
+        proxy = SimpleNamespace(**{name: getattr(node, name) for name in (
+            "name", "image", "interpolation", "extension", "inputs", "outputs",
+            "projection", "projection_blend")})
+        proxy.projection = (projection or {}).get(node.projection, node.projection)
+        proxy.projection_blend = node.projection_blend if blend is None else blend
+        return compile_node(c, proxy, out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeTexImage", changed)
+        yield
+
+
+@contextmanager
+def _box_normal_in_world_space():
+    """Box projection weighted by the world-space shading normal, not the object's."""
+    from addon import shader_nodes
+
+    through = shader_nodes._through
+
+    def world(c, v, kind, axes, origin, into):
+        if kind == "NORMAL" and axes == c.sh.OBJECT_AXES:
+            return v
+        return through(c, v, kind, axes, origin, into)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(shader_nodes, "_through", world)
+        yield
+
+
+@contextmanager
+def _wireframe_size_scaled(factor):
+    """Every Wireframe node's Size (unlinked) times `factor`."""
+    from types import SimpleNamespace
+
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeWireframe"]
+
+    def scaled(c, node, out):
+        size = SimpleNamespace(default_value=factor * node.inputs["Size"].default_value,
+                               is_linked=False, links=(), enabled=True, type="VALUE",
+                               name="Size", node=node)
+        proxy = SimpleNamespace(name=node.name, use_pixel_size=node.use_pixel_size,
+                                inputs={"Size": size})
+        return compile_node(c, proxy, out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeWireframe", scaled)
+        yield
+
+
+@contextmanager
+def _mixed_emission_as_mean():
+    """A textured Emission inside an Add Shader rendered as its mean (the old fallback)."""
+    from addon import materials
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(materials._Reader, "mixed_emission", lambda self, *args: {})
+        yield
+
+
+@contextmanager
 def _input_offset(node_type, name, opcode, offset, params=lambda: ()):
     """A `node_type` node (one instruction of `opcode` on one input) reading its input
     `name` plus `offset`."""
@@ -1119,6 +1267,29 @@ INJECTIONS = {
     "object_random_zero": ("geometry_and_object_info", None, _object_random_zero),
     "position_recentred": ("geometry_and_object_info", None, _position_recentred),
     "backfacing_ignored": ("geometry_and_object_info", None, _backfacing_ignored),
+    # Vector Transform: normals as directions; points as directions (origins dropped);
+    # object space without its scale; Blender's camera space; the projector empty ignored.
+    "normals_transformed_as_vectors": ("vector_transform", None, lambda:
+                                       _vector_transform_read_as(
+                                           vector_type={"NORMAL": "VECTOR"})),
+    "points_transformed_as_vectors": ("vector_transform", None, lambda:
+                                      _vector_transform_read_as(
+                                          vector_type={"POINT": "VECTOR"})),
+    "object_space_unscaled": ("vector_transform", None, _object_space_unscaled),
+    "camera_space_as_blender": ("vector_transform", None, _camera_space_as_blender),
+    "projector_ignored": ("vector_transform", None, _projector_ignored),
+    # Image projections: Sphere read as Flat, Tube as Sphere, Box unblended, Box by the
+    # world-space normal.
+    "sphere_projection_flat": ("image_projections", None, lambda: _image_read_as(
+        projection={"SPHERE": "FLAT"})),
+    "tube_projection_as_sphere": ("image_projections", None, lambda: _image_read_as(
+        projection={"TUBE": "SPHERE"})),
+    "box_blend_ignored": ("image_projections", None, lambda: _image_read_as(blend=0.0)),
+    "box_normal_in_world_space": ("image_projections", None, _box_normal_in_world_space),
+    # Wireframe: its size doubled; the wires' glow (an Emission in an Add Shader) as its
+    # mean, as before the mix had its own emission program.
+    "wireframe_size_doubled": ("wireframe", None, lambda: _wireframe_size_scaled(2.0)),
+    "mixed_emission_as_mean": ("wireframe", None, _mixed_emission_as_mean),
     # Bricks' offset frequency 0 (no offset or squash); Vector Rotate's Invert ignored.
     "brick_rows_unshifted": ("bricks_and_rotation", None, lambda: _parameter_changed(
         "ShaderNodeTexBrick", "OP_BRICK", 7, 0)),

@@ -1272,6 +1272,95 @@ def geometry_and_object_info():
                                                                    _backfacing_feed))
 
 
+def _vector_transform(tree, kind, source, target, vector):
+    """A Vector Transform node of `kind` from `source` to `target` space fed by `vector`."""
+    node = tree.nodes.new("ShaderNodeVectorTransform")
+    node.vector_type, node.convert_from, node.convert_to = kind, source, target
+    tree.links.new(vector, node.inputs["Vector"])
+    return node.outputs["Vector"]
+
+
+def _transformed(name, kind, source, target, coordinate, checker=0.0):
+    """A Diffuse material coloured by the Vector Transform of `coordinate` ("Position" or
+    "Normal" of the Geometry node, else a Texture Coordinate output): through a Checker
+    Texture of scale `checker` if given, else its absolute value."""
+    def feed(tree):
+        node = tree.nodes.new("ShaderNodeNewGeometry" if coordinate in ("Position", "Normal")
+                              else "ShaderNodeTexCoord")
+        vector = _vector_transform(tree, kind, source, target, node.outputs[coordinate])
+        if checker:
+            texture = tree.nodes.new("ShaderNodeTexChecker")
+            texture.inputs["Scale"].default_value = checker
+            texture.inputs["Color1"].default_value = (0.9, 0.6, 0.1, 1.0)
+            texture.inputs["Color2"].default_value = (0.1, 0.3, 0.8, 1.0)
+            tree.links.new(vector, texture.inputs["Vector"])
+            return texture.outputs["Color"]
+        absolute = tree.nodes.new("ShaderNodeVectorMath")
+        absolute.operation = "ABSOLUTE"
+        tree.links.new(vector, absolute.inputs[0])
+        return absolute.outputs[0]
+    return _diffuse_fed(name, feed)
+
+
+def vector_transform():
+    """The Vector Transform node (issue 14, point 1) between World, Object and Camera
+    space, for points, vectors and normals, on turned and unevenly scaled objects, and
+    Texture Coordinate's Object output of another object (a turned, scaled empty): two
+    balls sharing a material chequered by world positions in their own space; a ball
+    coloured by its camera-space normals; a ball chequered by camera coordinates in its own
+    space; a ball coloured by its object-space normals in world space and a cube by its
+    world normals in object space; a cube coloured by object coordinates as camera-space
+    vectors, another chequered by them as world points; a card chequered in the empty's
+    space."""
+    _box()
+    shared = _transformed("ObjectPoints", "POINT", "WORLD", "OBJECT", "Position", 4.0)
+    balls = [(shared, (-0.7, 0.1, 0.2), (0.3, 0.0, 0.8), (1.0, 0.7, 1.3)),
+             (shared, (-0.25, -0.1, 0.2), (0.0, 0.9, -0.4), (1.2, 1.0, 0.8)),
+             (_transformed("CameraNormals", "NORMAL", "WORLD", "CAMERA", "Normal"),
+              (0.2, 0.1, 0.2), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)),
+             (_transformed("CameraToObject", "POINT", "CAMERA", "OBJECT", "Camera", 5.0),
+              (0.65, -0.1, 0.2), (0.5, 0.2, 0.7), (0.8, 1.3, 1.0)),
+             (_transformed("ObjectNormals", "NORMAL", "OBJECT", "WORLD", "Normal"),
+              (-0.45, 0.45, 0.75), (0.7, 0.0, 0.3), (1.5, 0.6, 1.0))]
+    for i, (mat, centre, turn, scale) in enumerate(balls):
+        ball = _sphere(mat, centre, 0.2, f"Ball{i}")
+        ball.rotation_euler, ball.scale = turn, scale
+    cubes = [("NormalCube", _transformed("WorldNormals", "NORMAL", "WORLD", "OBJECT", "Normal"),
+              (0.05, 0.5, 0.8)),
+             ("VectorCube", _transformed("ObjectVectors", "VECTOR", "OBJECT", "CAMERA",
+                                         "Object"), (0.45, 0.5, 0.8)),
+             ("PointCube", _transformed("ObjectPointsInWorld", "POINT", "OBJECT", "WORLD",
+                                        "Object", 6.0), (0.8, 0.3, 1.15))]
+    for name, mat, location in cubes:
+        cube = _cube(name, location, (0.25, 0.3, 0.18), mat)
+        cube.rotation_euler = (0.4, 0.3, 0.6)
+    projector = bpy.data.objects.new("Projector", None)
+    projector.location, projector.rotation_euler = (0.3, 0.2, 1.0), (0.2, 0.5, 0.9)
+    projector.scale = (0.5, 1.5, 1.0)
+    bpy.context.scene.collection.objects.link(projector)
+    mat = bs.material("Projected", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    coordinates = tree.nodes.new("ShaderNodeTexCoord")
+    coordinates.object = projector
+    texture = tree.nodes.new("ShaderNodeTexChecker")
+    texture.inputs["Scale"].default_value = 3.0
+    tree.links.new(coordinates.outputs["Object"], texture.inputs["Vector"])
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    tree.links.new(texture.outputs["Color"], diffuse.inputs["Color"])
+    _card("ProjectedCard", (-0.1, 0.7, 1.2), (1.2, 0.45), mat)
+
+
+def _orange_to_blue(tree, factor):
+    """A colour Mix from orange to blue by the socket `factor`; returns its Result."""
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    ins = {sock.identifier: sock for sock in mix.inputs}
+    ins["A_Color"].default_value = (0.9, 0.5, 0.1, 1.0)
+    ins["B_Color"].default_value = (0.1, 0.3, 0.9, 1.0)
+    tree.links.new(factor, ins["Factor_Float"])
+    return mix.outputs["Result"]
+
+
 def _painted_ball(name, centre, domain, data_type, attribute="Paint", alpha=False):
     """A smooth UV sphere of radius 0.27 whose colour attribute `attribute` (per `domain`)
     paints bands of colour from its vertices' positions, Diffuse-shaded by a Color
@@ -1301,13 +1390,7 @@ def _painted_ball(name, centre, domain, data_type, attribute="Paint", alpha=Fals
     node.layer_name = attribute if attribute != "Paint" else ""
     colour = node.outputs["Color"]
     if alpha:
-        mix = tree.nodes.new("ShaderNodeMix")
-        mix.data_type = "RGBA"
-        ins = {s.identifier: s for s in mix.inputs}
-        ins["A_Color"].default_value = (0.9, 0.5, 0.1, 1.0)
-        ins["B_Color"].default_value = (0.1, 0.3, 0.9, 1.0)
-        tree.links.new(node.outputs["Alpha"], ins["Factor_Float"])
-        colour = mix.outputs["Result"]
+        colour = _orange_to_blue(tree, node.outputs["Alpha"])
     tree.links.new(colour, next(
         n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse").inputs["Color"])
     obj = bpy.data.objects.new(name, mesh)
@@ -2545,6 +2628,89 @@ def _textured(name, image, shader="ShaderNodeBsdfDiffuse", socket="Color", scale
     return mat
 
 
+def _projected(name, image, projection, coordinates, blend=0.0, linear=False, offset=None):
+    """A Diffuse material coloured by an Image Texture of `image` in `projection` on
+    Texture Coordinate's `coordinates` output (moved by `offset` through a Mapping if
+    given; Box blended by `blend`)."""
+    def feed(tree):
+        tex = tree.nodes.new("ShaderNodeTexImage")
+        tex.image, tex.projection, tex.projection_blend = image, projection, blend
+        tex.interpolation = "Linear" if linear else "Closest"
+        vector = tree.nodes.new("ShaderNodeTexCoord").outputs[coordinates]
+        if offset is not None:
+            mapping = tree.nodes.new("ShaderNodeMapping")
+            mapping.inputs["Location"].default_value = offset
+            tree.links.new(vector, mapping.inputs["Vector"])
+            vector = mapping.outputs["Vector"]
+        tree.links.new(vector, tex.inputs["Vector"])
+        return tex.outputs["Color"]
+    return _diffuse_fed(name, feed)
+
+
+def image_projections():
+    """Image Texture's Sphere, Tube and Box projections (issue 14, point 1): a ball in
+    Sphere projection of its Generated coordinates, a turned cylinder in Tube projection
+    (of Object coordinates centred on its axis: Generated ones would put its caps exactly
+    on a texel edge, v = 1, where float rounding picks either side), a turned, unevenly
+    scaled cube in Box projection of Object coordinates (blend 0) and a ball in Box
+    projection blended 0.4 (the two- and three-face mixes between), each of a chequered
+    image with a red and a green corner texel (a mirrored face shows)."""
+    _box()
+    image = _checker_image("Projected", n=8)
+    _sphere(_projected("SphereMap", image, "SPHERE", "Generated"), (-0.6, 0.0, 0.27), 0.27,
+            "SphereBall")
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.2, depth=0.55, location=(-0.05, 0.1, 0.3),
+                                        rotation=(0.3, 0.0, 0.5))
+    tube = bpy.context.active_object
+    tube.data.materials.append(_projected("TubeMap", image, "TUBE", "Object",
+                                          offset=(0.5, 0.5, 0.5)))
+    cube = _cube("BoxCube", (0.5, 0.3, 0.3), (0.35, 0.3, 0.4),
+                 _projected("BoxMap", image, "BOX", "Object"))
+    cube.rotation_euler = (0.5, 0.3, 0.7)
+    ball = _sphere(_projected("BlendedBox", image, "BOX", "Object", blend=0.4, linear=True),
+                   (0.1, -0.35, 0.85), 0.25, "BlendedBall")
+    ball.rotation_euler = (0.2, 0.6, 0.1)
+
+
+def _wired(name, size, emission=0.0):
+    """A Diffuse material orange on its faces' insides and blue within size / 2 of their
+    edges (a Wireframe node of world-space `size` as the Mix factor); with `emission`, an
+    Emission of that strength on the wires instead, added to the Diffuse."""
+    mat = bs.material(name, "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    wires = tree.nodes.new("ShaderNodeWireframe")
+    wires.inputs["Size"].default_value = size
+    diffuse = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse")
+    if emission:
+        glow = tree.nodes.new("ShaderNodeEmission")
+        glow.inputs["Color"].default_value = (0.3, 0.9, 0.4, 1.0)
+        scale = tree.nodes.new("ShaderNodeMath")
+        scale.operation = "MULTIPLY"
+        scale.inputs[1].default_value = emission
+        tree.links.new(wires.outputs["Fac"], scale.inputs[0])
+        tree.links.new(scale.outputs[0], glow.inputs["Strength"])
+        add = tree.nodes.new("ShaderNodeAddShader")
+        out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+        tree.links.new(diffuse.outputs[0], add.inputs[0])
+        tree.links.new(glow.outputs[0], add.inputs[1])
+        tree.links.new(add.outputs[0], out.inputs["Surface"])
+        return mat
+    tree.links.new(_orange_to_blue(tree, wires.outputs["Fac"]), diffuse.inputs["Color"])
+    return mat
+
+
+def wireframe():
+    """The Wireframe node at world-space sizes (issue 14): a smooth UV sphere and a turned,
+    unevenly scaled cube whose triangles' edges (the quads' diagonals too, as Cycles
+    renders them) colour their surface, and a card whose wires glow green (an Emission of
+    the Wireframe's Fac, added to its Diffuse)."""
+    _box()
+    _sphere(_wired("WiredBall", 0.005), (-0.45, 0.0, 0.3), 0.3, "WiredBall")
+    cube = _cube("WiredCube", (0.4, 0.1, 0.3), (0.35, 0.3, 0.45), _wired("WiredCube", 0.03))
+    cube.rotation_euler = (0.4, 0.2, 0.6)
+    _card("WiredCard", (0.0, 0.6, 1.05), (0.9, 0.4), _wired("GlowingWires", 0.04, 4.0))
+
+
 def _uv_sphere_mesh(name, radius):
     """A smooth 32 x 16 UV sphere mesh with its UV map (bmesh's calc_uvs)."""
     mesh = bpy.data.meshes.new(name)
@@ -2966,6 +3132,12 @@ _add(Variant("texture_coordinates", texture_coordinates, resolution=(128, 96), m
              samples=256, cycles_samples=512))
 _add(Variant("geometry_and_object_info", geometry_and_object_info, resolution=(128, 96),
              max_bounces=8, samples=256, cycles_samples=512))
+_add(Variant("vector_transform", vector_transform, resolution=(128, 96), max_bounces=8,
+             samples=256, cycles_samples=512))
+_add(Variant("image_projections", image_projections, resolution=(128, 96), max_bounces=8,
+             samples=256, cycles_samples=512))
+_add(Variant("wireframe", wireframe, resolution=(128, 96), max_bounces=8, samples=256,
+             cycles_samples=512))
 _add(Variant("blend_modes", blend_modes, resolution=(228, 72), max_bounces=0, samples=64,
              cycles_samples=128))
 _add(Variant("procedural_textures", procedural_textures, resolution=(224, 96), max_bounces=0,

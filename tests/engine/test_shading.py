@@ -426,6 +426,102 @@ def test_mapping_of_each_type_with_its_inputs_in_registers(rng):
     np.testing.assert_allclose(shading.evaluate(prog)[out:out + 3], [0.5, 0.0, 3.0])
 
 
+def _transform(v, axes, origin, into, normal):
+    """OP_TRANSFORM of v through the frame whose columns are `axes`' columns."""
+    prog = Program()
+    first = prog.const(list(axes[:, 0]))
+    prog.const(list(axes[:, 1]))
+    prog.const(list(axes[:, 2]))
+    o = prog.const(list(origin)) if origin is not None else -1
+    out = prog.emit(shading.OP_TRANSFORM, 3, a=prog.const(list(v)), b=first, c=o,
+                    d=int(into), e=int(normal))
+    return shading.evaluate(prog)[out:out + 3]
+
+
+def test_transform_moves_points_vectors_and_normals_through_a_frame(rng):
+    """OP_TRANSFORM, the Vector Transform node's step: out of a frame M, a point is M v + t
+    and a vector M v; into it by components, (v - t) . M_j; a normal is normalised. Into
+    the inverse's columns is the transposed inverse, a normal's transform, so a normal
+    taken out of an object as Cycles does (M^-T n) stays perpendicular to a surface's
+    vectors taken out as directions; a zero normal stays zero."""
+    for _ in range(10):
+        m, t, v = rng.normal(size=(3, 3)), rng.normal(size=3), rng.normal(size=3)
+        np.testing.assert_allclose(_transform(v, m, t, False, False), m @ v + t, atol=1e-12)
+        np.testing.assert_allclose(_transform(v, m, None, False, False), m @ v, atol=1e-12)
+        np.testing.assert_allclose(_transform(v, m, t, True, False), m.T @ (v - t),
+                                   atol=1e-12)
+        n = m.T @ v
+        np.testing.assert_allclose(_transform(v, m, None, True, True), n / np.linalg.norm(n),
+                                   atol=1e-12)
+        # A surface with tangent a and normal cross(a, b) in object space, out to world.
+        a, b = rng.normal(size=3), rng.normal(size=3)
+        normal = _transform(np.cross(a, b), np.linalg.inv(m), None, True, True)
+        for tangent in (a, b):
+            world = _transform(tangent, m, None, False, False)
+            assert abs(normal @ world) < 1e-9 * np.linalg.norm(world)
+    assert np.all(_transform(np.zeros(3), np.eye(3), None, True, True) == 0.0)
+
+
+def test_box_projection_weights_are_a_continuous_partition(rng):
+    """Cycles' box weights: one face near an axis (also at blend 0, everywhere), never
+    negative, summing to 1, and with a blend continuous as the normal turns (its seven
+    zones meet without jumps)."""
+    for blend in (0.0, 0.2, 0.5, 1.0):
+        for _ in range(10):  # along great circles, in steps of 3e-4 radians
+            a, b = np.linalg.qr(rng.normal(size=(3, 2)))[0].T
+            turn = np.linspace(0.0, 2.0 * np.pi, 20001)
+            w = np.array([shading.box_weights(*(math.cos(t) * a + math.sin(t) * b), blend)
+                          for t in turn])
+            assert np.all(w >= -1e-12) and np.allclose(w.sum(axis=1), 1.0, atol=1e-12)
+            if blend == 0.0:
+                assert np.all(np.sort(w, axis=1) == [0.0, 0.0, 1.0])
+            else:
+                assert np.abs(np.diff(w, axis=0)).max() < 0.02, blend
+        if blend <= 0.5:  # near enough the y axis for one face
+            assert shading.box_weights(0.1, -0.9, 0.2, blend) == (0.0, 1.0, 0.0)
+
+
+def test_sphere_and_tube_projections_of_the_unit_box(rng):
+    """Sphere: v from the angle to +z, u turning once about z; Tube: v from z, u the same
+    turn, on coordinates remapped from the 0..1 box about its centre."""
+    for _ in range(50):
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        co = 0.5 + 0.5 * rng.uniform(0.1, 1.0) * d  # a point in the box, direction d
+        u, v = shading.sphere_tube(0, *co)
+        assert v == pytest.approx(1.0 - math.acos(d[2]) / math.pi, abs=1e-9)
+        turn = math.atan2(d[0], d[1])
+        assert u == pytest.approx(0.5 - turn / (2 * math.pi), abs=1e-9)
+        u, v = shading.sphere_tube(1, *co)
+        assert v == pytest.approx(co[2], abs=1e-12)
+        assert u == pytest.approx(0.5 - turn / (2 * math.pi), abs=1e-9)
+    assert shading.sphere_tube(0, 0.5, 0.5, 0.5) == (0.0, 0.0)
+    assert shading.sphere_tube(1, 0.5, 0.5, 0.9) == (0.0, 0.0)
+
+
+def test_wireframe_marks_points_within_half_its_size_of_an_edge(rng):
+    """The Wireframe node's Fac: 1 within size / 2 of any edge of the hit's triangle (its
+    corners read from a map), 0 inside, whatever the triangle's size and turn."""
+    for _ in range(20):
+        turn = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        scale, size = rng.uniform(0.5, 3.0), rng.uniform(0.01, 0.2)
+        corners = (np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]) * scale
+                   @ turn.T + rng.normal(size=3))
+        prog = Program()
+        out = prog.emit(shading.OP_WIREFRAME, 1, a=prog.map_index(shading.POSITION),
+                        b=prog.const([size]))
+        pt = shading.pack([prog], None, lambda name: 0)
+        uv = corners.astype(np.float32)[None, None]
+        for u, v in rng.uniform(0.0, 1.0, (50, 2)) / 1.05:
+            if u + v > 1.0:
+                u, v = 1.0 - u, 1.0 - v
+            reg = np.zeros(shading.MAX_REGISTERS)
+            shading.run(0, len(pt.code), pt, uv, 0, u, v, reg)
+            distance = scale * min(u, v, (1.0 - u - v) / math.sqrt(2.0))
+            if abs(distance - size / 2) > 1e-4:
+                assert reg[out] == float(distance < size / 2), (u, v, distance, size)
+
+
 @pytest.mark.parametrize("backfacing", [False, True])
 def test_reflection_normal_and_window_outputs(rng, backfacing):
     """Texture Coordinate's Reflection is the view mirrored about the shading normal (the
