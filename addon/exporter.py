@@ -754,18 +754,20 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
         if name.startswith((sh.RADIAL, sh.UV_TANGENT)):
             local = m[:, [0, 2, 1]] if mirrored else m
             maps[name] = np.concatenate([_as_normals(local, i.matrix_world) for i in insts])
+    # Each instance's values, (k, 3) per map; the inverses, when read, once for them all.
+    matrices = np.array([np.asarray(i.matrix_world, np.float64) for i in insts])
+    inverses = shader_nodes.world_to_object(matrices) if any(
+        n in (*sh.OBJECT_INVERSE, sh.OBJECT_INVERSE_ORIGIN) for n in object_maps) else None
     per_instance = {
-        sh.OBJECT_LOCATION: lambda i: np.asarray(i.matrix_world, np.float64)[:3, 3],
-        sh.OBJECT_COLOUR: lambda i: i.colour[:3],
-        sh.OBJECT_NUMBERS: lambda i: (i.colour[3], i.random, i.pass_index),
-        sh.OBJECT_INVERSE_ORIGIN: lambda i: shader_nodes.world_to_object(i.matrix_world)[:3, 3],
-        **{axis: (lambda i, j=j: np.asarray(i.matrix_world, np.float64)[:3, j])
-           for j, axis in enumerate(sh.OBJECT_AXES)},
-        **{axis: (lambda i, j=j: shader_nodes.world_to_object(i.matrix_world)[:3, j])
-           for j, axis in enumerate(sh.OBJECT_INVERSE)}}
+        sh.OBJECT_LOCATION: lambda: matrices[:, :3, 3],
+        sh.OBJECT_COLOUR: lambda: [i.colour[:3] for i in insts],
+        sh.OBJECT_NUMBERS: lambda: [(i.colour[3], i.random, i.pass_index) for i in insts],
+        sh.OBJECT_INVERSE_ORIGIN: lambda: inverses[:, :3, 3],
+        **{axis: (lambda j=j: matrices[:, :3, j]) for j, axis in enumerate(sh.OBJECT_AXES)},
+        **{axis: (lambda j=j: inverses[:, :3, j]) for j, axis in enumerate(sh.OBJECT_INVERSE)}}
     t = len(mesh.triangles)
     for name in object_maps:
-        values = np.array([per_instance[name](i) for i in insts], np.float32)
+        values = np.asarray(per_instance[name](), np.float32)
         maps[name] = np.broadcast_to(np.repeat(values, t, axis=0)[:, None, :],
                                      (len(insts) * t, 3, 3))
     return maps

@@ -1012,8 +1012,9 @@ class _Reader:
         """The emission of a Mix Shader of constant factor (or an Add Shader) over Emission
         shaders, one or both textured, as the mix's own program: their colours times
         strengths mixed per point, which the kernel evaluates where the mix is hit or sampled
-        as a light. {} where the parts are mixes, or a textured part is another shader (its
-        emission may be dimmed by its own coat or sheen), as the texture's mean then."""
+        as a light. Parts that emit nothing (a Diffuse, a mix without emission) count as 0.
+        {} where another part emits by itself (a Principled BSDF's emission may be dimmed
+        by its own coat or sheen): its texture's mean then."""
         parts = (first, second)
         if not any("emission_program" in p.kwargs for p in parts) or any(
                 p.ctor != "emission_only" and ("emission_program" in p.kwargs

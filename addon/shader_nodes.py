@@ -413,8 +413,8 @@ def _n_image(c, node, out):
 
 
 def world_to_object(matrix_world) -> np.ndarray:
-    """An object's world-to-object matrix (4, 4): the pseudo-inverse, so that a flattened
-    object's zero axis stays zero rather than making NaN."""
+    """An object's world-to-object matrix (4, 4), or those of a stack (k, 4, 4): the
+    pseudo-inverse, so that a flattened object's zero axis stays zero rather than NaN."""
     return np.linalg.pinv(np.asarray(matrix_world, np.float64))
 
 
@@ -1064,12 +1064,17 @@ def compile_product(colour, strength, texture_cache):
     whose colour, strength or both vary), in one program; no view-dependent nodes."""
     def build():
         c = Compiler(texture_cache, view_dependent=False)
-        a = c.input(colour, "RGBA")
-        b = c.convert(c.input(strength, "VALUE"), "VALUE", "RGBA")  # as compile()
-        c.program.out = c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
-                                       d=c.sh.BLENDS.index("MULTIPLY"))
+        c.program.out = _emission_product(c, colour, strength)
         return c.program
     return _attempt(build)
+
+
+def _emission_product(c, colour, strength):
+    """The register of colour socket x strength socket, in compiler c's program."""
+    a = c.input(colour, "RGBA")
+    b = c.convert(c.input(strength, "VALUE"), "VALUE", "RGBA")  # as compile()
+    return c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
+                          d=c.sh.BLENDS.index("MULTIPLY"))
 
 
 def compile_mixed_emission(sources, fac, scale, texture_cache):
@@ -1080,11 +1085,8 @@ def compile_mixed_emission(sources, fac, scale, texture_cache):
         c = Compiler(texture_cache, view_dependent=False)
         p, regs = c.program, []
         for source in sources:
-            if len(source) == 2:  # sockets: colour x strength, as compile_product
-                a = c.input(source[0], "RGBA")
-                b = c.convert(c.input(source[1], "VALUE"), "VALUE", "RGBA")
-                regs.append(p.emit(c.sh.OP_BLEND, 3, a=p.const([1.0]), b=a, c=b,
-                                   d=c.sh.BLENDS.index("MULTIPLY")))
+            if len(source) == 2:  # sockets
+                regs.append(_emission_product(c, *source))
             else:
                 regs.append(p.const([float(x) for x in source]))
         mixed = p.emit(c.sh.OP_LERP, 3, a=p.const([fac]), b=regs[0], c=regs[1], d=3)

@@ -437,38 +437,42 @@ def _backfacing_ignored():
 
 
 @contextmanager
+def _node_replaced(node_type, replace):
+    """Every `node_type` node compiled by replace(its own compile function)."""
+    from addon import shader_nodes
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, node_type, replace(shader_nodes.NODES[node_type]))
+        yield
+
+
 def _vector_transform_read_as(**changes):
     """Every Vector Transform node compiled as if its vector_type, convert_from or
     convert_to were `changes` (e.g. vector_type={"NORMAL": "VECTOR"}: normals transformed
     as directions)."""
     from types import SimpleNamespace
 
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeVectorTransform"]
-
-    def changed(c, node, out):
-        fields = {name: changes.get(name, {}).get(getattr(node, name), getattr(node, name))
-                  for name in ("vector_type", "convert_from", "convert_to")}
-        return compile_node(c, SimpleNamespace(inputs=node.inputs, **fields), out)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeVectorTransform", changed)
-        yield
+    def replace(compile_node):
+        def changed(c, node, out):
+            fields = {name: changes.get(name, {}).get(getattr(node, name), getattr(node, name))
+                      for name in ("vector_type", "convert_from", "convert_to")}
+            return compile_node(c, SimpleNamespace(inputs=node.inputs, **fields), out)
+        return changed
+    return _node_replaced("ShaderNodeVectorTransform", replace)
 
 
 @contextmanager
 def _object_space_unscaled():
-    """Object space without the object's scale: world_to_object inverts the matrix with its
-    axes normalised (Vector Transform into an object's space, and Texture Coordinate's
+    """Object space without the object's scale: world_to_object inverts the matrices with
+    their axes normalised (Vector Transform into an object's space, and Texture Coordinate's
     Object of the empty)."""
     from addon import shader_nodes
 
     inverse = shader_nodes.world_to_object
 
     def unscaled(matrix_world):
-        m = np.array(matrix_world, np.float64)
-        m[:3, :3] /= np.linalg.norm(m[:3, :3], axis=0)
+        m = np.array(matrix_world, np.float64)  # (4, 4), or (k, 4, 4) instances
+        m[..., :3, :3] /= np.linalg.norm(m[..., :3, :3], axis=-2, keepdims=True)
         return inverse(m)
 
     with pytest.MonkeyPatch.context() as mp:
@@ -493,46 +497,34 @@ def _camera_space_as_blender():
         yield
 
 
-@contextmanager
 def _projector_ignored():
     """Texture Coordinate's Object output of another object read as the shaded object's."""
     from types import SimpleNamespace
 
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeTexCoord"]
-
-    def own(c, node, out):
-        plain = SimpleNamespace(name=node.name, from_instancer=node.from_instancer,
-                                object=None)
-        return compile_node(c, plain, out)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeTexCoord", own)
-        yield
+    def replace(compile_node):
+        def own(c, node, out):
+            plain = SimpleNamespace(name=node.name, from_instancer=node.from_instancer,
+                                    object=None)
+            return compile_node(c, plain, out)
+        return own
+    return _node_replaced("ShaderNodeTexCoord", replace)
 
 
-@contextmanager
 def _image_read_as(projection=None, blend=None):
     """Every Image Texture compiled as if its projection (a dict: from -> to) or its Box
     blend (`blend`) were other."""
     from types import SimpleNamespace
 
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeTexImage"]
-
-    def changed(c, node, out):
-        proxy = SimpleNamespace(**{name: getattr(node, name) for name in (
-            "name", "image", "interpolation", "extension", "inputs", "outputs",
-            "projection", "projection_blend")})
-        proxy.projection = (projection or {}).get(node.projection, node.projection)
-        proxy.projection_blend = node.projection_blend if blend is None else blend
-        return compile_node(c, proxy, out)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeTexImage", changed)
-        yield
+    def replace(compile_node):
+        def changed(c, node, out):
+            proxy = SimpleNamespace(**{name: getattr(node, name) for name in (
+                "name", "image", "interpolation", "extension", "inputs", "outputs",
+                "projection", "projection_blend")})
+            proxy.projection = (projection or {}).get(node.projection, node.projection)
+            proxy.projection_blend = node.projection_blend if blend is None else blend
+            return compile_node(c, proxy, out)
+        return changed
+    return _node_replaced("ShaderNodeTexImage", replace)
 
 
 @contextmanager
@@ -552,26 +544,20 @@ def _box_normal_in_world_space():
         yield
 
 
-@contextmanager
 def _wireframe_size_scaled(factor):
     """Every Wireframe node's Size (unlinked) times `factor`."""
     from types import SimpleNamespace
 
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeWireframe"]
-
-    def scaled(c, node, out):
-        size = SimpleNamespace(default_value=factor * node.inputs["Size"].default_value,
-                               is_linked=False, links=(), enabled=True, type="VALUE",
-                               name="Size", node=node)
-        proxy = SimpleNamespace(name=node.name, use_pixel_size=node.use_pixel_size,
-                                inputs={"Size": size})
-        return compile_node(c, proxy, out)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeWireframe", scaled)
-        yield
+    def replace(compile_node):
+        def scaled(c, node, out):
+            size = SimpleNamespace(default_value=factor * node.inputs["Size"].default_value,
+                                   is_linked=False, links=(), enabled=True, type="VALUE",
+                                   name="Size", node=node)
+            proxy = SimpleNamespace(name=node.name, use_pixel_size=node.use_pixel_size,
+                                    inputs={"Size": size})
+            return compile_node(c, proxy, out)
+        return scaled
+    return _node_replaced("ShaderNodeWireframe", replace)
 
 
 @contextmanager
