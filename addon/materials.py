@@ -16,7 +16,8 @@ Fallbacks:
   * Volume: its medium fills the mesh (absorption, Henyey-Greenstein scattering and
     emission of Volume Absorption, Volume Scatter, Principled Volume, Volume
     Coefficients and Emission, added and mixed); other volume shaders warned, ignored.
-  * Displacement linked beside a Surface: ignored, warned.
+  * Displacement linked beside a Surface: a bump (the material's Displacement Method Bump
+    Only, Cycles' default); Displacement Only and Both would move the mesh: warned.
   * Diffuse BSDF: Lambert, or Oren-Nayar (Cycles' improved model) at Roughness > 0.
   * Beckmann (and Ashikhmin-Shirley) distributions: GGX.
   * Principled BSDF: metal (x Metallic), glass (x (1 - Metallic) x Transmission Weight)
@@ -67,8 +68,15 @@ PRINCIPLED_IGNORED = (
     ("Thin Film Thickness", 0.0, "rendered without thin film"),
 )
 # Material Output inputs beside Surface that Specula ignores, with what that means.
-OUTPUT_IGNORED = (("Displacement", "displacement is not applied"),
-                  ("Thickness", "thickness is not used"))
+OUTPUT_IGNORED = (("Thickness", "thickness is not used"),)
+# Leaves whose look does not depend on the shading normal.
+UNSHADED = ("transparent", "emission_only", "boundary")
+
+
+def _layered(spec) -> bool:
+    """Whether a sheen or coat lies over part of `spec` (it dims the emission below it)."""
+    return any(p.ctor == "mix" and ("coat_ior" in p.kwargs or p.kwargs.get("sheen_layer"))
+               for p in spec.parts())
 
 
 def _leaf_emission(spec) -> np.ndarray:
@@ -123,7 +131,8 @@ class MaterialSpec:
         kwargs = dict(self.kwargs)
         kwargs.pop("normal_uv", None)
         normal = {k: kwargs.pop(k) for k in ("normal_program", "normal_strength",
-                                             "height_program", *MEDIUM_KEYS) if k in kwargs}
+                                             "height_program", "sets_normal", *MEDIUM_KEYS)
+                  if k in kwargs}
         anisotropy = {k: kwargs.pop(k) for k in ANISOTROPY_KEYS if k in kwargs}
         m = getattr(core.Material, self.ctor)(self.name, **kwargs)
         if anisotropy:  # (a Glossy BSDF at zero roughness is a mirror: it ignores them)
@@ -564,8 +573,9 @@ class _Reader:
         self.warnings = []
         self.constants = _Constants({} if image_cache is None else image_cache)
         self.normal_map = None  # set by normal(): the shader's tangent-space normal map
-        # id(emission program) -> its (colour, strength) sockets, to compile a mix's again
-        self.emission_sockets = {}
+        # id(emission program) -> its recipe (shader_nodes.compile_emission), so that a mix
+        # or an Alpha over it can compile it again, within its own
+        self.emission_sources = {}
 
     def warn(self, text):
         """Record a warning once (a Principled BSDF's lobes read the same inputs)."""
@@ -651,16 +661,17 @@ class _Reader:
                                                       unknown=unknown_colour, emission=True)
         if (colour_program is None and strength_program is None) or not max(colour) > 0:
             return colour, strength, None
-        sockets = (enabled_input(node, colour_socket), enabled_input(node, strength_socket))
+        source = ("product", enabled_input(node, colour_socket),
+                  enabled_input(node, strength_socket))
         if strength_program is None:
             program = shader_nodes.scaled(colour_program, strength)
         else:
-            program, why = shader_nodes.compile_product(*sockets, self.constants.image_cache)
+            program, why = shader_nodes.compile_emission(source, self.constants.image_cache)
             if program is None:
                 self.warn(f"node '{node.name}': its emission cannot be evaluated per point "
                           f"({why}); rendered as its constant")
                 return colour, strength, None
-        self.emission_sockets[id(program)] = sockets  # (a mix may compile them again)
+        self.emission_sources[id(program)] = source
         return colour, strength, program
 
     def number(self, node, socket_name, default=0.0, unknown=None):
@@ -785,9 +796,47 @@ class _Reader:
                                           f"nowhere")
         spec = self.shader(source.from_node)
         _give_normal_map(spec, self.normal_map)
+        self.displacement(out, spec)
         if _is_medium(medium):
             spec.kwargs.update(medium)
         return spec
+
+    def displacement(self, out, spec):
+        """The Material Output's Displacement, as Cycles renders the material's Displacement
+        Method Bump Only (its default): a bump (shader_nodes.compile_displacement) that
+        sets the normal every closure without a normal of its own starts from; a closure's
+        tangent-space Normal Map does not read it (Cycles' neither). The bumped normal is
+        the surface's own (sets_normal): bump shadowing is measured from it (Cycles'
+        SetNormal; beside a normal-mapped closure Specula measures from the mesh's).
+        Displacement Only and Displacement and Bump move the mesh, which Specula does not
+        (warned)."""
+        sock = out.inputs.get("Displacement")
+        link = None if sock is None else live_link(sock)
+        if link is None:
+            return
+        method = getattr(self.material, "displacement_method", "BUMP")
+        where = f"'{out.name}' input 'Displacement' (node '{link.from_node.name}')"
+        if method != "BUMP":
+            self.warn(f"{where}: displacement method {method} moves the mesh, which Specula "
+                      f"does not; rendered " + ("without it" if method == "DISPLACEMENT" else
+                                                "as Bump Only"))
+            if method == "DISPLACEMENT":
+                return
+        program, why = shader_nodes.compile_displacement(sock, self.constants.image_cache)
+        if program is None:
+            if why:
+                self.warn(f"{where} varies through {why}, which Specula does not evaluate "
+                          f"per point yet; rendered without it")
+            return
+        for leaf in spec.leaves():
+            if leaf.kwargs.get("normal_program") is not None or leaf.ctor in UNSHADED:
+                continue  # a normal map's frame is the mesh's
+            if leaf.kwargs.get("height_program") is not None:
+                self.warn(f"{where}: a Bump node over the displaced normal is not supported; "
+                          f"the Bump node's shader is rendered without the displacement")
+                continue
+            leaf.kwargs.update(height_program=program, sets_normal=True)
+            leaf.kwargs.setdefault("normal_program", None)
 
     def volume(self, link):
         """The medium of the Material Output's Volume (MEDIUM_KEYS keywords: coefficients
@@ -970,10 +1019,11 @@ class _Reader:
         c, program = self.textured_colour(node, socket_name, (default,) * 3)
         return min(max(c[0], 0.0), 1.0), program
 
-    def mixed(self, first, second, fac, scale=1.0, fac_program=None):
+    def mixed(self, first, second, fac, scale=1.0, fac_program=None, emission_program=None):
         """The mix spec of two specs; their normal maps must read one UV map (a triangle has
         one set of tangents), else the second's is dropped, warned. A textured factor mixes
-        the components' emission by its constant (warned)."""
+        the components' emission by its constant (warned). `emission_program`: the mix's
+        whole emission per point, given (with_alpha), its parts' constants its mean."""
         a, b = first.normal_uv, second.normal_uv
         if a is not None and b is not None and a != b:
             self.warn(f"mixed shaders' normal maps read UV maps '{a}' and '{b}'; only one per "
@@ -982,13 +1032,15 @@ class _Reader:
                 for key in ("normal_program", "normal_strength", "normal_uv"):
                     leaf.kwargs.pop(key, None)
         kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
-        if fac_program is None:
+        if emission_program is not None:
+            kwargs["emission_program"] = emission_program
+        elif fac_program is None:
             kwargs.update(self.mixed_emission(first, second, fac, scale))
         for part in (*first.parts(), *second.parts()):
             if part.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
-        if fac_program is not None and any(
+        if fac_program is not None and emission_program is None and any(
                 max(_leaf_emission(leaf)) > 0 for leaf in (*first.leaves(), *second.leaves())):
             program = None
             if first.ctor != "mix" and second.ctor != "mix":
@@ -1009,33 +1061,49 @@ class _Reader:
         return MaterialSpec("mix", self.material.name, kwargs)
 
     def mixed_emission(self, first, second, fac, scale):
-        """The emission of a Mix Shader of constant factor (or an Add Shader) over Emission
-        shaders, one or both textured, as the mix's own program: their colours times
-        strengths mixed per point, which the kernel evaluates where the mix is hit or sampled
-        as a light. Parts that emit nothing (a Diffuse, a mix without emission) count as 0.
-        {} where another part emits by itself (a Principled BSDF's emission may be dimmed
-        by its own coat or sheen): its texture's mean then."""
+        """The emission of a Mix Shader of constant factor (or an Add Shader) over parts of
+        which one or both emit from a texture, as the mix's own program: their emissions
+        mixed per point (shader_nodes.compile_emission), which the kernel evaluates where
+        the mix is hit or sampled as a light. A part may be an Emission shader, a
+        Principled BSDF (its emission under its Alpha, coat and sheen) or a mix with a
+        program of its own; a part that emits nothing counts as 0. Emission shaders' parts
+        become the mix's; the others keep their constants, for which the mix's program
+        stands (scene._flatten_mixes), so a Principled BSDF's coat and sheen still dim
+        its share. {} where that share would not be exact (the other part emits too) or a
+        part's recipe is unknown: the texture's mean then (warned by the caller)."""
         parts = (first, second)
-        if not any("emission_program" in p.kwargs for p in parts) or any(
-                p.ctor != "emission_only" and ("emission_program" in p.kwargs
-                                               or max(_leaf_emission(p)) > 0)
-                for p in parts):
+        programs = [p.kwargs.get("emission_program") for p in parts]
+        if all(p is None for p in programs):
             return {}
-        sources = [self.emission_sockets.get(id(p.kwargs.get("emission_program")),
-                                             tuple(_leaf_emission(p))) for p in parts]
-        program, why = shader_nodes.compile_mixed_emission(sources, fac, scale,
-                                                           self.constants.image_cache)
+        emits = [prog is not None or max(_leaf_emission(p)) > 0
+                 for p, prog in zip(parts, programs)]
+        if any(p.ctor != "emission_only" and _layered(p) for p in parts) and all(emits):
+            return {}
+        sources = [("constant", tuple(_leaf_emission(p))) if prog is None
+                   else self.emission_sources.get(id(prog)) for p, prog in zip(parts, programs)]
+        if any(source is None for source in sources):
+            return {}
+        source = ("mix", sources[0], sources[1], fac, scale)
+        program, why = shader_nodes.compile_emission(source, self.constants.image_cache)
         if program is None:
             self.warn(f"a mixed textured emission cannot be evaluated per point ({why})")
             return {}
-        mean = scale * ((1.0 - fac) * _leaf_emission(first) + fac * _leaf_emission(second))
-        if not max(mean) > 0:  # (the kernel skips a surface whose constant emits nothing)
-            mean = scale * np.maximum(_leaf_emission(first), _leaf_emission(second))
+        self.emission_sources[id(program)] = source
+        weights = (scale * (1.0 - fac), scale * fac)
+        own = sum(w * _leaf_emission(p) for w, p in zip(weights, parts)
+                  if p.ctor == "emission_only")
         for p in parts:
+            p.kwargs.pop("emission_program", None)
             if p.ctor == "emission_only":  # (now the mix's)
-                p.kwargs.pop("emission_program", None)
                 p.kwargs["strength"] = 0.0
-        return {"emission": tuple(float(x) for x in mean), "emission_program": program}
+        kwargs = {"emission_program": program}
+        if np.max(own) > 0:
+            kwargs["emission"] = tuple(float(x) for x in own)
+        elif not any(max(_leaf_emission(p)) > 0 for p in parts):
+            # (the kernel skips a surface whose constants emit nothing: one stands in)
+            kwargs["emission"] = tuple(float(x) for x in scale * np.maximum(
+                _leaf_emission(first), _leaf_emission(second)))
+        return kwargs
 
     def roughness(self, node):
         """A GGX node's Roughness as keywords: its constant in [0, 1] (the texture's mean
@@ -1241,7 +1309,30 @@ class _Reader:
         alpha, program = self.textured_unit(node, "Alpha", 1.0)
         if program is None and alpha >= 1.0:
             return spec
-        return self.mixed(transparent(self.material.name), spec, alpha, 1.0, program)
+        glow = spec.kwargs.pop("emission_program", None)
+        if alpha > 0.0 and (glow is not None or program is not None
+                            and max(spec.kwargs.get("emission", (0.0,))) > 0):
+            glow = self.alpha_glow(node, spec, glow, alpha, program)
+        return self.mixed(transparent(self.material.name), spec, alpha, 1.0, program, glow)
+
+    def alpha_glow(self, node, spec, glow, alpha, alpha_program):
+        """The emission of a Principled BSDF under its Alpha, per point: alpha x its
+        emission (`glow`, its program, or its constant), as Cycles weighs every closure of
+        the node by alpha. Its sheen and coat still dim it (scene: the mix's program stands
+        for its parts' emission, which lies under them). None where it cannot be evaluated
+        per point (warned: the texture's mean)."""
+        inner = ("constant", tuple(spec.kwargs["emission"])) if glow is None \
+            else self.emission_sources.get(id(glow))
+        weight = alpha if alpha_program is None else enabled_input(node, "Alpha")
+        program, why = (None, "its recipe is unknown") if inner is None else \
+            shader_nodes.compile_emission(("weighted", inner, weight),
+                                          self.constants.image_cache)
+        if program is None:
+            self.warn(f"node '{node.name}': its emission cannot be weighted by its Alpha per "
+                      f"point ({why}); rendered as its mean")
+            return None
+        self.emission_sources[id(program)] = ("weighted", inner, weight)
+        return program
 
     def with_emission(self, node, mix, kwargs):
         """A Principled BSDF's mix of lobes with its emission (textured or not) added once,

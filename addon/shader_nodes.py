@@ -27,7 +27,8 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
            "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath",
-           "ShaderNodeTangent", "ShaderNodeVectorTransform", "ShaderNodeWireframe")
+           "ShaderNodeTangent", "ShaderNodeVectorTransform", "ShaderNodeWireframe",
+           "ShaderNodeDisplacement")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -919,6 +920,34 @@ def _through(c, v, kind, axes, origin, into):
                   e=int(kind == "NORMAL"))
 
 
+def _n_displacement(c, node, out):
+    """Displacement (Cycles' svm_node_displacement): the normal (its Normal input, or the
+    shading normal) times (Height - Midlevel) x Scale, in World space as it is; in Object
+    space the normal is taken into the object's frame (M^T n, normalised), scaled there
+    and carried back as a direction (M v), so the object's scale stretches it."""
+    sh, p = c.sh, c.program
+    maths = sh.MATHS
+    height = p.emit(sh.OP_MATH, 1, a=c.input(node.inputs["Height"], "VALUE"),
+                    b=c.input(node.inputs["Midlevel"], "VALUE"), c=p.const([0.0]),
+                    d=maths.index("SUBTRACT"))
+    scale = c.input(node.inputs["Scale"], "VALUE")
+    height = p.emit(sh.OP_MATH, 1, a=height, b=scale, c=scale, d=maths.index("MULTIPLY"))
+    normal = node.inputs["Normal"]
+    if live_link(normal) is not None:
+        n = c.input(normal, "VECTOR")
+    elif c.view_dependent:
+        n = p.emit(sh.OP_GEOMETRY, 3, d=0)
+    else:
+        raise Unsupported(f"displacement '{node.name}' along the normal in an emission")
+    if node.space == "OBJECT":  # (normalised there, as object_inverse_normal_transform)
+        n = _through(c, n, "NORMAL", sh.OBJECT_AXES, None, into=True)
+    v = p.emit(sh.OP_VECTOR_MATH, 4, a=n, b=n, c=n, d=sh.VECTOR_MATHS.index("SCALE"),
+               e=height)
+    if node.space == "OBJECT":
+        v = _through(c, v, "VECTOR", sh.OBJECT_AXES, None, into=False)
+    return v, "VECTOR"
+
+
 def _n_wireframe(c, node, out):
     """Wireframe at a world-space Size (Cycles' wireframe, on the triangles as rendered);
     Pixel Size needs the ray's footprint, which Specula does not carry."""
@@ -994,6 +1023,7 @@ NODES = {
     "ShaderNodeVectorRotate": _n_vector_rotate,
     "ShaderNodeVectorTransform": _n_vector_transform,
     "ShaderNodeWireframe": _n_wireframe,
+    "ShaderNodeDisplacement": _n_displacement,
     "ShaderNodeRGBToBW": _n_rgb_to_bw,
     "ShaderNodeNewGeometry": _n_geometry,
     "ShaderNodeTangent": _n_tangent,
@@ -1059,41 +1089,53 @@ def _attempt(build):
         return None, f"{type(exc).__name__}: {exc}"
 
 
-def compile_product(colour, strength, texture_cache):
-    """(program or None, why not): colour socket x strength socket per point (an emission
-    whose colour, strength or both vary), in one program; no view-dependent nodes."""
+def compile_emission(source, texture_cache):
+    """(program or None, why not): the emission `source` describes, per point, in one
+    program (no view-dependent nodes). A source is the recipe of an emission:
+      ("product", colour socket, strength socket): colour x strength (one Emission or a
+          Principled BSDF's emission, either varying);
+      ("constant", (r, g, b)): an emission that does not vary;
+      ("mix", first, second, fac, scale): scale x ((1 - fac) first + fac second), a Mix
+          Shader of constant factor (an Add Shader: fac 0.5, scale 2) over two sources;
+      ("weighted", source, weight): source x weight, a number or a socket clamped to
+          [0, 1] (a Principled BSDF's Alpha weighs its emission)."""
     def build():
         c = Compiler(texture_cache, view_dependent=False)
-        c.program.out = _emission_product(c, colour, strength)
+        c.program.out = _emission_of(c, source)
         return c.program
     return _attempt(build)
 
 
-def _emission_product(c, colour, strength):
-    """The register of colour socket x strength socket, in compiler c's program."""
+def _emission_of(c, source):
+    """The register of emission `source` (compile_emission), in compiler c's program."""
+    p, kind = c.program, source[0]
+    if kind == "constant":
+        return p.const([float(x) for x in source[1]])
+    if kind == "mix":
+        _, first, second, fac, scale = source
+        mixed = p.emit(c.sh.OP_LERP, 3, a=p.const([float(fac)]), b=_emission_of(c, first),
+                       c=_emission_of(c, second), d=3)
+        return _times(c, mixed, p.const([float(scale)] * 3))
+    if kind == "weighted":
+        _, inner, weight = source
+        if isinstance(weight, (int, float)):
+            w = p.const([float(weight)] * 3)
+        else:
+            zero = p.const([0.0])
+            w = c.convert(p.emit(c.sh.OP_MATH, 1, a=c.input(weight, "VALUE"), b=zero, c=zero,
+                                 d=c.sh.MATHS.index("ADD"), e=1),  # (clamped, as alpha)
+                          "VALUE", "RGBA")
+        return _times(c, _emission_of(c, inner), w)
+    _, colour, strength = source  # "product"
     a = c.input(colour, "RGBA")
     b = c.convert(c.input(strength, "VALUE"), "VALUE", "RGBA")  # as compile()
+    return _times(c, a, b)
+
+
+def _times(c, a, b):
+    """The register of colour registers a x b (a Multiply blend at factor 1)."""
     return c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
                           d=c.sh.BLENDS.index("MULTIPLY"))
-
-
-def compile_mixed_emission(sources, fac, scale, texture_cache):
-    """(program or None, why not): the emission of a Mix Shader of constant factor `fac`
-    (an Add Shader: 0.5, `scale` 2) over two Emission shaders, each given as its (colour,
-    strength) sockets or as a constant colour x strength."""
-    def build():
-        c = Compiler(texture_cache, view_dependent=False)
-        p, regs = c.program, []
-        for source in sources:
-            if len(source) == 2:  # sockets
-                regs.append(_emission_product(c, *source))
-            else:
-                regs.append(p.const([float(x) for x in source]))
-        mixed = p.emit(c.sh.OP_LERP, 3, a=p.const([fac]), b=regs[0], c=regs[1], d=3)
-        p.out = p.emit(c.sh.OP_BLEND, 3, a=p.const([1.0]), b=mixed, c=p.const([scale] * 3),
-                       d=c.sh.BLENDS.index("MULTIPLY"))
-        return p
-    return _attempt(build)
 
 
 def compile_bump(node, texture_cache):
@@ -1120,6 +1162,31 @@ def compile_bump(node, texture_cache):
         return p
     program, why = _attempt(build)
     return (program, why) if program is None or varies(height) else (None, "")
+
+
+def compile_displacement(socket, texture_cache):
+    """(program or None, why not): a Material Output's Displacement as Cycles renders it in
+    Bump Only (ShaderGraph::bump_from_displacement): a Bump node of Distance 1 and Strength
+    1 whose height is the displacement vector's component along the shading normal (the
+    same result layout as compile_bump); (None, "") where the displacement does not vary
+    (a Displacement node of constant inputs moves every point along its normal alike)."""
+    src = live_link(socket).from_node
+    inputs = [s for s in src.inputs if s.enabled] \
+        if src.bl_idname == "ShaderNodeDisplacement" else [socket]
+    if not any(varies(s) for s in inputs):
+        return None, ""
+
+    def build():
+        c = Compiler(texture_cache)
+        p = c.program
+        v = c.input(socket, "VECTOR")
+        n = p.emit(c.sh.OP_GEOMETRY, 3, d=0)
+        dot = p.emit(c.sh.OP_VECTOR_MATH, 4, a=v, b=n, c=n,
+                     d=c.sh.VECTOR_MATHS.index("DOT_PRODUCT"), e=p.const([1.0]))
+        one = p.const([1.0])
+        p.out = p.emit(c.sh.OP_COMBINE, 3, a=dot + 3, b=one, c=one)
+        return p
+    return _attempt(build)
 
 
 def compile_anisotropy(anisotropy, rotation, texture_cache):

@@ -128,14 +128,17 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # the Principled BSDF's Specular Tint on its dielectric Fresnel (k, 3; white elsewhere);
 # each row's layer dimming its emission's share under a sheen or coat (k,) and that share
 # (k, 3) (scene.Materials.emission_root, emission_share); with anisotropy, each row's
-# anisotropy and rotation (k,) (scene.Materials.specular_anisotropy, anisotropic_rotation).
+# anisotropy and rotation (k,) (scene.Materials.specular_anisotropy, anisotropic_rotation);
+# with normal maps, whether a row's bump is its displacement's (k,) bool
+# (scene.Materials.sets_normal).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength medium mix_components "
                                             "mix_fac mix_scale coat_ior coat_tint fresnel "
                                             "glass_tints roughness sheen_layer sheen_parent "
                                             "sheen_ltc specular_tint emission_root "
-                                            "emission_share anisotropy rotation")
+                                            "emission_share anisotropy rotation "
+                                            "sets_normal")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
 # exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's). A setting,
@@ -559,6 +562,8 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
         sx, sy, sz = sheen_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     elif HAS_NORMAL_MAPS and shading.perturbs_normal(sc.materials.programs, mat):
         sx, sy, sz = perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    if HAS_NORMAL_MAPS and sc.materials.sets_normal[mat]:  # the displaced surface's own
+        bx, by, bz = sx, sy, sz
     mx, my, mz = sx, sy, sz
     if k != DIFFUSE and k != TRANSLUCENT and k != SHEEN:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)

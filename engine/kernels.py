@@ -237,7 +237,8 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
                               m.sheen_parent if plan.sheen or generic else None,
                               sheen_table() if plan.sheen or generic else None,
                               m.specular_tint, m.emission_root, m.emission_share,
-                              *_anisotropy_columns(m, plan.anisotropy or generic))
+                              *_anisotropy_columns(m, plan.anisotropy or generic),
+                              _sets_normal(m) if plan.normal_maps or generic else None)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -297,6 +298,11 @@ def _anisotropy_columns(m, needed) -> tuple:
     k = len(m.kind)
     return (m.specular_anisotropy if m.specular_anisotropy is not None else np.zeros(k),
             m.anisotropic_rotation if m.anisotropic_rotation is not None else np.zeros(k))
+
+
+def _sets_normal(m) -> np.ndarray:
+    """The MaterialTable's sets_normal column (False where the materials do not say)."""
+    return m.sets_normal if m.sets_normal is not None else np.zeros(len(m.kind), np.bool_)
 
 
 def _generic_emitters(em, num_triangles: int) -> Emitters:

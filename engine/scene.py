@@ -215,6 +215,10 @@ class Material:
     normal_program: Program | None = field(default=None, compare=False)
     normal_strength: float = 1.0
     height_program: Program | None = field(default=None, compare=False)  # a Bump node
+    # The height program is the Material Output's Displacement (Bump Only): its tilted
+    # normal becomes the surface's own (Cycles' SetNormal), so bump shadowing
+    # (bsdf.bump_shadowing) is measured from it, not from the mesh's smooth normal.
+    sets_normal: bool = False
     absorption: tuple = (0.0, 0.0, 0.0)
     scattering: tuple = (0.0, 0.0, 0.0)
     anisotropy: float = 0.0
@@ -473,11 +477,13 @@ def _flatten_mixes(materials: list[Material]) -> tuple[list[Material], list]:
             continue
         if len(m.components) != 2:
             raise ValueError(f"material '{m.name}': a mix needs two components")
-        if any(_emits(c, textured_only=True) for c in m.components) or \
-                m.emission_program is not None and any(_emits(c) for c in m.components):
+        # A component row already carries the emission (and program) of the mix above it.
+        if i < given and any(_emits(c, textured_only=True) for c in m.components):
             raise ValueError(f"material '{m.name}': a textured emission can only be a mix's "
-                             f"own, with components that emit nothing")
-        # A component row already carries the emission of the mix above it.
+                             f"own, not its components'")
+        # A mix's own textured emission stands for its whole emission, the constants of its
+        # components' included (a Principled BSDF's under its Alpha: alpha x E per point);
+        # their mixed constants are its mean.
         total = _mixed_emission(m) if i < given else np.asarray(m.emission, np.float64)
         out[i] = _with_emission(m, total, m.emission_program)
         rows = []
@@ -596,6 +602,7 @@ class Materials:
     emission_root: np.ndarray | None = None
     emission_share: np.ndarray | None = None
     fresnel: np.ndarray | None = None  # (k,) bool, Material.fresnel
+    sets_normal: np.ndarray | None = None  # (k,) bool, Material.sets_normal
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     specular_tint: np.ndarray | None = None  # (k, 3), Material.specular_tint
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
@@ -729,6 +736,7 @@ class Materials:
                    anisotropic_rotation=np.array([float(m.anisotropic_rotation)
                                                   for m in materials]),
                    fresnel=np.array([bool(m.fresnel) for m in materials]),
+                   sets_normal=np.array([bool(m.sets_normal) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
                    specular_tint=np.array([_specular_tint(m) for m in materials]))

@@ -648,6 +648,132 @@ def test_principled_alpha_mixes_in_transparency(fresh, core, alpha):
     np.testing.assert_allclose(m.emission[0], 0.25 * 2.0 * np.array([1.0, 0.5, 0.25]))
 
 
+@pytest.mark.parametrize("layers", [{}, {"Coat Weight": 0.5, "Metallic": 0.5,
+                                          "Transmission Weight": 0.5}, {"Sheen Weight": 0.6}])
+@pytest.mark.parametrize("textured", ["emission", "alpha", "both"])
+def test_a_textured_emission_under_alpha_is_weighted_per_point(fresh, core, layers, textured):
+    """A Principled BSDF's emission under its Alpha, one or both textured, is the alpha
+    mix's own program: alpha x colour x strength at each texel (clamped alpha, as a mix's
+    factor), nothing warned; under a coat or sheen the whole of it lies under them (their
+    share 1, from the layer mix's row), over no layers none of it. The materials table
+    builds (nested lobes below a textured emission once raised)."""
+    mat, node = node_material("Veil", "ShaderNodeBsdfPrincipled",
+                              **{"Emission Strength": 3.0, "Alpha": 0.4,
+                                 "Emission Color": (1.0, 0.5, 0.25, 1.0)}, **layers)
+    texels = np.array(TEXELS, np.float64)
+    texels[:, 3] = (1.0, 0.3, 0.0, 0.7)
+    img, stored = make_image("VeilMap", texels, colorspace="Non-Color")
+    tex = None
+    if textured in ("emission", "both"):
+        tex = texture(mat, img, node, "Emission Color")
+    if textured in ("alpha", "both"):
+        tex = tex or mat.node_tree.nodes.new("ShaderNodeTexImage")
+        tex.image = img
+        mat.node_tree.links.new(tex.outputs["Alpha"], node.inputs["Alpha"])
+    tex.interpolation = "Closest"
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.ctor == "mix" and spec.kwargs["first"].ctor == "transparent"
+    assert "emission_program" not in spec.kwargs["second"].kwargs
+    for uv, texel in zip(TEXEL_CENTRES, stored):
+        alpha = texel[3] if textured != "emission" else 0.4
+        colour = texel[:3] if textured != "alpha" else np.array([1.0, 0.5, 0.25])
+        np.testing.assert_allclose(_program_at(spec.kwargs["emission_program"], uv),
+                                   3.0 * alpha * colour, atol=1e-5)
+    m = core.Materials.from_list([spec.to_core(core)])
+    assert max(m.emission[0]) > 0  # the mean stands in
+    layered = bool(layers)
+    np.testing.assert_allclose(m.emission_share[m.reachable([0])], float(layered))
+    assert (m.emission_root[0] >= 0) == layered
+
+
+def _glowing(tree, kind, img, **inputs):
+    """A Principled BSDF (Emission Strength 2, Emission Color the image's colour) or an
+    Emission shader (Strength 3, Color the image's alpha) in `tree`, the image Closest."""
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation = img, "Closest"
+    if kind == "principled":
+        node = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        node.inputs["Emission Strength"].default_value = 2.0
+        tree.links.new(tex.outputs["Color"], node.inputs["Emission Color"])
+    else:
+        node = tree.nodes.new("ShaderNodeEmission")
+        node.inputs["Strength"].default_value = 3.0
+        tree.links.new(tex.outputs["Alpha"], node.inputs["Color"])
+    for key, value in inputs.items():
+        node.inputs[key].default_value = value
+    return node
+
+
+def _shader_mix(tree, first, second, fac=None):
+    """A Mix Shader of constant `fac` (None: an Add Shader) of two nodes' shaders."""
+    mix = tree.nodes.new("ShaderNodeAddShader" if fac is None else "ShaderNodeMixShader")
+    i = 0 if fac is None else 1
+    if fac is not None:
+        mix.inputs[0].default_value = fac
+    tree.links.new(first.outputs[0], mix.inputs[i])
+    tree.links.new(second.outputs[0], mix.inputs[i + 1])
+    return mix
+
+
+@pytest.mark.parametrize("case", ["coated_over_transparent", "principled_and_emission",
+                                  "nested_emission", "added_under_alpha",
+                                  "coated_and_emission"])
+def test_a_textured_emission_of_any_part_of_a_constant_mix_is_the_mix_s_program(fresh, core,
+                                                                                 case):
+    """A Principled BSDF's textured emission (under its coat, beside an Emission shader,
+    under its Alpha in an Add Shader) and a mix's own textured emission nested in another
+    mix: the outer mix emits their mix per point, nothing warned; a coated Principled's
+    share of it lies under the coat (share 1, when nothing else emits). Where a layered
+    emission is mixed with another, its share of the per-point sum would not be exact: the
+    mean, warned."""
+    texels = np.array(TEXELS, np.float64)
+    texels[:, 3] = (0.9, 0.2, 0.5, 0.7)
+    img, stored = make_image("GlowMap", texels, colorspace="Non-Color")
+    mat, _ = node_material("Glow", "ShaderNodeBsdfDiffuse")
+    tree = mat.node_tree
+    principled = lambda k: 2.0 * stored[k, :3]  # noqa: E731
+    emission = lambda k: 3.0 * stored[k, 3] * np.ones(3)  # noqa: E731
+    plain = lambda kind: tree.nodes.new(kind)  # noqa: E731
+    top, want, layered = {
+        "coated_over_transparent": lambda: (
+            _shader_mix(tree, _glowing(tree, "principled", img, **{"Coat Weight": 0.5}),
+                        plain("ShaderNodeBsdfTransparent"), 0.3),
+            lambda k: 0.7 * principled(k), True),
+        "principled_and_emission": lambda: (
+            _shader_mix(tree, _glowing(tree, "principled", img), _glowing(tree, "emission", img),
+                        0.4),
+            lambda k: 0.6 * principled(k) + 0.4 * emission(k), False),
+        "nested_emission": lambda: (
+            _shader_mix(tree, _shader_mix(tree, _glowing(tree, "emission", img),
+                                          plain("ShaderNodeBsdfDiffuse"), 0.5),
+                        plain("ShaderNodeBsdfGlossy"), 0.3),
+            lambda k: 0.35 * emission(k), False),
+        "added_under_alpha": lambda: (
+            _shader_mix(tree, _glowing(tree, "principled", img, Alpha=0.5),
+                        plain("ShaderNodeBsdfDiffuse")),
+            lambda k: 0.5 * principled(k), False),
+        "coated_and_emission": lambda: (
+            _shader_mix(tree, _glowing(tree, "principled", img, **{"Coat Weight": 0.5}),
+                        _glowing(tree, "emission", img), 0.4), None, True),
+    }[case]()
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(top.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    m = core.Materials.from_list([spec.to_core(core)])
+    assert max(m.emission[0]) > 0
+    if want is None:
+        assert len(warnings) == 1 and "mean" in warnings[0], warnings
+        assert all("emission_program" not in p.kwargs for p in spec.parts())
+        return
+    assert warnings == []
+    program = spec.kwargs["emission_program"]
+    assert not any("emission_program" in p.kwargs for p in list(spec.parts())[1:])
+    for uv, k in zip(TEXEL_CENTRES, range(4)):
+        np.testing.assert_allclose(_program_at(program, uv), want(k), atol=1e-5)
+    np.testing.assert_allclose(m.emission_share[0], 1.0 if layered else 0.0)
+
+
 def test_transparent_bsdf_is_transparent(fresh):
     mat, node = node_material("Glassless", "ShaderNodeBsdfTransparent",
                               Color=(0.9, 0.5, 0.1, 1.0))
@@ -1161,14 +1287,64 @@ def test_specular_tint_tints_every_fresnel(fresh, core):
         assert leaves[ctor].to_core(core).specular_tint == pytest.approx((0.2, 1.5, 0.0))
 
 
-def test_linked_displacement_warns(fresh):
-    mat, _ = node_material("Displaced", "ShaderNodeBsdfDiffuse")
+def add_displacement(mat, space="WORLD"):
+    """A Displacement node on the Material Output (Midlevel 0.3, Scale 0.2) whose Height is
+    the UV's u times 2."""
     tree = mat.node_tree
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    disp = tree.nodes.new("ShaderNodeDisplacement")
-    tree.links.new(disp.outputs[0], out.inputs["Displacement"])
-    _, warnings = convert(mat)
-    assert len(warnings) == 1 and "'Displacement'" in warnings[0] and disp.name in warnings[0]
+    displacement = tree.nodes.new("ShaderNodeDisplacement")
+    displacement.space = space
+    displacement.inputs["Midlevel"].default_value = 0.3
+    displacement.inputs["Scale"].default_value = 0.2
+    tree.links.new(displacement.outputs[0], out.inputs["Displacement"])
+    bump = add_bump(mat, displacement, "Height")  # (its Height chain; the node goes)
+    tree.links.new(bump.inputs["Height"].links[0].from_socket, displacement.inputs["Height"])
+    tree.nodes.remove(bump)
+    return displacement
+
+
+def test_displacement_is_a_bump_under_every_closure_without_a_normal(fresh, core):
+    """A Material Output's Displacement in Bump Only (Blender's default): a height program,
+    the displacement's component along the shading normal ((u x 2 - 0.3) x 0.2 for a
+    World-space Displacement node) at Distance 1 and Strength 1, on every closure that
+    has no normal of its own: a Principled's lobes and its coat, not a closure whose
+    Normal is a normal map (Cycles' reads the mesh's normal); the bumped normal is the
+    surface's own (sets_normal), unlike a Bump node's. Displacement Only is
+    warned and left out; a constant displacement tilts nothing."""
+    from engine import shading
+    mat, principled = node_material("Embossed", "ShaderNodeBsdfPrincipled",
+                                    **{"Coat Weight": 0.5})
+    displacement = add_displacement(mat)
+    spec, warnings = convert(mat)
+    assert warnings == []
+    leaves = spec.leaves()
+    assert {leaf.ctor for leaf in leaves} == {"principled", "coat_lobe"}
+    for leaf in leaves:
+        program = leaf.kwargs["height_program"]
+        for normal in ((0.0, 0.0, 1.0), (0.6, 0.0, -0.8)):
+            reg = shading.evaluate(program, uv=(0.25, 0.5), normal=normal)
+            assert reg[program.out:program.out + 3] == pytest.approx(
+                ((0.25 * 2 - 0.3) * 0.2, 1.0, 1.0))
+        assert leaf.to_core(core).height_program is program
+        assert leaf.to_core(core).sets_normal  # (bump shadowing measured from it)
+    nmap = add_normal_map(mat, principled)
+    spec, warnings = convert(mat)
+    assert warnings == []
+    leaves = {leaf.ctor: leaf for leaf in spec.leaves()}
+    assert leaves["principled"].kwargs.get("height_program") is None
+    assert leaves["principled"].kwargs["normal_program"] is not None
+    assert leaves["coat_lobe"].kwargs["height_program"] is not None  # its own: unlinked
+    mat.node_tree.nodes.remove(nmap)
+    mat.displacement_method = "DISPLACEMENT"
+    spec, warnings = convert(mat)
+    assert all("height_program" not in leaf.kwargs for leaf in spec.leaves())
+    assert len(warnings) == 1 and "DISPLACEMENT" in warnings[0] and \
+        displacement.name in warnings[0] and "Embossed" in warnings[0]
+    mat.displacement_method = "BUMP"
+    mat.node_tree.links.remove(displacement.inputs["Height"].links[0])
+    spec, warnings = convert(mat)
+    assert warnings == [] and all("height_program" not in leaf.kwargs
+                                  for leaf in spec.leaves())
 
 
 def test_bump_map_correction_off_is_warned():

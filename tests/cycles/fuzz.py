@@ -343,6 +343,14 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
                 "distance": _r(bumps.uniform(0.002, 0.02), 4),
                 "strength": _r(bumps.uniform(0.3, 1.0), 3) if bumps.random() < 0.5 else 1.0,
                 "invert": bool(bumps.random() < 0.3)}
+    # Some of those bumps the Material Output's Displacement instead (Bump Only: its
+    # Scale the distance; World or Object space), from a stream of their own.
+    displaced = np.random.default_rng([seed, 0xd15b])
+    for o in params["objects"]:
+        b = o["material"].get("bump")
+        if b is not None and displaced.random() < 0.4:
+            b["displacement"] = {"space": str(displaced.choice(["WORLD", "OBJECT"])),
+                                 "midlevel": _r(displaced.uniform(0.0, 1.0), 3)}
     # Some opaque surfaces coloured by a procedural texture (issue 14's nodes), from a
     # stream of their own: a texture of random kind and settings on Generated or Object
     # coordinates, its Fac-like output through a Math or Map Range node or not, into a
@@ -431,6 +439,7 @@ def features(params) -> list[str]:
                  + (":coat" if m.get("coat") else "")
                  + (":sheen" if m.get("sheen") else "")
                  + (":bump" if m.get("bump") else "")
+                 + (":displacement" if m.get("bump", {}).get("displacement") else "")
                  + (":specular_tint" if m.get("specular_tint") else "")
                  + (":refraction" if m.get("refraction") else ""))
     for light in params["lights"]:
@@ -643,6 +652,9 @@ def _simpler_material(m):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("bump"):
         out.append(("no bump", {k: v for k, v in m.items() if k != "bump"}))
+    if m.get("bump", {}).get("displacement"):
+        out.append(("a Bump node instead of the displacement", {
+            **m, "bump": {k: v for k, v in m["bump"].items() if k != "displacement"}}))
     if m.get("sheen"):
         out.append(("no sheen", {k: v for k, v in m.items() if k != "sheen"}))
     if m.get("specular_tint"):
@@ -832,8 +844,14 @@ def _bpy_surface(name, m):
         _colour_texture(mat, m["colour_texture"])
     if m.get("bump"):
         b = m["bump"]
-        from tests.cycles.variants import _bumped
-        _bumped(mat, b["axis"], b["frequency"], b["distance"], b["strength"], b["invert"])
+        from tests.cycles.variants import _bumped, _displaced
+        if b.get("displacement"):  # (its strength and invert are a Bump node's)
+            d = b["displacement"]
+            _displaced(mat, b["axis"], b["frequency"], b["distance"], d["space"],
+                       d["midlevel"])
+        else:
+            _bumped(mat, b["axis"], b["frequency"], b["distance"], b["strength"],
+                    b["invert"])
     return mat
 
 

@@ -68,6 +68,8 @@ def _all_features(seeds, avoid_known=False):
         found.update("alpha" for o in p["objects"] if o["material"].get("alpha"))
         found.update("coat" for o in p["objects"] if o["material"].get("coat"))
         found.update("bump" for o in p["objects"] if o["material"].get("bump"))
+        found.update("displacement" for o in p["objects"]
+                     if o["material"].get("bump", {}).get("displacement"))
         found.update("sheen" for o in p["objects"] if o["material"].get("sheen"))
         found.update("specular tint" for o in p["objects"]
                      if o["material"].get("specular_tint"))
@@ -95,6 +97,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
               "coat", "refraction", "bump", "specular tint", "sheen", "vector transform",
+              "displacement",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c", "known:d",
               "known:e"}
 

@@ -570,6 +570,30 @@ def _mixed_emission_as_mean():
         yield
 
 
+def _displacement_in_world_space():
+    """Every Displacement node compiled as if its space were World (an Object-space one
+    not stretched by the object's scale)."""
+    from types import SimpleNamespace
+
+    def replace(compile_node):
+        def changed(c, node, out):
+            return compile_node(c, SimpleNamespace(inputs=node.inputs, name=node.name,
+                                                   space="WORLD"), out)
+        return changed
+    return _node_replaced("ShaderNodeDisplacement", replace)
+
+
+@contextmanager
+def _alpha_glow_unweighted():
+    """A Principled BSDF's textured emission under its Alpha not weighted by it: its own
+    program, or with a textured Alpha and a constant emission, that constant."""
+    from addon import materials
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(materials._Reader, "alpha_glow", lambda self, node, spec, glow, *_: glow)
+        yield
+
+
 @contextmanager
 def _input_offset(node_type, name, opcode, offset, params=lambda: ()):
     """A `node_type` node (one instruction of `opcode` on one input) reading its input
@@ -1149,6 +1173,13 @@ def _emission_undimmed(scene, settings):
     return scene, settings
 
 
+def _displacement_shadowed_from_the_mesh(scene, settings):
+    """A displacement's bump shadowed as a Bump node's: from the mesh's smooth normal."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, sets_normal=np.zeros_like(m.sets_normal))
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -1347,6 +1378,12 @@ INJECTIONS = {
                                        _dielectric_specular_tint_white, None),
     "tints_as_their_means": ("textured_tints", _tints_as_their_means, None),
     "emission_undimmed": ("emission_under_layers", _emission_undimmed, None),
+    "displacement_ignored": ("displacement_bump", _bumps_ignored, None),
+    "displacement_object_as_world": ("displacement_bump", None, _displacement_in_world_space),
+    "displacement_shadowed_from_the_mesh": ("displacement_bump",
+                                            _displacement_shadowed_from_the_mesh, None),
+    "alpha_emission_undimmed": ("emission_under_alpha", _emission_undimmed, None),
+    "alpha_glow_unweighted": ("emission_under_alpha", None, _alpha_glow_unweighted),
     "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
