@@ -1120,11 +1120,8 @@ def _emission_of(c, source):
         _, inner, weight = source
         if isinstance(weight, (int, float)):
             w = p.const([float(weight)] * 3)
-        else:
-            zero = p.const([0.0])
-            w = c.convert(p.emit(c.sh.OP_MATH, 1, a=c.input(weight, "VALUE"), b=zero, c=zero,
-                                 d=c.sh.MATHS.index("ADD"), e=1),  # (clamped, as alpha)
-                          "VALUE", "RGBA")
+        else:  # (clamped, as a Principled BSDF clamps its Alpha)
+            w = c.convert(_clamped(c, c.input(weight, "VALUE"), 1), "VALUE", "RGBA")
         return _times(c, _emission_of(c, inner), w)
     _, colour, strength = source  # "product"
     a = c.input(colour, "RGBA")
