@@ -155,14 +155,15 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # registers (shading.MAX_REGISTERS floats, reused by every path of the batch); the media
 # each path is inside (media.MEDIA_STACK material indices, -1 empty); with transparency
 # (HAS_TRANSPARENCY), each path's bounce count, its transparent crossings, the distance
-# from its last scattering vertex (o64, where its MIS state was set) to the ray's start and
-# the volume boundaries it crossed (counted apart, as Cycles does); with the Light Path
+# from its last scattering vertex (o64, where its MIS state was set) to the ray's start,
+# the volume boundaries it crossed (counted apart, as Cycles does) and whether it crossed
+# a transparent surface since that vertex (Cycles' PATH_RAY_TRANSPARENT); with the Light Path
 # node (HAS_LIGHT_PATH), the flags of the ray that arrives (shading.RAY_*, Cycles'
 # PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
                             "camera_near prev_normal svm media bounce transparent mis_t "
-                            "bounds flags kind_bounces")
+                            "bounds via_transparent flags kind_bounces")
 # Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
 # path's transparent crossings plus its own, the sampler bounce of its vertex and the media
 # it is in (traced a segment at a time, media.MEDIA_STACK entries); with the Light Path
@@ -791,9 +792,7 @@ def handle_emission(i, row, depth, x, sc, paths, mis, max_bounces):
                                             sc.geometry.uv, paths.svm, le0, le1, le2)
     if HAS_COATS or HAS_SHEEN:
         if sc.materials.emission_root[x.mat] >= 0:
-            t = paths.throughput
-            full = 0.0 if depth > max_bounces else 1.0 if depth < ROULETTE_MIN_BOUNCE else \
-                min(math.sqrt(max(t[i, 0], max(t[i, 1], t[i, 2]))), 1.0)
+            full = continuation_probability(i, depth, max_bounces, paths)
             le0, le1, le2 = under_layers(np.int64(x.mat), np.int64(x.f), x.u, x.v, -x.wox,
                                          -x.woy, -x.woz, le0, le1, le2, full, sc, paths)
     w = 1.0
@@ -827,6 +826,24 @@ def caustic_weight(i, source, cos_y, sc, paths):
     eta = paths.caustic_eta[i]
     return caustics.path_tracing_weight(ca.n_light, ca.pdf_emit[source] / cos_y,
                                         1.0 / (eta * eta), paths.caustic_q[i])
+
+
+def continuation_probability(i, depth, max_bounces, paths):
+    """Cycles' chance that path i goes on from the surface it arrives at
+    (path_state_continuation_probability, decided as the ray arrives): none past the bounce
+    limit; certain for the first bounces or, for a ray that crossed a transparent surface
+    since its last scattering vertex, while the path has crossed at most one (Cycles'
+    min_bounce and transparent_min_bounce, each its setting 0 plus one); else
+    min(sqrt(max channel of the throughput), 1)."""
+    if depth > max_bounces:
+        return 0.0
+    if HAS_TRANSPARENCY and paths.via_transparent[i]:
+        if paths.transparent[i] <= 1:
+            return 1.0
+    elif depth < ROULETTE_MIN_BOUNCE:
+        return 1.0
+    t = paths.throughput
+    return min(math.sqrt(max(t[i, 0], max(t[i, 1], t[i, 2]))), 1.0)
 
 
 def russian_roulette(depth, vertex, t0, t1, t2, pseed, rev_sample):
@@ -1291,6 +1308,7 @@ def spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf,
         paths.transparent[out] = paths.transparent[i]
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
+        paths.via_transparent[out] = False
     paths.o64[out, 0], paths.o64[out, 1], paths.o64[out, 2] = px, py, pz
     paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
     for j in range(3):
@@ -1392,6 +1410,9 @@ def pass_through(i, out, row, x, tfar, boundary, sc, paths):
     paths.bounce[out] = paths.bounce[i]
     paths.transparent[out] = paths.transparent[i] + (0 if boundary else 1)
     paths.bounds[out] = paths.bounds[i] + (1 if boundary else 0)
+    # (A boundary leaves the flags as they were: Cycles' volume-only bounce skips
+    # path_state_next.)
+    paths.via_transparent[out] = paths.via_transparent[i] or not boundary
     paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
     if HAS_LIGHT_PATH:  # the ray goes on as the same kind of ray (a camera ray stays one)
         paths.flags[out] = paths.flags[i]
@@ -1435,6 +1456,7 @@ def spawn(i, out, row, depth, vertex, x, k, lobe, wx, wy, wz, t0, t1, t2, pdf, r
         paths.transparent[out] = paths.transparent[i]
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
+        paths.via_transparent[out] = False
     if HAS_LIGHT_PATH:
         count_bounce(i, out, bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths),
                      paths)
@@ -1641,7 +1663,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_tint_at, metal_edge_at,
     handle_emission, caustic_weight,
-    russian_roulette, emitter_pmf,
+    continuation_probability, russian_roulette, emitter_pmf,
     lit_side, textured_emitter,
     shadow_origin, sample_light, sample_bsdf, oren_nayar_at, diffuse_shadowing, sheen_at,
     caustic_state,

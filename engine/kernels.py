@@ -353,7 +353,8 @@ class Tracer:
                      np.zeros(n), np.ones(n), np.zeros(n), np.zeros((n, 3)),
                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
                      np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n),
-                     np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros((n, 3), np.int64))
+                     np.zeros(n, np.int64), np.zeros(n, np.bool_), np.zeros(n, np.int64),
+                     np.zeros((n, 3), np.int64))
 
     @staticmethod
     def shadow_rays(n: int) -> ShadowRays:

@@ -137,3 +137,28 @@ def test_transparency_is_planned_and_leaves_light_tracing_out():
     assert not make_plan(scenes.cbspheres(), scenes.settings()).transparency
     with pytest.raises(ValueError, match="transparent_max_bounces"):
         RenderSettings(transparent_max_bounces=-1).validate()
+
+
+@pytest.mark.parametrize("via, crossed, depth, expected", [
+    (True, 1, 5, 1.0),     # after bounces, its first transparent crossing: Cycles goes on
+    (True, 2, 0, 0.5),     # a camera ray past two crossings: the throughput's rule
+    (True, 3, 5, 0.5),
+    (False, 1, 1, 1.0),    # after a bounce, the first bounces go on
+    (False, 1, 2, 0.5),    # the crossing was before the last bounce: the bounce rule
+    (True, 1, 9, 0.0),     # past the bounce limit (8) nothing goes on
+])
+def test_a_ray_through_a_transparent_surface_goes_on_by_cycles_transparent_rule(
+        via, crossed, depth, expected):
+    """Cycles decides whether a path goes on as its ray arrives (the chance an emission
+    under a coat or sheen is dimmed with, integrator.handle_emission): a ray that crossed a
+    transparent surface since its last bounce goes on for certain while the path has
+    crossed at most one, whatever its bounce count, else with min(sqrt(max throughput), 1)
+    (path_state_continuation_probability). The bounce count's rule alone gets the first
+    two rows wrong."""
+    from engine import integrator
+    from engine.kernels import Tracer
+    paths = Tracer.new_paths(1)
+    paths.throughput[0] = (0.25, 0.1, 0.2)
+    paths.via_transparent[0] = via
+    paths.transparent[0] = crossed
+    assert integrator.continuation_probability(0, depth, 8, paths) == expected
