@@ -148,6 +148,8 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
         out[sh.OBJECT] = co[tri_verts]
     if sh.NORMAL in spaces and normals is not None:
         out[sh.NORMAL] = normals.astype(np.float32)
+    if sh.PARAMETRIC in spaces:
+        out[sh.PARAMETRIC] = np.broadcast_to(PARAMETRIC_CORNERS, (len(tri_verts), 3, 3))
     radial = [name for name in spaces if name.startswith(sh.RADIAL)]
     if sh.GENERATED in spaces or radial:
         loc = np.array(mesh.texspace_location, np.float32)
@@ -159,6 +161,10 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
         for name in radial:  # object space here; _instance_uvs turns them into the world's
             out[name] = _radial(generated - 0.5, name[len(sh.RADIAL):])
     return out
+
+
+# The Parametric map's value at each corner of a triangle (shading.PARAMETRIC).
+PARAMETRIC_CORNERS = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0]], np.float32)
 
 
 def _radial(g, axis):
@@ -356,7 +362,7 @@ class _Exporter:
         self.textured = bool(programs)
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
-                              if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL)
+                              if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL, sh.PARAMETRIC)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
                                                   sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS,
                                                   sh.RADIAL, sh.UV_TANGENT))})

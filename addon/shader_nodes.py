@@ -446,11 +446,14 @@ def _n_tex_coord(c, node, out):
 
 def _n_geometry(c, node, out):
     """Geometry: Position (world space), Normal (the shading normal), True Normal (the
-    triangle's), Incoming (toward the viewer) and Backfacing, as Cycles' svm_node_geometry
-    reads sd->P, N, Ng, wi (N and Ng facing the viewer's side)."""
+    triangle's), Incoming (toward the viewer), Backfacing and Parametric (the barycentric
+    weights of the triangle's first two corners), as Cycles' svm_node_geometry reads sd->P,
+    N, Ng, wi (N and Ng facing the viewer's side), u and v."""
     sh, p, name = c.sh, c.program, out.name
     if name == "Position":
         return p.uv(sh.POSITION), "VECTOR"
+    if name == "Parametric":
+        return p.uv(sh.PARAMETRIC), "VECTOR"
     if name == "Tangent":  # Cycles' primitive_tangent: Radial Z of the texture space
         return _tangent(c, node, "Z")
     if name not in ("Normal", "True Normal", "Incoming", "Backfacing"):

@@ -143,6 +143,11 @@ NORMAL, CAMERA, WINDOW = "\x00normal", "\x00camera", "\x00window"
 # The Geometry node's Position (world space) and True Normal (the triangle's, as its
 # winding gives it; OP_FACING orients it) are maps the renderer fills from the scene too.
 POSITION, TRUE_NORMAL = "\x00position", "\x00true_normal"
+# The Geometry node's Parametric: the hit's barycentric weights of its triangle's first two
+# corners and 0, (1 - u - v, u, 0) (Cycles' svm_node_geometry; its u and v weigh corners 1
+# and 2, as embree's). Per corner (1, 0, 0), (0, 1, 0) and 0, which interpolate to exactly
+# that; the exporter's mesh map, so a mirrored instance's reordered corners keep it.
+PARAMETRIC = "\x00parametric"
 # The Vector Transform node's camera space: the render camera's axes (Cycles' camera
 # space: +z ahead, +y up, scale cleared) and position, maps of world-space vectors
 # OP_TRANSFORM reads as a frame (three consecutive registers).
@@ -188,6 +193,8 @@ def map_label(name: str) -> str:
         return "Object coordinates"
     if name == NORMAL:
         return "normals"
+    if name == PARAMETRIC:
+        return "parametric coordinates"
     if name in OBJECT_AXES + OBJECT_INVERSE + (OBJECT_INVERSE_ORIGIN,):
         return "object transform"
     if name in OBJECT_MAPS:

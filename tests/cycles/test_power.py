@@ -446,6 +446,17 @@ def _node_replaced(node_type, replace):
         yield
 
 
+@contextmanager
+def _parametric_corners_swapped():
+    """The Parametric map's first two corners swapped: (u, 1 - u - v, 0) for Cycles'
+    (1 - u - v, u, 0)."""
+    from addon import exporter
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "PARAMETRIC_CORNERS", exporter.PARAMETRIC_CORNERS[[1, 0, 2]])
+        yield
+
+
 def _vector_transform_read_as(**changes):
     """Every Vector Transform node compiled as if its vector_type, convert_from or
     convert_to were `changes` (e.g. vector_type={"NORMAL": "VECTOR"}: normals transformed
@@ -1385,6 +1396,7 @@ INJECTIONS = {
     "alpha_emission_undimmed": ("emission_under_alpha", _emission_undimmed, None),
     "alpha_glow_unweighted": ("emission_under_alpha", None, _alpha_glow_unweighted),
     "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),
+    "parametric_corners_swapped": ("parametric", None, _parametric_corners_swapped),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

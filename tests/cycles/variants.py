@@ -1328,6 +1328,24 @@ def geometry_and_object_info():
                                                                    _backfacing_feed))
 
 
+def parametric():
+    """The Geometry node's Parametric (issue 14, point 1), glowing as a colour on a card, a
+    turned cube and a turned mirrored cube (negative x scale: its corners reorder with its
+    winding, Cycles' values stay the mesh's)."""
+    _box()
+
+    def feed(tree):
+        return tree.nodes.new("ShaderNodeNewGeometry").outputs["Parametric"]
+    _glowing_card("ParametricCard", (0.0, 0.6, 1.05), (0.9, 0.45), feed)
+    mat = bs.material("ParametricGlow", "ShaderNodeEmission", Strength=1.0)
+    tree = mat.node_tree
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    tree.links.new(feed(tree), emission.inputs["Color"])
+    for name, x, sx in (("ParametricCube", -0.45, 0.25), ("MirroredCube", 0.45, -0.25)):
+        cube = _cube(name, (x, 0.0, 0.4), (sx, 0.25, 0.25), mat)
+        cube.rotation_euler = (0.5, 0.3, 0.7)
+
+
 def _vector_transform(tree, kind, source, target, vector):
     """A Vector Transform node of `kind` from `source` to `target` space fed by `vector`."""
     node = tree.nodes.new("ShaderNodeVectorTransform")
@@ -3239,6 +3257,8 @@ _add(Variant("texture_coordinates", texture_coordinates, resolution=(128, 96), m
              samples=256, cycles_samples=512))
 _add(Variant("geometry_and_object_info", geometry_and_object_info, resolution=(128, 96),
              max_bounces=8, samples=256, cycles_samples=512))
+_add(Variant("parametric", parametric, resolution=(128, 96), max_bounces=0, samples=64,
+             cycles_samples=128))
 _add(Variant("vector_transform", vector_transform, resolution=(128, 96), max_bounces=8,
              samples=256, cycles_samples=512))
 _add(Variant("image_projections", image_projections, resolution=(128, 96), max_bounces=8,
