@@ -150,6 +150,9 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
         out[sh.NORMAL] = normals.astype(np.float32)
     if sh.PARAMETRIC in spaces:
         out[sh.PARAMETRIC] = np.broadcast_to(PARAMETRIC_CORNERS, (len(tri_verts), 3, 3))
+    if sh.ISLAND_RANDOM in spaces:
+        out[sh.ISLAND_RANDOM] = np.broadcast_to(
+            _island_random(mesh, tri_verts)[:, None, None], (len(tri_verts), 3, 3))
     radial = [name for name in spaces if name.startswith(sh.RADIAL)]
     if sh.GENERATED in spaces or radial:
         loc = np.array(mesh.texspace_location, np.float32)
@@ -161,6 +164,14 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
         for name in radial:  # object space here; _instance_uvs turns them into the world's
             out[name] = _radial(generated - 0.5, name[len(sh.RADIAL):])
     return out
+
+
+def _island_random(mesh, tri_verts) -> np.ndarray:
+    """(t,) the Random Per Island of each triangle of `mesh` (noise.island_random)."""
+    edges = np.zeros(len(mesh.edges) * 2, np.int64)
+    mesh.edges.foreach_get("vertices", edges)
+    return core.load().noise.island_random(edges.reshape(-1, 2), len(mesh.vertices),
+                                           np.ascontiguousarray(tri_verts[:, 0], np.int64))
 
 
 # The Parametric map's value at each corner of a triangle (shading.PARAMETRIC).
@@ -362,7 +373,8 @@ class _Exporter:
         self.textured = bool(programs)
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
-                              if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL, sh.PARAMETRIC)
+                              if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL, sh.PARAMETRIC,
+                                          sh.ISLAND_RANDOM)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
                                                   sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS,
                                                   sh.RADIAL, sh.UV_TANGENT))})

@@ -148,6 +148,9 @@ POSITION, TRUE_NORMAL = "\x00position", "\x00true_normal"
 # and 2, as embree's). Per corner (1, 0, 0), (0, 1, 0) and 0, which interpolate to exactly
 # that; the exporter's mesh map, so a mirrored instance's reordered corners keep it.
 PARAMETRIC = "\x00parametric"
+# The Geometry node's Random Per Island: each triangle's island's number
+# (noise.island_random) on all three corners, so it interpolates to itself.
+ISLAND_RANDOM = "\x00island_random"
 # The Vector Transform node's camera space: the render camera's axes (Cycles' camera
 # space: +z ahead, +y up, scale cleared) and position, maps of world-space vectors
 # OP_TRANSFORM reads as a frame (three consecutive registers).
@@ -195,6 +198,8 @@ def map_label(name: str) -> str:
         return "normals"
     if name == PARAMETRIC:
         return "parametric coordinates"
+    if name == ISLAND_RANDOM:
+        return "random per island"
     if name in OBJECT_AXES + OBJECT_INVERSE + (OBJECT_INVERSE_ORIGIN,):
         return "object transform"
     if name in OBJECT_MAPS:

@@ -457,6 +457,34 @@ def _parametric_corners_swapped():
         yield
 
 
+@contextmanager
+def _islands_rooted_at_their_first_join():
+    """Random Per Island with the islands joined without Cycles' union by rank (the
+    first vertex's root always wins): the same islands, other roots, other numbers."""
+    from addon import exporter
+    from engine import noise
+
+    def unranked(mesh, tri_verts):
+        edges = np.zeros(len(mesh.edges) * 2, np.int64)
+        mesh.edges.foreach_get("vertices", edges)
+        parent = list(range(len(mesh.vertices)))
+
+        def root(x):
+            while parent[x] != x:
+                x = parent[x]
+            return x
+        for a, b in edges.reshape(-1, 2):
+            ra, rb = root(int(a)), root(int(b))
+            if ra != rb:
+                parent[rb] = ra
+        return np.array([np.float32(noise.hash_uint(1, root(int(v)), 0, 0, 0))
+                         / np.float32(4294967296.0) for v in tri_verts[:, 0]], np.float32)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_island_random", unranked)
+        yield
+
+
 def _vector_transform_read_as(**changes):
     """Every Vector Transform node compiled as if its vector_type, convert_from or
     convert_to were `changes` (e.g. vector_type={"NORMAL": "VECTOR"}: normals transformed
@@ -1397,6 +1425,8 @@ INJECTIONS = {
     "alpha_glow_unweighted": ("emission_under_alpha", None, _alpha_glow_unweighted),
     "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),
     "parametric_corners_swapped": ("parametric", None, _parametric_corners_swapped),
+    "islands_rooted_at_their_first_join": ("random_per_island", None,
+                                           _islands_rooted_at_their_first_join),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

@@ -1346,6 +1346,49 @@ def parametric():
         cube.rotation_euler = (0.5, 0.3, 0.7)
 
 
+def _islands_mesh(name, count):
+    """One mesh of `count` small cubes in a row (each an island), built in a fixed order."""
+    from mathutils import Matrix
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    for i in range(count):
+        bmesh.ops.create_cube(bm, size=0.14, matrix=Matrix.Translation(
+            (-0.45 + 0.9 * i / (count - 1), 0.0, 0.08 * (i % 2))))
+    bm.to_mesh(mesh)
+    bm.free()
+    return mesh
+
+
+def random_per_island():
+    """The Geometry node's Random Per Island (issue 14, point 1): a mesh of eight cubes
+    glowing grey in it, and the same mesh mirrored and turned glowing in a White Noise
+    hash of it (which would scatter any difference in the number's last bit)."""
+    _box()
+
+    def glow(name, hashed):
+        mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
+        tree = mat.node_tree
+        emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+        value = tree.nodes.new("ShaderNodeNewGeometry").outputs["Random Per Island"]
+        if hashed:
+            noise = tree.nodes.new("ShaderNodeTexWhiteNoise")
+            noise.noise_dimensions = "1D"
+            tree.links.new(value, noise.inputs["W"])
+            value = noise.outputs["Color"]
+        tree.links.new(value, emission.inputs["Color"])
+        return mat
+
+    mesh = _islands_mesh("Islands", 8)
+    for name, z, scale, mat in (("Islands", 0.9, (1.0, 1.0, 1.0), glow("IslandGrey", False)),
+                                ("HashedIslands", 0.35, (-1.0, 1.0, 1.0),
+                                 glow("IslandHashed", True))):
+        obj = bpy.data.objects.new(name, mesh if name == "Islands" else mesh.copy())
+        obj.data.materials.clear()
+        obj.data.materials.append(mat)
+        obj.location, obj.scale, obj.rotation_euler = (0.0, 0.0, z), scale, (0.3, 0.0, 0.2)
+        bpy.context.scene.collection.objects.link(obj)
+
+
 def _vector_transform(tree, kind, source, target, vector):
     """A Vector Transform node of `kind` from `source` to `target` space fed by `vector`."""
     node = tree.nodes.new("ShaderNodeVectorTransform")
@@ -3259,6 +3302,8 @@ _add(Variant("geometry_and_object_info", geometry_and_object_info, resolution=(1
              max_bounces=8, samples=256, cycles_samples=512))
 _add(Variant("parametric", parametric, resolution=(128, 96), max_bounces=0, samples=64,
              cycles_samples=128))
+_add(Variant("random_per_island", random_per_island, resolution=(128, 96), max_bounces=0,
+             samples=64, cycles_samples=128))
 _add(Variant("vector_transform", vector_transform, resolution=(128, 96), max_bounces=8,
              samples=256, cycles_samples=512))
 _add(Variant("image_projections", image_projections, resolution=(128, 96), max_bounces=8,
