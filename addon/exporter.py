@@ -153,6 +153,8 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
     if sh.ISLAND_RANDOM in spaces:
         out[sh.ISLAND_RANDOM] = np.broadcast_to(
             _island_random(mesh, tri_verts)[:, None, None], (len(tri_verts), 3, 3))
+    if sh.POINTINESS in spaces:
+        out[sh.POINTINESS] = np.repeat(_pointiness(mesh, co)[tri_verts][..., None], 3, axis=2)
     radial = [name for name in spaces if name.startswith(sh.RADIAL)]
     if sh.GENERATED in spaces or radial:
         loc = np.array(mesh.texspace_location, np.float32)
@@ -170,8 +172,18 @@ def _island_random(mesh, tri_verts) -> np.ndarray:
     """(t,) the Random Per Island of each triangle of `mesh` (noise.island_random)."""
     edges = np.zeros(len(mesh.edges) * 2, np.int64)
     mesh.edges.foreach_get("vertices", edges)
-    return core.load().noise.island_random(edges.reshape(-1, 2), len(mesh.vertices),
+    return core.load().mesh_attributes.island_random(edges.reshape(-1, 2), len(mesh.vertices),
                                            np.ascontiguousarray(tri_verts[:, 0], np.int64))
+
+
+def _pointiness(mesh, co) -> np.ndarray:
+    """(n,) the Pointiness of each vertex of `mesh` (mesh_attributes.pointiness)."""
+    normals = np.zeros(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("normal", normals)
+    edges = np.zeros(len(mesh.edges) * 2, np.int64)
+    mesh.edges.foreach_get("vertices", edges)
+    return core.load().mesh_attributes.pointiness(
+        np.ascontiguousarray(co, np.float32), normals.reshape(-1, 3), edges.reshape(-1, 2))
 
 
 # The Parametric map's value at each corner of a triangle (shading.PARAMETRIC).
@@ -374,7 +386,7 @@ class _Exporter:
         sh = core.load().shading
         self.spaces = sorted({name for p in programs for name in p.uv_maps
                               if name in (sh.GENERATED, sh.OBJECT, sh.NORMAL, sh.PARAMETRIC,
-                                          sh.ISLAND_RANDOM)
+                                          sh.ISLAND_RANDOM, sh.POINTINESS)
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
                                                   sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS,
                                                   sh.RADIAL, sh.UV_TANGENT))})

@@ -447,9 +447,9 @@ def _n_tex_coord(c, node, out):
 def _n_geometry(c, node, out):
     """Geometry: Position (world space), Normal (the shading normal), True Normal (the
     triangle's), Incoming (toward the viewer), Backfacing, Parametric (the barycentric
-    weights of the triangle's first two corners) and Random Per Island, as Cycles'
-    svm_node_geometry reads sd->P, N, Ng, wi (N and Ng facing the viewer's side), u and v
-    and the island attribute."""
+    weights of the triangle's first two corners), Random Per Island and Pointiness, as
+    Cycles' svm_node_geometry reads sd->P, N, Ng, wi (N and Ng facing the viewer's side),
+    u and v and the two mesh attributes."""
     sh, p, name = c.sh, c.program, out.name
     if name == "Position":
         return p.uv(sh.POSITION), "VECTOR"
@@ -457,6 +457,8 @@ def _n_geometry(c, node, out):
         return p.uv(sh.PARAMETRIC), "VECTOR"
     if name == "Random Per Island":
         return p.uv(sh.ISLAND_RANDOM), "VALUE"
+    if name == "Pointiness":
+        return p.uv(sh.POINTINESS), "VALUE"
     if name == "Tangent":  # Cycles' primitive_tangent: Radial Z of the texture space
         return _tangent(c, node, "Z")
     if name not in ("Normal", "True Normal", "Incoming", "Backfacing"):

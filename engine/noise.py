@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from .jit import ALLOCATING, JIT, njit
+from .jit import JIT, njit
 
 NOISE_TYPES = ("MULTIFRACTAL", "RIDGED_MULTIFRACTAL", "HYBRID_MULTIFRACTAL", "FBM",
                "HETERO_TERRAIN")
@@ -448,43 +448,6 @@ def object_random(name: str, instance_random_id: int | None = None) -> float:
         hash_uint.py_func(2, hash_string(name), 0, 0, 0) if hasattr(hash_uint, "py_func") \
         else hash_uint(2, hash_string(name), 0, 0, 0)
     return float(np.float32(rid & MASK) / np.float32(4294967296.0))
-
-
-@njit(**JIT)
-def _island_root(parent, x):
-    """The root of x's set, the path to it compressed (Cycles' DisjointSet::find)."""
-    root = x
-    while parent[root] != root:
-        root = parent[root]
-    while parent[x] != root:
-        x, parent[x] = parent[x], root
-    return root
-
-
-@njit(**ALLOCATING)
-def island_random(edges, n_verts, first_verts):
-    """The Geometry node's Random Per Island of each triangle (float32): Cycles joins the
-    mesh's vertices along its edges, in order, in its DisjointSet (union by rank, the
-    first vertex's root winning a tie) and hashes the root of each triangle's first
-    vertex, hash_uint_to_float (attr_create_random_per_island). edges : (e, 2) vertex
-    indices; first_verts : (t,) each triangle's first vertex."""
-    parent = np.arange(n_verts)
-    rank = np.zeros(n_verts, np.int64)
-    for e in range(edges.shape[0]):
-        x = _island_root(parent, edges[e, 0])
-        y = _island_root(parent, edges[e, 1])
-        if x == y:
-            continue
-        if rank[x] < rank[y]:
-            x, y = y, x
-        parent[y] = x
-        if rank[x] == rank[y]:
-            rank[x] += 1
-    out = np.empty(len(first_verts), np.float32)
-    for t in range(len(first_verts)):
-        h = hash_uint(1, _island_root(parent, first_verts[t]) & MASK, 0, 0, 0)
-        out[t] = np.float32(h) / np.float32(4294967296.0)
-    return out
 
 
 # ----------------------------------------------------------------- bricks

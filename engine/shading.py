@@ -151,6 +151,9 @@ PARAMETRIC = "\x00parametric"
 # The Geometry node's Random Per Island: each triangle's island's number
 # (noise.island_random) on all three corners, so it interpolates to itself.
 ISLAND_RANDOM = "\x00island_random"
+# ... and its Pointiness: each vertex's (mesh_attributes.pointiness) on the corners, which
+# Cycles interpolates as a vertex attribute.
+POINTINESS = "\x00pointiness"
 # The Vector Transform node's camera space: the render camera's axes (Cycles' camera
 # space: +z ahead, +y up, scale cleared) and position, maps of world-space vectors
 # OP_TRANSFORM reads as a frame (three consecutive registers).
@@ -200,6 +203,8 @@ def map_label(name: str) -> str:
         return "parametric coordinates"
     if name == ISLAND_RANDOM:
         return "random per island"
+    if name == POINTINESS:
+        return "pointiness"
     if name in OBJECT_AXES + OBJECT_INVERSE + (OBJECT_INVERSE_ORIGIN,):
         return "object transform"
     if name in OBJECT_MAPS:

@@ -485,6 +485,38 @@ def _islands_rooted_at_their_first_join():
         yield
 
 
+@contextmanager
+def _pointiness_unwelded():
+    """Pointiness without Cycles' welding of duplicate vertices first: a face split from
+    its neighbours reads flat along its own edges."""
+    from addon import exporter
+
+    def unwelded(mesh, co):
+        normals = np.zeros(len(mesh.vertices) * 3, np.float32)
+        mesh.vertices.foreach_get("normal", normals)
+        normals = normals.reshape(-1, 3).astype(np.float64)
+        edges = np.zeros(len(mesh.edges) * 2, np.int64)
+        mesh.edges.foreach_get("vertices", edges)
+        a, b = edges.reshape(-1, 2).T
+        d = co[b].astype(np.float64) - co[a]
+        d /= np.maximum(np.linalg.norm(d, axis=1), 1e-30)[:, None]
+        accum = np.zeros_like(normals)
+        np.add.at(accum, a, d)
+        np.add.at(accum, b, -d)
+        count = np.bincount(np.concatenate([a, b]), minlength=len(co))
+        mean = accum / np.maximum(count, 1)[:, None]
+        raw = np.where(count > 0, np.arccos(np.clip((normals * mean).sum(1), -1, 1)) / np.pi,
+                       0.0)
+        data = raw.copy()
+        np.add.at(data, a, raw[b])
+        np.add.at(data, b, raw[a])
+        return (data / (count + 1)).astype(np.float32)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "_pointiness", unwelded)
+        yield
+
+
 def _vector_transform_read_as(**changes):
     """Every Vector Transform node compiled as if its vector_type, convert_from or
     convert_to were `changes` (e.g. vector_type={"NORMAL": "VECTOR"}: normals transformed
@@ -1427,6 +1459,7 @@ INJECTIONS = {
     "parametric_corners_swapped": ("parametric", None, _parametric_corners_swapped),
     "islands_rooted_at_their_first_join": ("random_per_island", None,
                                            _islands_rooted_at_their_first_join),
+    "pointiness_unwelded": ("pointiness", None, _pointiness_unwelded),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
 }

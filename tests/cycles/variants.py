@@ -1389,6 +1389,32 @@ def random_per_island():
         bpy.context.scene.collection.objects.link(obj)
 
 
+def pointiness():
+    """The Geometry node's Pointiness (issue 14, point 1) through a Color Ramp of a narrow
+    range, glowing: a cube rounded by a Subdivision Surface modifier, a cube whose faces
+    an Edge Split modifier parts (duplicate vertices, which Cycles welds first) and a
+    turned card (flat: 1/2)."""
+    _box()
+    mat = bs.material("Pointy", "ShaderNodeEmission", Strength=1.0)
+    tree = mat.node_tree
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.elements[0].position, ramp.color_ramp.elements[1].position = 0.45, 0.75
+    ramp.color_ramp.elements[0].color = (0.1, 0.2, 1.0, 1.0)
+    ramp.color_ramp.elements[1].color = (1.0, 0.6, 0.1, 1.0)
+    tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Pointiness"],
+                   ramp.inputs["Fac"])
+    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
+    rounded = _cube("RoundedCube", (-0.45, 0.0, 0.4), (0.25, 0.25, 0.25), mat)
+    rounded.modifiers.new("Subdivision", "SUBSURF").levels = 2
+    rounded.modifiers["Subdivision"].render_levels = 2
+    parted = _cube("PartedCube", (0.45, 0.0, 0.4), (0.25, 0.25, 0.25), mat)
+    parted.modifiers.new("EdgeSplit", "EDGE_SPLIT").split_angle = 0.5
+    for obj in (rounded, parted):
+        obj.rotation_euler = (0.5, 0.3, 0.7)
+    _card("FlatCard", (0.0, 0.6, 1.05), (0.9, 0.45), mat, angle=0.3)
+
+
 def _vector_transform(tree, kind, source, target, vector):
     """A Vector Transform node of `kind` from `source` to `target` space fed by `vector`."""
     node = tree.nodes.new("ShaderNodeVectorTransform")
@@ -3304,6 +3330,8 @@ _add(Variant("parametric", parametric, resolution=(128, 96), max_bounces=0, samp
              cycles_samples=128))
 _add(Variant("random_per_island", random_per_island, resolution=(128, 96), max_bounces=0,
              samples=64, cycles_samples=128))
+_add(Variant("pointiness", pointiness, resolution=(128, 96), max_bounces=0, samples=64,
+             cycles_samples=128))
 _add(Variant("vector_transform", vector_transform, resolution=(128, 96), max_bounces=8,
              samples=256, cycles_samples=512))
 _add(Variant("image_projections", image_projections, resolution=(128, 96), max_bounces=8,

@@ -128,16 +128,3 @@ def test_bricks_lay_in_offset_rows_with_mortar_between():
     for x in np.linspace(-3, 3, 50):
         tint = b(x, 0.37 * x, **dict(settings, bias=0.3))[0]
         assert 0.0 <= tint <= 1.0
-
-
-def test_an_island_is_numbered_by_the_root_cycles_disjoint_set_gives_it():
-    """Random Per Island hashes the root of each triangle's first vertex in Cycles'
-    DisjointSet: joined by rank, so vertex 2 joining the set {0, 1} hangs under its root
-    0 (joining without rank would root the island at 2); a tie keeps the first vertex's
-    root; another island has its own number."""
-    from engine.noise import hash_uint, island_random
-    edges = np.array([[0, 1], [2, 0], [4, 3], [5, 6]], np.int64)
-    got = island_random(edges, 7, np.array([2, 3, 6], np.int64))
-    expected = [np.float32(hash_uint(1, root, 0, 0, 0)) / np.float32(4294967296.0)
-                for root in (0, 4, 5)]
-    assert got.dtype == np.float32 and list(got) == expected
