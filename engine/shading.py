@@ -191,20 +191,16 @@ RADIAL = "\x00radial:"
 UV_TANGENT = "\x00uv_tangent:"
 
 
+# How a warning names the maps of fixed names.
+_MAP_LABELS = {GENERATED: "Generated coordinates", OBJECT: "Object coordinates",
+               NORMAL: "normals", PARAMETRIC: "parametric coordinates",
+               ISLAND_RANDOM: "random per island", POINTINESS: "pointiness"}
+
+
 def map_label(name: str) -> str:
     """How a warning names a per-corner map."""
-    if name == GENERATED:
-        return "Generated coordinates"
-    if name == OBJECT:
-        return "Object coordinates"
-    if name == NORMAL:
-        return "normals"
-    if name == PARAMETRIC:
-        return "parametric coordinates"
-    if name == ISLAND_RANDOM:
-        return "random per island"
-    if name == POINTINESS:
-        return "pointiness"
+    if name in _MAP_LABELS:
+        return _MAP_LABELS[name]
     if name in OBJECT_AXES + OBJECT_INVERSE + (OBJECT_INVERSE_ORIGIN,):
         return "object transform"
     if name in OBJECT_MAPS:

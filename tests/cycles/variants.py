@@ -1337,10 +1337,7 @@ def parametric():
     def feed(tree):
         return tree.nodes.new("ShaderNodeNewGeometry").outputs["Parametric"]
     _glowing_card("ParametricCard", (0.0, 0.6, 1.05), (0.9, 0.45), feed)
-    mat = bs.material("ParametricGlow", "ShaderNodeEmission", Strength=1.0)
-    tree = mat.node_tree
-    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
-    tree.links.new(feed(tree), emission.inputs["Color"])
+    mat = _glow("ParametricGlow", feed)
     for name, x, sx in (("ParametricCube", -0.45, 0.25), ("MirroredCube", 0.45, -0.25)):
         cube = _cube(name, (x, 0.0, 0.4), (sx, 0.25, 0.25), mat)
         cube.rotation_euler = (0.5, 0.3, 0.7)
@@ -1366,17 +1363,15 @@ def random_per_island():
     _box()
 
     def glow(name, hashed):
-        mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
-        tree = mat.node_tree
-        emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
-        value = tree.nodes.new("ShaderNodeNewGeometry").outputs["Random Per Island"]
-        if hashed:
+        def feed(tree):
+            value = tree.nodes.new("ShaderNodeNewGeometry").outputs["Random Per Island"]
+            if not hashed:
+                return value
             noise = tree.nodes.new("ShaderNodeTexWhiteNoise")
             noise.noise_dimensions = "1D"
             tree.links.new(value, noise.inputs["W"])
-            value = noise.outputs["Color"]
-        tree.links.new(value, emission.inputs["Color"])
-        return mat
+            return noise.outputs["Color"]
+        return _glow(name, feed)
 
     mesh = _islands_mesh("Islands", 8)
     for name, z, scale, mat in (("Islands", 0.9, (1.0, 1.0, 1.0), glow("IslandGrey", False)),
@@ -1395,16 +1390,15 @@ def pointiness():
     an Edge Split modifier parts (duplicate vertices, which Cycles welds first) and a
     turned card (flat: 1/2)."""
     _box()
-    mat = bs.material("Pointy", "ShaderNodeEmission", Strength=1.0)
-    tree = mat.node_tree
-    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    ramp.color_ramp.elements[0].position, ramp.color_ramp.elements[1].position = 0.45, 0.75
-    ramp.color_ramp.elements[0].color = (0.1, 0.2, 1.0, 1.0)
-    ramp.color_ramp.elements[1].color = (1.0, 0.6, 0.1, 1.0)
-    tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Pointiness"],
-                   ramp.inputs["Fac"])
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
+    def feed(tree):
+        ramp = tree.nodes.new("ShaderNodeValToRGB")
+        low, high = ramp.color_ramp.elements
+        low.position, high.position = 0.45, 0.75
+        low.color, high.color = (0.1, 0.2, 1.0, 1.0), (1.0, 0.6, 0.1, 1.0)
+        tree.links.new(tree.nodes.new("ShaderNodeNewGeometry").outputs["Pointiness"],
+                       ramp.inputs["Fac"])
+        return ramp.outputs["Color"]
+    mat = _glow("Pointy", feed)
     rounded = _cube("RoundedCube", (-0.45, 0.0, 0.4), (0.25, 0.25, 0.25), mat)
     rounded.modifiers.new("Subdivision", "SUBSURF").levels = 2
     rounded.modifiers["Subdivision"].render_levels = 2
@@ -1631,14 +1625,19 @@ def blend_modes():
         _blend_card(f"C{mode}", (x, 0.0, -0.33), mode, odd, False)
 
 
-def _glowing_card(name, centre, size, feed):
-    """An emitting card (strength 1, UV mapped) whose colour is the socket `feed(tree)`
-    returns."""
+def _glow(name, feed):
+    """An Emission material (strength 1) whose colour is the socket `feed(tree)` returns."""
     mat = bs.material(name, "ShaderNodeEmission", Strength=1.0)
     tree = mat.node_tree
     emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
     tree.links.new(feed(tree), emission.inputs["Color"])
-    _quad_uvs(_card(name, centre, size, mat))
+    return mat
+
+
+def _glowing_card(name, centre, size, feed):
+    """An emitting card (strength 1, UV mapped) whose colour is the socket `feed(tree)`
+    returns."""
+    _quad_uvs(_card(name, centre, size, _glow(name, feed)))
 
 
 def _noise_feed(dimensions, kind, output="Factor", **inputs):
@@ -3326,12 +3325,9 @@ _add(Variant("texture_coordinates", texture_coordinates, resolution=(128, 96), m
              samples=256, cycles_samples=512))
 _add(Variant("geometry_and_object_info", geometry_and_object_info, resolution=(128, 96),
              max_bounces=8, samples=256, cycles_samples=512))
-_add(Variant("parametric", parametric, resolution=(128, 96), max_bounces=0, samples=64,
-             cycles_samples=128))
-_add(Variant("random_per_island", random_per_island, resolution=(128, 96), max_bounces=0,
-             samples=64, cycles_samples=128))
-_add(Variant("pointiness", pointiness, resolution=(128, 96), max_bounces=0, samples=64,
-             cycles_samples=128))
+for _setup in (parametric, random_per_island, pointiness):  # the Geometry node's mesh data
+    _add(Variant(_setup.__name__, _setup, resolution=(128, 96), max_bounces=0, samples=64,
+                 cycles_samples=128))
 _add(Variant("vector_transform", vector_transform, resolution=(128, 96), max_bounces=8,
              samples=256, cycles_samples=512))
 _add(Variant("image_projections", image_projections, resolution=(128, 96), max_bounces=8,
