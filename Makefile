@@ -55,8 +55,10 @@ render: $(STAMP)
 	$(PY) -m addon render blend_scenes/default.blend --samples 16 \
 		--output out/default.exr --output out/default.png
 
+# Two processes (pytest-xdist): a file's tests, and the Cycles and install folders, each
+# stay in one (tests/conftest.py).
 test: $(STAMP)
-	$(PY) -m pytest -q --durations=40 tests
+	$(PY) -m pytest -q -n 2 --durations=40 tests
 
 test-fast: $(STAMP)
 	$(PY) -m pytest -q -m "not slow" tests

@@ -1,4 +1,6 @@
+import glob
 import os
+import time
 
 import numpy as np
 import pytest
@@ -13,3 +15,48 @@ def rng():
 # instead of one per plan (tests/engine/test_kernel.py renders with the plans' own kernels
 # and checks they give the same bits). Inherited by the Blender processes the tests start.
 os.environ.setdefault("SPECULA_KERNEL", "generic")
+
+
+# `make test` runs the suite in two processes (pytest-xdist): most of its time is numba
+# compiling kernels, which uses one core. A file's tests stay in one process (its module
+# fixtures are made once), and so do the Cycles comparisons (the injected errors reuse the
+# agreement renders of their variants) and the install tests (one `make dist`, one Blender
+# 3.4 user folder). (xdist's own --dist loadgroup marks do not reach its scheduler under
+# pytest 9: the nodeids it sends lack their group.)
+GROUPED_FOLDERS = ("cycles", "install")
+
+
+def process_group(nodeid: str) -> str:
+    """The process-sharing group of a test: its folder if grouped, else its file."""
+    path = nodeid.split("::")[0]
+    parts = path.split("/")
+    return parts[1] if len(parts) > 2 and parts[1] in GROUPED_FOLDERS else path
+
+
+def pytest_xdist_make_scheduler(config, log):
+    from xdist.scheduler import LoadScopeScheduling
+
+    class GroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            return process_group(nodeid)
+
+    return GroupScheduling(config, log)
+
+
+STARTED = time.time()
+CYCLES_SUMMARIES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "out",
+                                "cycles", "summary-*.txt")
+
+
+def pytest_terminal_summary(terminalreporter):
+    """The Cycles comparisons' summary (where the references came from, how each
+    comparison went), as the processes that ran them left it (tests/cycles/conftest.py)."""
+    lines = []
+    for path in sorted(glob.glob(CYCLES_SUMMARIES)):
+        if os.path.getmtime(path) >= STARTED:
+            with open(path) as f:
+                lines += f.read().splitlines()
+    if lines:
+        terminalreporter.section("Specula vs Cycles")
+        for line in lines:
+            terminalreporter.write_line(line)

@@ -17,7 +17,8 @@ bpy = pytest.importorskip("bpy")
 
 import addon  # noqa: E402 - needs REPO on sys.path
 
-addon.register()
+if not hasattr(bpy.types.Scene, "specula"):  # tests/cycles' conftest may have done it
+    addon.register()
 
 SCENES_DIR = os.path.join(REPO, "blend_scenes")
 
