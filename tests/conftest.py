@@ -1,6 +1,7 @@
 import glob
 import os
 import time
+import zlib
 
 import numpy as np
 import pytest
@@ -19,18 +20,24 @@ os.environ.setdefault("SPECULA_KERNEL", "generic")
 
 # `make test` runs the suite in two processes (pytest-xdist): most of its time is numba
 # compiling kernels, which uses one core. A file's tests stay in one process (its module
-# fixtures are made once), and so do the Cycles comparisons (the injected errors reuse the
-# agreement renders of their variants) and the install tests (one `make dist`, one Blender
-# 3.4 user folder). (xdist's own --dist loadgroup marks do not reach its scheduler under
-# pytest 9: the nodeids it sends lack their group.)
-GROUPED_FOLDERS = ("cycles", "install")
+# fixtures are made once), and so do the install tests (one `make dist`, one Blender 3.4 user
+# folder); the Cycles comparisons are split between the two by variant, a variant's injected
+# errors in the process that made its agreement render (test_power.py's ids start with the
+# variant). (xdist's own --dist loadgroup does not group under pytest 9.2: its group suffix
+# no longer reaches the nodeids it schedules, pytest-dev/pytest-xdist#1386.)
+BY_VARIANT = ("tests/cycles/test_agreement.py", "tests/cycles/test_power.py")
 
 
 def process_group(nodeid: str) -> str:
-    """The process-sharing group of a test: its folder if grouped, else its file."""
-    path = nodeid.split("::")[0]
-    parts = path.split("/")
-    return parts[1] if len(parts) > 2 and parts[1] in GROUPED_FOLDERS else path
+    """The process-sharing group of a test: its file's, the install folder's, or for a
+    Cycles comparison one of two halves of the variants."""
+    path, _, test = nodeid.partition("::")
+    if path.startswith("tests/install/"):
+        return "install"
+    if path in BY_VARIANT and "[" in test:
+        variant = test[test.index("[") + 1:].rstrip("]").split("-")[0]
+        return f"cycles-{zlib.crc32(variant.encode()) % 2}"
+    return path
 
 
 def pytest_xdist_make_scheduler(config, log):

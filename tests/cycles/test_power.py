@@ -1466,7 +1466,8 @@ INJECTIONS = {
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("error", list(INJECTIONS))
+@pytest.mark.parametrize("error", list(INJECTIONS),
+                         ids=[f"{variant}-{error}" for error, (variant, *_) in INJECTIONS.items()])
 def test_comparison_rejects_injected_error(error):
     name, inject, patch = INJECTIONS[error]
     correct = harness.agreement(name)

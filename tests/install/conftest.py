@@ -6,6 +6,16 @@ import pytest
 from . import helpers
 
 
+@pytest.fixture(autouse=True)
+def users_kernel_choice(monkeypatch):
+    """The Blender processes started here choose their kernels as a user's do ("auto": the
+    scene's own, compiled where it is not cached) rather than the suite's shared generic
+    one (tests/conftest.py). Each of them has its own kernel cache (another Python's numba,
+    or the extension's package name), where the generic kernel, compiled cold, took 5-6 min
+    of the 12-min install tests; the scenes' own kernels compile several times faster."""
+    monkeypatch.setenv("SPECULA_KERNEL", "auto")
+
+
 @pytest.fixture(scope="session")
 def dist():
     """The zips of `make dist`, built once per session: {platform | 'legacy': path}."""
