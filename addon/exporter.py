@@ -404,8 +404,8 @@ class _Exporter:
                 self.warn(f"object '{obj.name}' ({UNSUPPORTED_TYPES[obj.type]}) not supported "
                           f"yet, skipped")
         self.out.camera = camera_settings(self.scene, self.depsgraph, self.warn)
-        self.out.world_colour = world_colour(self.scene.world, self.warn)
-        self.out.environment = world_environment(self.scene.world, self.warn)
+        self.out.world_colour, self.out.environment = world_lighting(
+            self.scene.world, self.warn, self._image_means)
         volume, notes = materials.world_volume(self.scene.world, self._image_means)
         self.out.world_volume = volume
         for note in notes:
@@ -572,68 +572,78 @@ def _uses_nodes(idblock):
     return idblock.node_tree is not None and (bpy.app.version >= (5, 0) or idblock.use_nodes)
 
 
-def world_colour(world, warn) -> tuple:
-    """Background radiance colour x strength; black without a world."""
+# The width of a baked world map (height: half): Cycles runs the world's shader per ray, the
+# map is looked up bilinearly between texel centres, which rounds off a kink (a Map Range's
+# clamp at the horizon: 0.6 % too bright in that pixel row at 1024, 0.12 % at 2048, measured
+# against Cycles on tests/cycles world_nodes_sky). A world with images is baked at twice its
+# widest image's width, so the lookup adds little blur to the image it resamples, up to
+# 4096 (at 2048: 25 MB of map and 34 MB of sampling tables; at 4096 four times that).
+WORLD_BAKE_WIDTH = 2048
+
+
+def world_lighting(world, warn, texture_cache):
+    """(colour, environment) of the core's World: the background radiance (colour x strength
+    of a plain Background; black without a world, or with its Surface unlinked, as in
+    Cycles), and the keywords of an equirectangular map (core.World's environment and
+    texture_from_world) where the world varies with direction, or None.
+
+    A Background whose Color is an Environment Texture (Equirectangular, Linear), its Vector
+    unlinked, a Texture Coordinate's Generated or a rotating Mapping, is the image itself,
+    looked up exactly (`_plain_environment`). Any other node tree the shader programs can
+    express (Background and Emission under Mix and Add Shaders; textures, Mapping, Math,
+    Color Ramp, Gradient, Noise ... on the direction) is baked into a map
+    (environment.bake) that the kernel looks up and importance-samples as such a map; a
+    tree that does not vary is its constant. Trees that cannot be baked (a Light Path
+    node, a Sky Texture ...) warn, naming the node, and render the viewport colour."""
     if world is None:
-        return (0.0, 0.0, 0.0)
+        return (0.0, 0.0, 0.0), None
     flat = tuple(float(c) for c in world.color[:3])
     if not _uses_nodes(world):
-        return flat
+        return flat, None
     out = world.node_tree.get_output_node('CYCLES')
     if out is None:
         warn(f"world '{world.name}': no active World Output node for Cycles; using its "
              f"viewport colour")
-        return flat
+        return flat, None
     surface = out.inputs.get("Surface")
-    if surface is None or not surface.is_linked:
-        return (0.0, 0.0, 0.0)  # Cycles renders an unlinked world black too
-    node = surface.links[0].from_node
-    if node.bl_idname != "ShaderNodeBackground":
-        warn(f"world '{world.name}': node '{node.name}' is not supported; using its viewport "
-             f"colour")
-        return flat
-    colour = node.inputs["Color"]
-    if colour.is_linked and colour.links[0].from_node.bl_idname == "ShaderNodeTexEnvironment":
-        # The map itself is read by world_environment; this constant is its fallback.
-        return flat
-    for sock in ("Color", "Strength"):
-        if node.inputs[sock].is_linked:
-            warn(f"world '{world.name}': node '{node.name}' input '{sock}' is driven by another "
-                 f"node, which is not supported; using the input's own value")
-    strength = float(node.inputs["Strength"].default_value)
-    return tuple(strength * float(c) for c in node.inputs["Color"].default_value[:3])
+    if surface is None or shader_nodes.live_link(surface) is None:
+        return (0.0, 0.0, 0.0), None  # Cycles renders an unlinked world black too
+    plain = _plain_environment(world, shader_nodes.live_link(surface).from_node, warn)
+    if plain is not None:
+        return flat, plain or None  # {}: the plain map could not be read (warned)
+    program, why = shader_nodes.compile_world(surface, texture_cache)
+    if program is None:
+        warn(f"world '{world.name}' cannot be rendered from its node tree ({why}); rendering "
+             f"its viewport colour instead")
+        return flat, None
+    sh = core.load().shading
+    if not (program.uv_maps or program.textures
+            or any(ins[0] in sh.GEOMETRY_OPS for ins in program.code)):
+        values = sh.evaluate(program)
+        return tuple(max(float(v), 0.0) for v in values[program.out:program.out + 3]), None
+    width = min(max([WORLD_BAKE_WIDTH] + [2 * t.texels.shape[1] for t in program.textures]),
+                4096)
+    image = core.load().environment.bake(program, width, width // 2)
+    return flat, dict(environment=image, texture_from_world=np.eye(3))
 
 
-def _background_node(world):
-    if world is None or not _uses_nodes(world):
+def _plain_environment(world, node, warn):
+    """A world whose Surface is `node`, when it is a Background lit by an Environment
+    Texture that the core's map looks up exactly (Equirectangular, Linear; Strength
+    unlinked; Vector unlinked, a Texture Coordinate's Generated or a Mapping that only
+    rotates it): the core World's keywords, {} where its image cannot be read (warned), and
+    None for any other tree."""
+    if node.bl_idname != "ShaderNodeBackground" or node.inputs["Strength"].is_linked \
+            or not node.inputs["Color"].is_linked:
         return None
-    out = world.node_tree.get_output_node('CYCLES')
-    surface = None if out is None else out.inputs.get("Surface")
-    if surface is None or not surface.is_linked:
+    tex = shader_nodes.live_link(node.inputs["Color"]).from_node
+    if tex.bl_idname != "ShaderNodeTexEnvironment" or tex.projection != "EQUIRECTANGULAR" \
+            or tex.interpolation != "Linear" or tex.image is None:
         return None
-    node = surface.links[0].from_node
-    return node if node.bl_idname == "ShaderNodeBackground" else None
-
-
-def world_environment(world, warn):
-    """The world's equirectangular Environment Texture as keyword arguments of the core's
-    World (environment = image x strength, texture_from_world = a Mapping node's rotation),
-    or None. A missing or unreadable image warns and leaves the constant world colour."""
-    bg = _background_node(world)
-    if bg is None or not bg.inputs["Color"].is_linked:
+    rotation = _rotation_only(tex.inputs.get("Vector"))
+    if rotation is None:
         return None
-    tex = bg.inputs["Color"].links[0].from_node
-    if tex.bl_idname != "ShaderNodeTexEnvironment":
-        return None
-    where = f"world '{world.name}': node '{tex.name}'"
-    fallback = "; rendering the world's viewport colour instead"
-    if tex.projection != "EQUIRECTANGULAR":
-        warn(f"{where}: {tex.projection} projection is not supported{fallback}")
-        return None
-    image = tex.image
-    if image is None:
-        warn(f"{where} has no image{fallback}")
-        return None
+    image, where = tex.image, f"world '{world.name}': node '{tex.name}'"
     try:
         w, h = (int(v) for v in image.size)
         if w * h == 0:
@@ -641,8 +651,9 @@ def world_environment(world, warn):
         px = np.empty(w * h * image.channels, np.float32)
         image.pixels.foreach_get(px)
     except (RuntimeError, ValueError) as exc:
-        warn(f"{where}: image '{image.name}' ({image.filepath}) cannot be read: {exc}{fallback}")
-        return None
+        warn(f"{where}: image '{image.name}' ({image.filepath}) cannot be read: {exc}; "
+             f"rendering the world's viewport colour instead")
+        return {}
     rgb = px.reshape(h, w, image.channels)[..., :3].astype(np.float64)
     if image.channels < 3:
         rgb = np.repeat(px.reshape(h, w, image.channels)[..., :1], 3, axis=2)
@@ -652,23 +663,38 @@ def world_environment(world, warn):
         warn(f"{where}: image '{image.name}' has NaN/inf pixels; they are rendered black")
         rgb = np.nan_to_num(rgb, nan=0.0, posinf=0.0, neginf=0.0)
     rgb = np.maximum(rgb, 0.0)
-    strength = bg.inputs["Strength"]
-    if strength.is_linked:
-        warn(f"world '{world.name}': Background Strength is driven by another node, which is "
-             f"not supported; using its own value")
-    rotation = np.eye(3)
-    vector = tex.inputs.get("Vector")
-    if vector is not None and vector.is_linked:
-        mapping = vector.links[0].from_node
-        if mapping.bl_idname == "ShaderNodeMapping":
-            r = np.array(core.load().shading.euler_rotation(
-                *(float(a) for a in mapping.inputs["Rotation"].default_value[:3])))
-            # POINT and VECTOR rotate the lookup vector; TEXTURE applies the inverse.
-            rotation = r.T if mapping.vector_type == "TEXTURE" else r
-        elif mapping.bl_idname != "ShaderNodeTexCoord":
-            warn(f"{where}: its Vector input comes from '{mapping.name}', which is not "
-                 f"supported; using the view direction")
-    return dict(environment=rgb * float(strength.default_value), texture_from_world=rotation)
+    strength = float(node.inputs["Strength"].default_value)
+    return dict(environment=rgb * strength, texture_from_world=rotation)
+
+
+def _rotation_only(vector):
+    """The rotation (3, 3) taking world directions into an Environment Texture's frame when
+    its Vector input only rotates the direction (unlinked; a Texture Coordinate's
+    Generated; a Mapping of zero Location and unit Scale, its other inputs unlinked, over
+    either), else None."""
+    link = None if vector is None else shader_nodes.live_link(vector)
+    if link is None:
+        return np.eye(3)
+    src = link.from_node
+    if src.bl_idname == "ShaderNodeTexCoord":
+        return np.eye(3) if link.from_socket.name == "Generated" else None
+    # A Mapping's own Vector unlinked is 0, in Cycles too: not the direction.
+    if src.bl_idname != "ShaderNodeMapping" or not src.inputs["Vector"].is_linked \
+            or _rotation_only(src.inputs["Vector"]) is None:
+        return None
+    ins = {k: src.inputs.get(k) for k in ("Location", "Rotation", "Scale")}
+    if any(sock is not None and sock.is_linked for sock in ins.values()):
+        return None
+    location = np.zeros(3) if ins["Location"] is None else np.array(ins["Location"].default_value)
+    scale = np.ones(3) if ins["Scale"] is None else np.array(ins["Scale"].default_value)
+    if src.vector_type not in ("POINT", "TEXTURE", "VECTOR") or np.any(scale != 1.0) \
+            or (src.vector_type != "VECTOR" and np.any(location != 0.0)):
+        return None
+    r = np.array(core.load().shading.euler_rotation(
+        *(float(a) for a in ins["Rotation"].default_value[:3])))
+    inner = _rotation_only(src.inputs["Vector"])
+    # POINT and VECTOR rotate the lookup vector; TEXTURE applies the inverse.
+    return (r.T if src.vector_type == "TEXTURE" else r) @ inner
 
 
 # ---------------------------------------------------------------------------------------

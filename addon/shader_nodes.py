@@ -21,7 +21,8 @@ from . import core
 
 WIDTHS = {"VALUE": 1, "INT": 1, "BOOLEAN": 1, "RGBA": 3, "VECTOR": 3}
 # Node kinds whose output varies over a surface: a chain with none of them is a constant.
-VARYING = ("ShaderNodeTexImage", "ShaderNodeTexCoord", "ShaderNodeUVMap",
+VARYING = ("ShaderNodeTexImage", "ShaderNodeTexEnvironment", "ShaderNodeTexCoord",
+           "ShaderNodeUVMap",
            "ShaderNodeTexChecker", "ShaderNodeFresnel", "ShaderNodeLayerWeight",
            "ShaderNodeVertexColor", "ShaderNodeTexNoise", "ShaderNodeTexGradient",
            "ShaderNodeTexWave", "ShaderNodeTexMagic", "ShaderNodeTexWhiteNoise",
@@ -228,6 +229,7 @@ class Compiler:
         self.program = self.sh.Program()
         self.textures = texture_cache
         self.done = {}  # (node pointer, output identifier) -> (register, type)
+        self.world = False  # compiling a world's tree (compile_world)
 
     def compile(self, socket, to_type="RGBA"):
         """The program computing `socket`'s value as `to_type` (its result register set):
@@ -289,13 +291,15 @@ class Compiler:
         image = node.image
         if image is None:
             raise Unsupported(f"image texture '{node.name}' without an image")
-        key = (image.as_pointer(), node.interpolation, node.extension)
+        # An Environment Texture has no Extension: Cycles repeats its image.
+        extension = getattr(node, "extension", "REPEAT")
+        key = (image.as_pointer(), node.interpolation, extension)
         if key not in self.textures:
             texels, srgb = image_texels(image)
             if texels is None:
                 raise Unsupported(f"image '{image.name}' (no pixels: a missing file?)")
             self.textures[key] = self.sh.Texture(image.name, texels, node.interpolation,
-                                                 node.extension, srgb)
+                                                 extension, srgb)
         return self.textures[key]
 
 
@@ -391,12 +395,10 @@ def _n_image(c, node, out):
     sh, p = c.sh, c.program
     vec = enabled_input(node, "Vector")
     coord = c.input(vec, "VECTOR") if live_link(vec) is not None else p.uv("")
-    unassociate = (node.outputs["Alpha"].is_linked and node.image is not None
-                   and not node.image.colorspace_settings.is_data
-                   and node.image.alpha_mode not in ("CHANNEL_PACKED", "NONE"))
+    unassociate = _unassociates(node)
     texture = c.texture(node)
     if node.projection in ("SPHERE", "TUBE"):
-        coord = p.emit(sh.OP_SPHERE_TUBE, 3, a=coord, d=int(node.projection == "TUBE"))
+        coord = p.emit(sh.OP_PROJECTION, 3, a=coord, d=sh.PROJECTIONS.index(node.projection))
     if node.projection != "BOX":
         reg = p.image(texture, coord, unassociate)
     elif not c.view_dependent:
@@ -410,6 +412,28 @@ def _n_image(c, node, out):
         for k in (5, 7):  # OP_BOX reads the three lookups as consecutive registers
             p.image(texture, faces + k, unassociate)
         reg = p.emit(sh.OP_BOX, 4, a=faces, b=first, d=1)
+    return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
+
+
+def _unassociates(node):
+    """Whether an image node's colour is divided by its alpha where the Alpha output is
+    used (Cycles unassociates a colour image's premultiplied alpha then; an Environment
+    Texture has no Alpha output in 5.0)."""
+    alpha = node.outputs.get("Alpha")
+    return (alpha is not None and alpha.is_linked and node.image is not None
+            and not node.image.colorspace_settings.is_data
+            and node.image.alpha_mode not in ("CHANNEL_PACKED", "NONE"))
+
+
+def _n_environment(c, node, out):
+    """Environment Texture: its image in the Equirectangular or Mirror Ball projection of
+    the direction at Vector, which unlinked is the position (Cycles' LINK_POSITION: in a
+    world, the ray's direction) (svm_node_tex_environment)."""
+    sh, p = c.sh, c.program
+    vec = enabled_input(node, "Vector")
+    coord = c.input(vec, "VECTOR") if live_link(vec) is not None else p.uv(sh.POSITION)
+    coord = p.emit(sh.OP_PROJECTION, 3, a=coord, d=sh.PROJECTIONS.index(node.projection))
+    reg = p.image(c.texture(node), coord, _unassociates(node))
     return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
 
 
@@ -427,6 +451,8 @@ def _n_tex_coord(c, node, out):
     name = out.name
     if node.from_instancer:
         raise Unsupported(f"texture coordinate '{node.name}' output {name} from the instancer")
+    if c.world and name in ("UV", "Camera", "Window", "Reflection"):
+        raise Unsupported(f"texture coordinate '{node.name}' output {name} in a world")
     if name == "Object" and node.object is not None:
         rows = world_to_object(node.object.matrix_world)[:3].ravel()
         return p.emit(sh.OP_MAPPING, 3, a=p.uv(sh.POSITION), params=rows), "VECTOR"
@@ -974,6 +1000,9 @@ def _n_light_path(c, node, out):
         return c.program.const([0.0]), "VALUE"
     if out.name not in sh.LIGHT_PATH_OUTPUTS:
         raise Unsupported(f"light path '{node.name}' output {out.name}")
+    if c.world:
+        raise Unsupported(f"light path '{node.name}' in a world, whose map serves every ray "
+                          f"alike")
     return c.program.emit(sh.OP_LIGHT_PATH, 1,
                           d=sh.LIGHT_PATH_OUTPUTS.index(out.name)), "VALUE"
 
@@ -997,6 +1026,7 @@ def _n_layer_weight(c, node, out):
 
 NODES = {
     "ShaderNodeTexImage": _n_image,
+    "ShaderNodeTexEnvironment": _n_environment,
     "ShaderNodeTexCoord": _n_tex_coord,
     "ShaderNodeUVMap": _n_uv_map,
     "ShaderNodeVertexColor": _n_color_attribute,
@@ -1141,6 +1171,56 @@ def _times(c, a, b):
     """The register of colour registers a x b (a Multiply blend at factor 1)."""
     return c.program.emit(c.sh.OP_BLEND, 3, a=c.program.const([1.0]), b=a, c=b,
                           d=c.sh.BLENDS.index("MULTIPLY"))
+
+
+def compile_world(surface, texture_cache):
+    """(program or None, why not): the radiance a World Output's Surface input gives each
+    direction (engine.environment.bake runs it over the sphere): Background and Emission
+    (Color x Strength), Mix Shader (any factor, clamped) and Add Shader of them. Nodes that
+    tell rays apart (Light Path) or read the camera or a UV map have no meaning in a map
+    that serves every ray, and are refused."""
+    def build():
+        c = Compiler(texture_cache)
+        c.world = True
+        c.program.out = _world_radiance(c, surface)
+        for op, *_ in c.program.code:
+            if op in (c.sh.OP_LIGHT_PATH, c.sh.OP_REFLECTION, c.sh.OP_PROJECT):
+                raise Unsupported("a node reading the ray or the camera in a world, whose "
+                                  "map serves every ray alike")
+        allowed = core.load().environment.WORLD_MAPS
+        for name in c.program.uv_maps:
+            if name not in allowed:
+                raise Unsupported(f"coordinates a world does not have ({_map_label(name)})")
+        return c.program
+    return _attempt(build)
+
+
+def _map_label(name):
+    """A per-corner map's name as a user knows it."""
+    return "a UV map" if not name.startswith("\x00") else name.lstrip("\x00").split(":")[0]
+
+
+def _world_radiance(c, socket):
+    """The register of the radiance behind a world's shader socket (compile_world)."""
+    p = c.program
+    link = live_link(socket)
+    if link is None:
+        return p.const([0.0, 0.0, 0.0])  # an unlinked shader is black, in Cycles too
+    node = link.from_node
+    kind = node.bl_idname
+    if kind in ("ShaderNodeBackground", "ShaderNodeEmission"):
+        colour = c.input(enabled_input(node, "Color"), "RGBA")
+        strength = c.convert(c.input(enabled_input(node, "Strength"), "VALUE"), "VALUE", "RGBA")
+        return _times(c, colour, strength)
+    shaders = [s for s in node.inputs if s.enabled and s.type == "SHADER"]
+    if kind == "ShaderNodeMixShader":
+        fac = _clamped(c, c.input(enabled_input(node, "Fac"), "VALUE"), 1)
+        return p.emit(c.sh.OP_LERP, 3, a=fac, b=_world_radiance(c, shaders[0]),
+                      c=_world_radiance(c, shaders[1]), d=3)
+    if kind == "ShaderNodeAddShader":
+        return p.emit(c.sh.OP_BLEND, 3, a=p.const([1.0]), b=_world_radiance(c, shaders[0]),
+                      c=_world_radiance(c, shaders[1]), d=c.sh.BLENDS.index("ADD"))
+    raise Unsupported(f"node '{node.name}' ({node.bl_idname}) in a world")
 
 
 def compile_bump(node, texture_cache):

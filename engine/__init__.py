@@ -4,7 +4,8 @@ The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then ca
 `render(scene, settings, on_pass=..., should_stop=...)`.
 """
 
-from . import bsdf, camera, integrator, kernels, mesh_attributes, noise, shading  # noqa: F401
+from . import (  # noqa: F401
+    bsdf, camera, environment, integrator, kernels, mesh_attributes, noise, shading)
 from .plan import Plan, make_plan  # noqa: F401
 from .film import Pass  # noqa: F401
 from .renderer import RenderResult, render, warm_up  # noqa: F401

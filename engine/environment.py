@@ -20,9 +20,11 @@ from collections import namedtuple
 
 import numpy as np
 
-from .jit import INLINE, JIT, njit
+from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import Distribution1D, sample_cdf
 from .scene import LUMINANCE
+from .shading import (GENERATED, MAX_REGISTERS, NORMAL, OBJECT, POSITION, TRUE_NORMAL,
+                      equirectangular, equirectangular_direction, pack, run, set_geometry)
 
 # The map as the kernel reads it: image (H, W, 3) float32, texture_from_world and
 # world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution.
@@ -55,14 +57,59 @@ class EnvironmentMap:
                            self.distribution.pmf, self.distribution.cdf)
 
 
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+# What a world's shader reads in each coordinate map, as a multiple of the ray's direction D
+# (Cycles' shader_setup_from_background: P = D, N = Ng = -D; the Texture Coordinate's
+# Generated and Object are P there).
+WORLD_MAPS = {POSITION: 1.0, GENERATED: 1.0, OBJECT: 1.0, NORMAL: -1.0, TRUE_NORMAL: -1.0}
+
+
+def bake(program, width: int, height: int) -> np.ndarray:
+    """(height, width, 3) float32: a world's radiance `program` (a shading.Program) run in
+    the direction of each texel's centre, row 0 at the bottom: the map an EnvironmentMap
+    samples. Its maps must be WORLD_MAPS'; the Geometry node reads N and the view
+    direction as -D. Negative results are 0, as an emission's are, and so are NaN and
+    infinite ones and those beyond float32 (an Exponent node overflows), which the map
+    would hold as inf."""
+    unknown = [name for name in program.uv_maps if name not in WORLD_MAPS]
+    if unknown:
+        raise ValueError(f"a world's program cannot read the maps {unknown}")
+    signs = np.array([WORLD_MAPS[name] for name in program.uv_maps] or [0.0])
+    pt = pack([program], None, program.uv_maps.index)
+    image = np.empty((height, width, 3), np.float32)
+    _bake(pt, signs, program.out, image)
+    return image
+
+
+@njit(**ALLOCATING)
+def _bake(pt, signs, out, image):
+    h, w = image.shape[0], image.shape[1]
+    corners = np.zeros((len(signs), w, 3, 3), np.float32)
+    reg = np.zeros(MAX_REGISTERS)
+    for i in range(h):
+        for j in range(w):
+            x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)
+            for m in range(len(signs)):
+                for c in range(3):
+                    corners[m, j, c, 0] = signs[m] * x
+                    corners[m, j, c, 1] = signs[m] * y
+                    corners[m, j, c, 2] = signs[m] * z
+        for j in range(w):
+            x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)
+            set_geometry(reg, -x, -y, -z, -x, -y, -z, False)
+            run(0, len(pt.code), pt, corners, j, 0.0, 0.0, reg)
+            for c in range(3):
+                v = reg[out + c]
+                image[i, j, c] = v if 0.0 < v < FLOAT32_MAX else 0.0
+
+
 @njit(**JIT)
 def to_uv(dx, dy, dz, m):
     """Texture coordinates (u, v) of a world direction; m = texture_from_world."""
     x = dx * m[0, 0] + dy * m[0, 1] + dz * m[0, 2]
     y = dx * m[1, 0] + dy * m[1, 1] + dz * m[1, 2]
     z = dx * m[2, 0] + dy * m[2, 1] + dz * m[2, 2]
-    u = 0.5 - math.atan2(y, x) / (2.0 * np.pi)
-    v = 0.5 + math.atan2(z, math.hypot(x, y)) / np.pi
+    u, v = equirectangular(x, y, z)
     return u % 1.0, min(max(v, 0.0), 1.0)
 
 
@@ -116,10 +163,7 @@ def sample(ua, ub, env):
     row, col = k // w, k % w
     u = (col + fx) / w
     v = (row + ub) / h
-    azimuth = (0.5 - u) * 2.0 * np.pi
-    elevation = (v - 0.5) * np.pi
-    ce = math.cos(elevation)
-    x, y, z = ce * math.cos(azimuth), ce * math.sin(azimuth), math.sin(elevation)
+    x, y, z = equirectangular_direction(u, v)
     m = env.world_from_texture
     return (x * m[0, 0] + y * m[0, 1] + z * m[0, 2], x * m[1, 0] + y * m[1, 1] + z * m[1, 2],
             x * m[2, 0] + y * m[2, 1] + z * m[2, 2], pixel_pdf(u, v, pk, w, h))

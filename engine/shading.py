@@ -115,8 +115,9 @@ OP_BOX = 40         # Image Texture's Box projection (Cycles' svm_node_tex_image
 #                     reg[out:out+3] the three faces' weights and reg[out+3:out+9] their (u, v)
 #                     for the object-space normal reg[a:a+3] at coordinate reg[b:b+3], blend
 #                     params[p]; d = 1, reg[out:out+4] = sum_j reg[a+j] reg[b+4j:b+4j+4]
-OP_SPHERE_TUBE = 41  # reg[out:out+3] = (u, v, 0) of Image Texture's Sphere (d = 0) or Tube
-#                     (d = 1) projection of reg[a:a+3] (Cycles' map_to_sphere, map_to_tube)
+OP_PROJECTION = 41  # reg[out:out+3] = (u, v, 0) of reg[a:a+3] in projection d (PROJECTIONS):
+#                     an Image Texture's Sphere or Tube, an Environment Texture's
+#                     Equirectangular or Mirror Ball
 OP_WIREFRAME = 42   # reg[out] = the Wireframe node's Fac: 1 where the hit lies within reg[b] / 2
 #                     of an edge of its triangle, whose corners map a holds (POSITION)
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
@@ -227,6 +228,8 @@ BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE"
 HUE = BLENDS.index("HUE")
 # Types of OP_VECTOR_MAPPING (the Mapping node's, svm_mapping in kernel/svm/mapping_util.h).
 MAPPINGS = ("POINT", "TEXTURE", "VECTOR", "NORMAL")
+# OP_PROJECTION's kinds: the Image Texture's and the Environment Texture's projections.
+PROJECTIONS = ("SPHERE", "TUBE", "EQUIRECTANGULAR", "MIRROR_BALL")
 # Types of OP_VECTOR_ROTATE (the Vector Rotate node's).
 ROTATIONS = ("AXIS_ANGLE", "X_AXIS", "Y_AXIS", "Z_AXIS", "EULER_XYZ")
 # Types of OP_MAP_RANGE (the Map Range node's interpolation types).
@@ -873,6 +876,46 @@ def sphere_tube(kind, x, y, z):
     return (1.0 - math.atan2(x / length, y / length) / math.pi) * 0.5, (z + 1.0) * 0.5
 
 
+@njit(**JIT)
+def equirectangular(x, y, z):
+    """(u, v) of direction (x, y, z) on an equirectangular map (Cycles'
+    direction_to_equirectangular): u = 0.5 - azimuth / 2 pi, v = 0.5 + elevation / pi (v = 0
+    looks straight down); (0, 0) for the zero vector, as in Cycles."""
+    if x == 0.0 and y == 0.0 and z == 0.0:
+        return 0.0, 0.0
+    return (0.5 - math.atan2(y, x) / (2.0 * np.pi),
+            0.5 + math.atan2(z, math.hypot(x, y)) / np.pi)
+
+
+@njit(**JIT)
+def equirectangular_direction(u, v):
+    """The unit direction at (u, v) of an equirectangular map (the inverse of
+    `equirectangular`)."""
+    azimuth = (0.5 - u) * 2.0 * np.pi
+    elevation = (v - 0.5) * np.pi
+    ce = math.cos(elevation)
+    return ce * math.cos(azimuth), ce * math.sin(azimuth), math.sin(elevation)
+
+
+@njit(**JIT)
+def projection(kind, x, y, z):
+    """(u, v) of a coordinate in projection `kind` (PROJECTIONS): Sphere and Tube of a
+    point in the 0..1 box (sphere_tube); Equirectangular and Mirror Ball of a direction,
+    normalised first (Cycles' svm_node_tex_environment, direction_to_mirrorball)."""
+    if kind < 2:
+        return sphere_tube(kind, x, y, z)
+    length = math.sqrt(x * x + y * y + z * z)
+    if length > 0.0:
+        x, y, z = x / length, y / length, z / length
+    if kind == 2:
+        return equirectangular(x, y, z)
+    y -= 1.0
+    div = 2.0 * math.sqrt(max(-0.5 * y, 0.0))
+    if div > 0.0:
+        x, z = x / div, z / div
+    return 0.5 * (x + 1.0), 0.5 * (z + 1.0)
+
+
 @njit(**INLINE)
 def node_uv(ins, reg, uv, f, u, v):
     """The hit's coordinates on map a (a UV map, w = 0, or a texture space), interpolated
@@ -1417,7 +1460,7 @@ def node_colour_ops(ins, reg):
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
                OP_VORONOI)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
-                 OP_BLACKBODY, OP_WAVELENGTH, OP_TRANSFORM, OP_BOX, OP_SPHERE_TUBE)
+                 OP_BLACKBODY, OP_WAVELENGTH, OP_TRANSFORM, OP_BOX, OP_PROJECTION)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
 
 
@@ -1469,9 +1512,9 @@ def node_converter(ins, reg, params):
         node_transform(ins, reg)
     elif op == OP_BOX:
         node_box(ins, reg, params)
-    elif op == OP_SPHERE_TUBE:
-        reg[ins[1]], reg[ins[1] + 1] = sphere_tube(ins[5], reg[ins[2]], reg[ins[2] + 1],
-                                                   reg[ins[2] + 2])
+    elif op == OP_PROJECTION:
+        reg[ins[1]], reg[ins[1] + 1] = projection(ins[5], reg[ins[2]], reg[ins[2] + 1],
+                                                  reg[ins[2] + 2])
         reg[ins[1] + 2] = 0.0
     else:
         reg[ins[1]] = clamp_range(reg[ins[2]], reg[ins[3]], reg[ins[4]], ins[5] != 0)

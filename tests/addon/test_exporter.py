@@ -468,6 +468,105 @@ def test_missing_environment_image_warns_and_uses_a_constant_world(fresh, tmp_pa
     assert np.allclose(exp.world_colour, (0.1, 0.2, 0.3))
 
 
+def _node_world(name="Nodes"):
+    """A world whose node tree holds only its output, and that output."""
+    world = bpy.data.worlds.new(name)
+    world.use_nodes = True
+    nt = world.node_tree
+    for node in [n for n in nt.nodes if n.bl_idname != "ShaderNodeOutputWorld"]:
+        nt.nodes.remove(node)
+    world.color = (0.1, 0.2, 0.3)
+    return world, nt, nt.nodes["World Output"]
+
+
+def test_a_world_node_tree_is_baked_into_a_map(fresh):
+    """Background Strength from the direction's height (Texture Coordinate Generated,
+    Separate XYZ): a map bright above the horizon and black below, each row the height of
+    its centre, looked up in the world's own frame."""
+    cube_object()
+    world, nt, out = _node_world()
+    coords, xyz, bg = (nt.nodes.new(k) for k in ("ShaderNodeTexCoord", "ShaderNodeSeparateXYZ",
+                                                 "ShaderNodeBackground"))
+    bg.inputs["Color"].default_value = (1.0, 0.5, 0.25, 1.0)
+    nt.links.new(coords.outputs["Generated"], xyz.inputs["Vector"])
+    nt.links.new(xyz.outputs["Z"], bg.inputs["Strength"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    fresh.world = world
+    exp = export(fresh)
+    assert not any("Nodes" in w for w in exp.warnings), exp.warnings
+    image = exp.environment["environment"]
+    h, w = image.shape[:2]
+    assert (w, h) == (exporter.WORLD_BAKE_WIDTH, exporter.WORLD_BAKE_WIDTH // 2)
+    height = np.sin(((np.arange(h) + 0.5) / h - 0.5) * np.pi)
+    expected = np.maximum(height, 0.0)[:, None, None] * np.array([1.0, 0.5, 0.25])
+    assert np.allclose(image, expected, atol=1e-6)
+    assert np.array_equal(exp.environment["texture_from_world"], np.eye(3))
+
+
+def test_a_world_tree_that_does_not_vary_is_its_constant(fresh):
+    """An RGB node and a Math node into a Background: its colour x strength, no map."""
+    cube_object()
+    world, nt, out = _node_world()
+    rgb, maths, bg = (nt.nodes.new(k) for k in ("ShaderNodeRGB", "ShaderNodeMath",
+                                                "ShaderNodeBackground"))
+    rgb.outputs[0].default_value = (0.2, 0.4, 0.6, 1.0)
+    maths.operation = "MULTIPLY"
+    maths.inputs[0].default_value, maths.inputs[1].default_value = 1.5, 2.0
+    nt.links.new(rgb.outputs[0], bg.inputs["Color"])
+    nt.links.new(maths.outputs[0], bg.inputs["Strength"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    fresh.world = world
+    exp = export(fresh)
+    assert exp.environment is None
+    np.testing.assert_allclose(exp.world_colour, (0.6, 1.2, 1.8), rtol=1e-6)
+
+
+@pytest.mark.parametrize("node", ["ShaderNodeLightPath", "ShaderNodeTexSky"])
+def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
+    """A Light Path node (a map serves every ray alike) or a node without an instruction:
+    a warning naming the world and the node, and the world's viewport colour."""
+    cube_object()
+    world, nt, out = _node_world()
+    src, bg = nt.nodes.new(node), nt.nodes.new("ShaderNodeBackground")
+    src.name = "Culprit"
+    nt.links.new(src.outputs[0], bg.inputs["Strength"] if node == "ShaderNodeLightPath"
+                 else bg.inputs["Color"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    fresh.world = world
+    exp = export(fresh)
+    assert exp.environment is None
+    assert np.allclose(exp.world_colour, (0.1, 0.2, 0.3))
+    said = [w for w in exp.warnings if "world 'Nodes'" in w]
+    assert said and "'Culprit'" in said[0], exp.warnings
+
+
+def test_a_mapping_that_moves_or_scales_the_environment_is_baked(fresh, rng):
+    """Only a rotating Mapping is looked up exactly; one with a Scale is baked, and the map
+    is the image where the scaled direction points (here: z scaled by 0, the horizon's
+    row everywhere)."""
+    cube_object()
+    pixels = rng.random((8, 16, 4)).astype(np.float32)
+    image = bpy.data.images.new("sky", 16, 8, float_buffer=True)
+    image.pixels.foreach_set(pixels.ravel())
+    world = _environment_world(image, rotation=(0.0, 0.0, 0.0), strength=1.0)
+    mapping = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeMapping")
+    mapping.inputs["Scale"].default_value = (1.0, 1.0, 0.0)
+    fresh.world = world
+    exp = export(fresh)
+    baked = exp.environment["environment"]
+    assert baked.shape[1] == exporter.WORLD_BAKE_WIDTH  # twice 16 is less
+    # Every row is the horizon's (v = 0.5: half way between image rows 3 and 4).
+    horizon = 0.5 * (pixels[3, :, :3] + pixels[4, :, :3])
+    row = baked[0]
+    u = (np.arange(row.shape[0]) + 0.5) / row.shape[0]
+    x = u * 16 - 0.5
+    x0 = np.floor(x).astype(int)
+    f = (x - x0)[:, None]
+    expected = (1 - f) * horizon[x0 % 16] + f * horizon[(x0 + 1) % 16]
+    assert np.allclose(row, expected, atol=1e-5)
+    assert np.allclose(baked, row[None], atol=1e-6)
+
+
 @pytest.mark.parametrize("mirror", [False, True])
 def test_normal_map_tangents_are_blenders(fresh, core, mirror):
     """A normal-mapped material's triangles carry Blender's own tangents and bitangent signs

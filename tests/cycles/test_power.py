@@ -615,6 +615,45 @@ def _box_normal_in_world_space():
         yield
 
 
+@contextmanager
+def _world_baked_at_1024():
+    """A world's node tree baked at half the width: the map's interpolation error at a kink
+    four times as large."""
+    from addon import exporter
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "WORLD_BAKE_WIDTH", 1024)
+        yield
+
+
+@contextmanager
+def _world_mapping_only_rotates():
+    """The Mappings of a world's node tree taken as their rotations alone, their Location
+    and Scale dropped (what Specula did with a world's Mapping before world trees were
+    baked): each set to 0 and 1 while the tree compiles."""
+    from addon import exporter, shader_nodes
+
+    compile_world = shader_nodes.compile_world
+
+    def rotation_only(surface, texture_cache):
+        mappings = [n for n in surface.id_data.nodes if n.bl_idname == "ShaderNodeMapping"]
+        kept = [(tuple(n.inputs["Location"].default_value),
+                 tuple(n.inputs["Scale"].default_value)) for n in mappings]
+        try:
+            for n in mappings:
+                n.inputs["Location"].default_value, n.inputs["Scale"].default_value = \
+                    (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)
+            return compile_world(surface, texture_cache)
+        finally:
+            for n, (location, scale) in zip(mappings, kept):
+                n.inputs["Location"].default_value, n.inputs["Scale"].default_value = \
+                    location, scale
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter.shader_nodes, "compile_world", rotation_only)
+        yield
+
+
 def _wireframe_size_scaled(factor):
     """Every Wireframe node's Size (unlinked) times `factor`."""
     from types import SimpleNamespace
@@ -1462,6 +1501,9 @@ INJECTIONS = {
     "pointiness_unwelded": ("pointiness", None, _pointiness_unwelded),
     "bump_distance_plus_10_percent": ("bump", None, _bump_distance_plus_10_percent),
     "bump_on_the_turned_normal": ("bump", None, _bump_on_the_turned_normal),
+    "world_baked_at_1024": ("world_nodes_sky", None, _world_baked_at_1024),
+    "world_mapping_only_rotates": ("world_environment_mapped", None,
+                                   _world_mapping_only_rotates),
 }
 
 

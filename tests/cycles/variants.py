@@ -472,10 +472,8 @@ def light_through_glass():
     bpy.context.scene.collection.objects.link(obj)
 
 
-def world_environment():
-    """The spheres on the box's floor, lit through its open front by an environment map (a
-    procedural image: a bright warm patch in a dim blue sky), rotated by a Mapping node."""
-    _lit_box("POINT", energy=0.0)
+def _sky_image():
+    """A packed 64 x 32 float image: a bright warm patch in a dim blue sky."""
     w, h = 64, 32
     u = (np.arange(w) + 0.5) / w
     v = (np.arange(h) + 0.5) / h
@@ -488,6 +486,14 @@ def world_environment():
     image = bpy.data.images.new("Sky", w, h, float_buffer=True)
     image.pixels.foreach_set(sky.ravel())
     image.pack()
+    return image
+
+
+def world_environment():
+    """The spheres on the box's floor, lit through its open front by an environment map (a
+    procedural image: a bright warm patch in a dim blue sky), rotated by a Mapping node."""
+    _lit_box("POINT", energy=0.0)
+    image = _sky_image()
     world = bpy.context.scene.world
     world.use_nodes = True
     nt = world.node_tree
@@ -501,6 +507,107 @@ def world_environment():
     nt.links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
     nt.links.new(tex.outputs["Color"], background.inputs["Color"])
     background.inputs["Strength"].default_value = 1.0
+
+
+def _world_stage():
+    """A diffuse ball, a mirror ball and a rough Principled ball on a floor, seen from above
+    with the horizon in the top of the frame: the world is seen directly, in the mirror
+    and as the only light. Returns the world's node tree, emptied but for its output."""
+    scene = bs.new_scene()
+    coll = scene.collection
+    bs.quad("Floor", [(-3, -3, 0), (3, -3, 0), (3, 3, 0), (-3, 3, 0)],
+            bs.diffuse("Floor", (0.5, 0.5, 0.5)), coll)
+    bs.uv_sphere("Clay", (-0.55, 0.2, 0.3), 0.3, bs.diffuse("Clay", (0.8, 0.6, 0.4)), coll)
+    bs.uv_sphere("Mirror", (0.1, 0.35, 0.3), 0.3,
+                 bs.material("Mirror", "ShaderNodeBsdfGlossy", Color=(1, 1, 1, 1),
+                             Roughness=0.0), coll)
+    bs.uv_sphere("Plastic", (0.7, 0.0, 0.25), 0.25,
+                 _principled("Plastic", **{"Base Color": (0.2, 0.4, 0.8, 1.0),
+                                           "Roughness": 0.35}), coll)
+    cam = bs.camera(scene, "Camera", (0.0, -2.6, 1.1), bs.CBSPHERES_LENS, (64, 48))
+    look = mathutils.Vector((0.0, 0.0, 0.55)) - cam.location
+    cam.rotation_euler = look.to_track_quat("-Z", "Y").to_euler()
+    world = bpy.data.worlds.new("Nodes")
+    scene.world = world
+    world.use_nodes = True
+    nt = world.node_tree
+    for node in [n for n in nt.nodes if n.bl_idname != "ShaderNodeOutputWorld"]:
+        nt.nodes.remove(node)
+    return nt
+
+
+def world_nodes_sky():
+    """A world node tree baked into a map (issue 14): a Mix Shader of a sky and a ground
+    Background by a Map Range of the direction's height (Texture Coordinate Generated,
+    Separate XYZ), plus, through an Add Shader, an Emission whose strength is a sharp
+    power of the direction's cosine to a sun-like point, tinted by a Color Ramp of it."""
+    nt = _world_stage()
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    xyz = nt.nodes.new("ShaderNodeSeparateXYZ")
+    nt.links.new(coords.outputs["Generated"], xyz.inputs["Vector"])
+    horizon = nt.nodes.new("ShaderNodeMapRange")
+    horizon.inputs["From Min"].default_value, horizon.inputs["From Max"].default_value = -0.05, 0.2
+    nt.links.new(xyz.outputs["Z"], horizon.inputs["Value"])
+    sky, ground = (nt.nodes.new("ShaderNodeBackground") for _ in range(2))
+    sky.inputs["Color"].default_value = (0.25, 0.45, 0.9, 1.0)
+    ground.inputs["Color"].default_value = (0.35, 0.25, 0.15, 1.0)
+    ground.inputs["Strength"].default_value = 0.6
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(horizon.outputs["Result"], mix.inputs["Fac"])
+    nt.links.new(ground.outputs["Background"], mix.inputs[1])
+    nt.links.new(sky.outputs["Background"], mix.inputs[2])
+    toward = nt.nodes.new("ShaderNodeVectorMath")
+    toward.operation = "DOT_PRODUCT"
+    toward.inputs[1].default_value = mathutils.Vector((-0.5, 0.6, 0.62)).normalized()
+    nt.links.new(coords.outputs["Generated"], toward.inputs[0])
+    sharp = nt.nodes.new("ShaderNodeMath")
+    sharp.operation, sharp.use_clamp = "POWER", True
+    sharp.inputs[1].default_value = 60.0
+    nt.links.new(toward.outputs["Value"], sharp.inputs[0])
+    strength = nt.nodes.new("ShaderNodeMath")
+    strength.operation = "MULTIPLY"
+    strength.inputs[1].default_value = 40.0
+    nt.links.new(sharp.outputs["Value"], strength.inputs[0])
+    ramp = nt.nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.elements[0].color = (1.0, 0.5, 0.2, 1.0)
+    ramp.color_ramp.elements[1].color = (1.0, 0.95, 0.8, 1.0)
+    nt.links.new(sharp.outputs["Value"], ramp.inputs["Fac"])
+    sun = nt.nodes.new("ShaderNodeEmission")
+    nt.links.new(ramp.outputs["Color"], sun.inputs["Color"])
+    nt.links.new(strength.outputs["Value"], sun.inputs["Strength"])
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(mix.outputs["Shader"], add.inputs[0])
+    nt.links.new(sun.outputs["Emission"], add.inputs[1])
+    nt.links.new(add.outputs["Shader"], out.inputs["Surface"])
+
+
+def world_environment_mapped():
+    """An Environment Texture the core's map cannot look up directly, so baked (issue 14):
+    world_environment's procedural sky through a Mapping that rotates, moves and scales
+    the direction, its Strength from a Math node, its colour through a Hue/Saturation."""
+    nt = _world_stage()
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    image = _sky_image()
+    tex = nt.nodes.new("ShaderNodeTexEnvironment")
+    tex.image = image
+    mapping = nt.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Location"].default_value = (0.0, 0.0, -0.15)
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(60.0))
+    mapping.inputs["Scale"].default_value = (1.0, 1.0, 1.5)
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    nt.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    nt.links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+    hue = nt.nodes.new("ShaderNodeHueSaturation")
+    hue.inputs["Hue"].default_value = 0.45
+    nt.links.new(tex.outputs["Color"], hue.inputs["Color"])
+    background = nt.nodes.new("ShaderNodeBackground")
+    nt.links.new(hue.outputs["Color"], background.inputs["Color"])
+    strength = nt.nodes.new("ShaderNodeMath")
+    strength.operation = "MULTIPLY"
+    strength.inputs[0].default_value, strength.inputs[1].default_value = 0.5, 3.0
+    nt.links.new(strength.outputs["Value"], background.inputs["Strength"])
+    nt.links.new(background.outputs["Background"], out.inputs["Surface"])
 
 
 # ---------------------------------------------------------------------------------------
@@ -3267,7 +3374,7 @@ for _setup in (glass_chart_145, glass_chart_24):
 for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light_spot, light_sun,
                light_sun_angle, light_area_square, light_area_rectangle_scaled,
                light_area_disk_visible, light_area_ellipse_spread, light_through_glass,
-               world_environment):
+               world_environment, world_nodes_sky, world_environment_mapped):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):

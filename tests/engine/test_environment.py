@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from engine import Camera, Material, RenderSettings, SceneBuilder, World, environment, render
+from engine import (Camera, Material, RenderSettings, SceneBuilder, World, environment, render,
+                    shading)
 from engine.environment import EnvironmentMap
 from tests.scenes import look_at, uv_sphere
 from tests.stats import SIGNIFICANCE, chi2_test
@@ -104,3 +105,63 @@ def test_upper_hemisphere_sky_on_a_plane():
 def test_invalid_environment_is_refused():
     with pytest.raises(ValueError, match="environment"):
         SceneBuilder().build(Camera(), World((0, 0, 0), environment=np.full((4, 8, 3), -1.0)))
+
+
+def _direction_program(kind):
+    """A program whose result is the world's coordinate map `kind` (shading's map names)."""
+    p = shading.Program()
+    p.out = p.uv(kind)
+    return p
+
+
+def test_a_baked_world_reads_each_texel_direction():
+    """Each texel of a baked map holds the program run in the direction of its centre, the
+    direction looked up where `to_uv` puts it: P and Generated are that direction, N its
+    opposite (Cycles' shader_setup_from_background)."""
+    w, h = 32, 16
+    u, v = np.meshgrid((np.arange(w) + 0.5) / w, (np.arange(h) + 0.5) / h)
+    d = np.array([shading.equirectangular_direction(a, b)
+                  for a, b in zip(u.ravel(), v.ravel())]).reshape(h, w, 3)
+    for kind, sign in ((shading.POSITION, 1.0), (shading.GENERATED, 1.0),
+                       (shading.NORMAL, -1.0)):
+        baked = environment.bake(_direction_program(kind), w, h)
+        assert np.allclose(baked, np.maximum(sign * d, 0.0), atol=1e-6), kind
+    m = np.eye(3)
+    back = np.array([environment.to_uv(*x, m) for x in d.reshape(-1, 3)])
+    assert np.allclose(back, np.stack([u.ravel(), v.ravel()], axis=1), atol=1e-12)
+
+
+def test_a_baked_world_keeps_no_negative_or_non_finite_value():
+    """Results beyond float32 (exp(100 z) above z = 0.89), which the map would hold as
+    inf, and negative ones bake to 0: an output pixel is never NaN or inf."""
+    p = shading.Program()
+    z = p.uv(shading.GENERATED) + 2
+    big, zero = p.const([100.0]), p.const([0.0])
+    steep = p.emit(shading.OP_MATH, 1, a=z, b=big, c=big, d=shading.MATHS.index("MULTIPLY"))
+    inf = p.emit(shading.OP_MATH, 1, a=steep, b=zero, c=zero,
+                 d=shading.MATHS.index("EXPONENT"))
+    p.out = p.emit(shading.OP_COMBINE, 3, a=inf, b=z, c=zero)
+    baked = environment.bake(p, 16, 8)
+    assert np.all(np.isfinite(baked)) and baked.min() >= 0.0
+    assert np.all(baked[-1, :, 0] == 0.0) and np.all(baked[4:-1, :, 0] > 1e8)
+    assert np.all(baked[:4, :, 1] == 0.0) and np.all(baked[4:, :, 1] > 0.0)
+
+
+def test_a_baked_world_refuses_maps_a_world_does_not_have():
+    with pytest.raises(ValueError, match="cannot read"):
+        environment.bake(_direction_program(shading.CAMERA), 8, 4)
+
+
+def test_environment_projections_follow_cycles(rng):
+    """Equirectangular: the map's own convention, any length; Mirror Ball: Cycles'
+    direction_to_mirrorball, whose +y (toward the ball's viewer) is the centre and -y the
+    rim, on the direction normalised first."""
+    for d in rng.normal(size=(50, 3)):
+        unit = d / np.linalg.norm(d)
+        assert np.allclose(shading.projection(2, *(3.0 * d)), shading.equirectangular(*unit))
+        u, v = shading.projection(3, *(0.5 * d))
+        x, y, z = unit[0], unit[1] - 1.0, unit[2]
+        div = 2.0 * np.sqrt(max(-0.5 * y, 0.0))
+        assert np.allclose((u, v), (0.5 * (x / div + 1.0), 0.5 * (z / div + 1.0)))
+    assert shading.projection(3, 0.0, 1.0, 0.0) == (0.5, 0.5)
+    assert shading.projection(2, 0.0, 0.0, 0.0) == (0.0, 0.0)
