@@ -312,6 +312,12 @@ def _c_reroute(k, node, out):
     return k.input(node.inputs[0])
 
 
+def _c_object_info(k, node, out):
+    """Object Info's Material Index, the material's pass index; its other outputs vary."""
+    return float(shader_nodes.MATERIAL_PASS_INDEX.get()) if out.name == "Material Index" \
+        else None
+
+
 def _c_image(k, node, out):
     image = node.image
     if image is None:
@@ -461,6 +467,7 @@ def _c_vector_math(k, node, out):
 
 NODE_CONSTANTS = {
     "NodeReroute": _c_reroute,
+    "ShaderNodeObjectInfo": _c_object_info,
     "ShaderNodeRGB": _c_value,
     "ShaderNodeValue": _c_value,
     "ShaderNodeTexImage": _c_image,
@@ -1386,11 +1393,14 @@ def convert(material, image_cache=None):
     if material is None:
         return default_material(), []
     reader = _Reader(material, image_cache)
+    pass_index = shader_nodes.MATERIAL_PASS_INDEX.set(int(material.pass_index))
     try:
         return reader.read(), reader.warnings
     except Exception as exc:  # noqa: BLE001 - a bad node tree must not stop the render
         reader.warn(f"could not be read ({type(exc).__name__}: {exc}); rendered as grey 0.8")
         return MaterialSpec("diffuse", material.name, {"colour": DEFAULT_GREY}), reader.warnings
+    finally:
+        shader_nodes.MATERIAL_PASS_INDEX.reset(pass_index)
 
 
 classes = ()

@@ -14,6 +14,8 @@ after interpolation, others are decoded per texel to scene linear; alpha is asso
 where Cycles associates it (see engine/shading.py).
 """
 
+import contextvars
+
 import mathutils
 import numpy as np
 
@@ -33,6 +35,12 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexEnvironment", "ShaderNodeTexCoord
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
+
+
+# The pass index of the material being read (materials.convert sets it): Object Info's
+# Material Index, a constant of the material's programs (Cycles' shader_pass_id). A world
+# reads 0.
+MATERIAL_PASS_INDEX = contextvars.ContextVar("material_pass_index", default=0)
 
 
 class Unsupported(Exception):
@@ -517,8 +525,11 @@ def _n_tangent(c, node, out):
 
 def _n_object_info(c, node, out):
     """Object Info: the shaded object's Location, Color, Alpha, Random and Object Index
-    (its pass index), from the maps the exporter fills per instance."""
+    (its pass index), from the maps the exporter fills per instance, and the material's
+    Material Index (its pass index, MATERIAL_PASS_INDEX)."""
     sh, p, name = c.sh, c.program, out.name
+    if name == "Material Index":
+        return p.const([float(MATERIAL_PASS_INDEX.get())]), "VALUE"
     if name == "Location":
         return p.uv(sh.OBJECT_LOCATION), "VECTOR"
     if name == "Color":
@@ -1000,9 +1011,9 @@ def _n_light_path(c, node, out):
         return c.program.const([0.0]), "VALUE"
     if out.name not in sh.LIGHT_PATH_OUTPUTS:
         raise Unsupported(f"light path '{node.name}' output {out.name}")
-    if c.world:
-        raise Unsupported(f"light path '{node.name}' in a world, whose map serves every ray "
-                          f"alike")
+    if c.world and out.name != "Is Camera Ray":
+        raise Unsupported(f"light path '{node.name}' output {out.name} in a world (its maps "
+                          f"tell camera rays from the others only)")
     return c.program.emit(sh.OP_LIGHT_PATH, 1,
                           d=sh.LIGHT_PATH_OUTPUTS.index(out.name)), "VALUE"
 
@@ -1176,15 +1187,16 @@ def _times(c, a, b):
 def compile_world(surface, texture_cache):
     """(program or None, why not): the radiance a World Output's Surface input gives each
     direction (engine.environment.bake runs it over the sphere): Background and Emission
-    (Color x Strength), Mix Shader (any factor, clamped) and Add Shader of them. Nodes that
-    tell rays apart (Light Path) or read the camera or a UV map have no meaning in a map
-    that serves every ray, and are refused."""
+    (Color x Strength), Mix Shader (any factor, clamped) and Add Shader of them. A Light
+    Path node's Is Camera Ray is read (the world is then baked twice); its other outputs,
+    and the camera's or a UV map's coordinates, have no meaning in maps that serve every
+    other ray alike, and are refused."""
     def build():
         c = Compiler(texture_cache)
         c.world = True
         c.program.out = _world_radiance(c, surface)
         for op, *_ in c.program.code:
-            if op in (c.sh.OP_LIGHT_PATH, c.sh.OP_REFLECTION, c.sh.OP_PROJECT):
+            if op in (c.sh.OP_REFLECTION, c.sh.OP_PROJECT):
                 raise Unsupported("a node reading the ray or the camera in a world, whose "
                                   "map serves every ray alike")
         allowed = core.load().environment.WORLD_MAPS

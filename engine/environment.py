@@ -24,20 +24,29 @@ from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import Distribution1D, sample_cdf
 from .scene import LUMINANCE
 from .shading import (GENERATED, MAX_REGISTERS, NORMAL, OBJECT, POSITION, TRUE_NORMAL,
-                      equirectangular, equirectangular_direction, pack, run, set_geometry)
+                      equirectangular, equirectangular_direction, pack, run, set_geometry,
+                      set_light_path)
 
 # The map as the kernel reads it: image (H, W, 3) float32, texture_from_world and
-# world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution.
-Environment = namedtuple("Environment", "image texture_from_world world_from_texture pmf cdf")
+# world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution, and the image
+# camera rays see (the same array but where a world tells camera rays apart).
+Environment = namedtuple("Environment",
+                         "image texture_from_world world_from_texture pmf cdf camera_image")
 
 
 class EnvironmentMap:
     """image : (H, W, 3) radiance (strength applied), row 0 at the bottom.
     texture_from_world : (3, 3) rotation taking world directions into the texture's frame
-    (a Mapping node's rotation)."""
+    (a Mapping node's rotation).
+    camera_image : (H', W', 3) the radiance camera rays see instead (a world whose Light
+    Path node's Is Camera Ray shows them another background), or None: the image. Only
+    `image` is sampled: camera rays are never light samples."""
 
-    def __init__(self, image: np.ndarray, texture_from_world: np.ndarray | None = None):
+    def __init__(self, image: np.ndarray, texture_from_world: np.ndarray | None = None,
+                 camera_image: np.ndarray | None = None):
         self.image = np.ascontiguousarray(image, np.float32)
+        self.camera_image = self.image if camera_image is None else \
+            np.ascontiguousarray(camera_image, np.float32)
         self.height, self.width = self.image.shape[:2]
         m = np.eye(3) if texture_from_world is None else np.asarray(texture_from_world, float)
         self.texture_from_world = np.ascontiguousarray(m, np.float64)
@@ -54,7 +63,7 @@ class EnvironmentMap:
 
     def data(self) -> Environment:
         return Environment(self.image, self.texture_from_world, self.world_from_texture,
-                           self.distribution.pmf, self.distribution.cdf)
+                           self.distribution.pmf, self.distribution.cdf, self.camera_image)
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -64,11 +73,12 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 WORLD_MAPS = {POSITION: 1.0, GENERATED: 1.0, OBJECT: 1.0, NORMAL: -1.0, TRUE_NORMAL: -1.0}
 
 
-def bake(program, width: int, height: int) -> np.ndarray:
+def bake(program, width: int, height: int, flags: int = 0) -> np.ndarray:
     """(height, width, 3) float32: a world's radiance `program` (a shading.Program) run in
     the direction of each texel's centre, row 0 at the bottom: the map an EnvironmentMap
     samples. Its maps must be WORLD_MAPS'; the Geometry node reads N and the view
-    direction as -D. Negative results are 0, as an emission's are, and so are NaN and
+    direction as -D, the Light Path node a ray of `flags` (shading.RAY_*) of unbounded
+    length. Negative results are 0, as an emission's are, and so are NaN and
     infinite ones and those beyond float32 (an Exponent node overflows), which the map
     would hold as inf."""
     unknown = [name for name in program.uv_maps if name not in WORLD_MAPS]
@@ -77,15 +87,16 @@ def bake(program, width: int, height: int) -> np.ndarray:
     signs = np.array([WORLD_MAPS[name] for name in program.uv_maps] or [0.0])
     pt = pack([program], None, program.uv_maps.index)
     image = np.empty((height, width, 3), np.float32)
-    _bake(pt, signs, program.out, image)
+    _bake(pt, signs, program.out, flags, image)
     return image
 
 
 @njit(**ALLOCATING)
-def _bake(pt, signs, out, image):
+def _bake(pt, signs, out, flags, image):
     h, w = image.shape[0], image.shape[1]
     corners = np.zeros((len(signs), w, 3, 3), np.float32)
     reg = np.zeros(MAX_REGISTERS)
+    set_light_path(reg, flags, np.inf, 0, 0, 0, 0, 0)
     for i in range(h):
         for j in range(w):
             x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)

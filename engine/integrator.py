@@ -327,15 +327,17 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
-def handle_escaped(i, row, sc, paths, mis):
+def handle_escaped(i, row, depth, sc, paths, mis):
     """Escaped rays take the world: the environment map, MIS-weighted against its light
-    sampling, or a constant colour (found by BSDF sampling only, as in Cycles)."""
+    sampling, or a constant colour (found by BSDF sampling only, as in Cycles). A camera
+    ray (depth 0: straight from the lens or on through transparent surfaces, which keep it
+    one) sees the map's camera image."""
     t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
     if HAS_ENVIRONMENT and sc.emitters.env_entry >= 0:
         env = sc.emitters.environment
         dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
         u_e, v_e = environment.to_uv(dx, dy, dz, env.texture_from_world)
-        l0, l1, l2 = environment.lookup(u_e, v_e, env.image)
+        l0, l1, l2 = environment.lookup(u_e, v_e, env.camera_image if depth == 0 else env.image)
         w = 1.0
         if mis:
             pdf_l = emitter_pmf(paths.o64[i, 0], paths.o64[i, 1], paths.o64[i, 2],
@@ -1506,7 +1508,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
                                                   shadow, n_shadow, rev_sample)
                 continue
         if f < 0:
-            handle_escaped(i, row, sc, paths, mis)
+            handle_escaped(i, row, depth, sc, paths, mis)
             continue
         mat = sc.geometry.material_index[f]
         weight = (1.0, 1.0, 1.0)

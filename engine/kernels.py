@@ -308,8 +308,9 @@ def _sets_normal(m) -> np.ndarray:
 def _generic_emitters(em, num_triangles: int) -> Emitters:
     """Emitters with every part present, as the generic kernel is compiled for."""
     z3, z = np.zeros((0, 3)), np.zeros(0)
-    stand_in_env = Environment(np.zeros((1, 1, 3), F32), np.eye(3), np.eye(3), np.ones(1),
-                               np.ones(1))
+    stand_in_image = np.zeros((1, 1, 3), F32)
+    stand_in_env = Environment(stand_in_image, np.eye(3), np.eye(3), np.ones(1), np.ones(1),
+                               stand_in_image)
     if em is None:
         return Emitters(z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z,
                         np.zeros(1, np.bool_), np.full(num_triangles, -1, np.int64),

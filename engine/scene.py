@@ -908,7 +908,9 @@ class World:
     """Background: escaped rays take radiance `colour` (colour x strength in Blender), or,
     with `environment` (H, W, 3) float radiance (strength applied, row 0 at the bottom),
     an equirectangular map looked up in the frame `texture_from_world` (3, 3), which is
-    importance-sampled as a light. `volume`: the world's Volume, a homogeneous medium
+    importance-sampled as a light; `camera_environment`, an image of its own for the camera
+    rays (a world that tells them apart with a Light Path node), or None: the same map.
+    `volume`: the world's Volume, a homogeneous medium
     filling all space (Material.boundary's medium keywords: absorption, scattering,
     anisotropy, volume_emission), or None; every path starts in it, as in Cycles, where it
     also dims distant light to nothing and the background to black unless it scatters."""
@@ -917,6 +919,7 @@ class World:
     environment: np.ndarray | None = None
     texture_from_world: np.ndarray | None = None
     volume: dict | None = None
+    camera_environment: np.ndarray | None = None
 
     def medium(self) -> Material | None:
         """The world's volume as a material row (none around it), or None."""
@@ -931,12 +934,17 @@ class World:
         _colour(self.colour, "world colour")
         if self.volume:
             Materials.from_list([self.medium() or Material("world")])  # its values
-        if self.environment is not None:
-            env = np.asarray(self.environment)
+        if self.camera_environment is not None and self.environment is None:
+            raise ValueError("world camera_environment needs an environment")
+        for name in ("environment", "camera_environment"):
+            env = getattr(self, name)
+            if env is None:
+                continue
+            env = np.asarray(env)
             if env.ndim != 3 or env.shape[2] != 3 or env.shape[0] < 1 or env.shape[1] < 1:
-                raise ValueError(f"world environment must be an (H, W, 3) image, got {env.shape}")
+                raise ValueError(f"world {name} must be an (H, W, 3) image, got {env.shape}")
             if not np.all(np.isfinite(env)) or env.min() < 0:
-                raise ValueError("world environment must be finite and non-negative")
+                raise ValueError(f"world {name} must be finite and non-negative")
         if self.texture_from_world is not None:
             m = np.asarray(self.texture_from_world, np.float64)
             if m.shape != (3, 3) or not np.all(np.isfinite(m)) or abs(np.linalg.det(m)) < 1e-12:

@@ -521,16 +521,38 @@ def test_a_world_tree_that_does_not_vary_is_its_constant(fresh):
     np.testing.assert_allclose(exp.world_colour, (0.6, 1.2, 1.8), rtol=1e-6)
 
 
+def test_is_camera_ray_bakes_the_world_camera_rays_see(fresh):
+    """A Mix Shader by Light Path's Is Camera Ray: camera rays see its second shader, every
+    other ray its first (constant here: two small maps of one colour each)."""
+    cube_object()
+    world, nt, out = _node_world()
+    path, mix = nt.nodes.new("ShaderNodeLightPath"), nt.nodes.new("ShaderNodeMixShader")
+    lit, seen = nt.nodes.new("ShaderNodeBackground"), nt.nodes.new("ShaderNodeBackground")
+    lit.inputs["Color"].default_value = (1.0, 0.8, 0.6, 1.0)
+    seen.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+    nt.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    nt.links.new(lit.outputs["Background"], mix.inputs[1])
+    nt.links.new(seen.outputs["Background"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    fresh.world = world
+    exp = export(fresh)
+    assert not any("Nodes" in w for w in exp.warnings), exp.warnings
+    assert np.allclose(exp.environment["environment"], (1.0, 0.8, 0.6))
+    assert np.allclose(exp.environment["camera_environment"], (0.1, 0.2, 0.3))
+
+
 @pytest.mark.parametrize("node", ["ShaderNodeLightPath", "ShaderNodeTexSky"])
 def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
-    """A Light Path node (a map serves every ray alike) or a node without an instruction:
-    a warning naming the world and the node, and the world's viewport colour."""
+    """A Light Path node's Is Glossy Ray (the maps tell only camera rays apart) or a node
+    without an instruction: a warning naming the world and the node, and the world's
+    viewport colour."""
     cube_object()
     world, nt, out = _node_world()
     src, bg = nt.nodes.new(node), nt.nodes.new("ShaderNodeBackground")
     src.name = "Culprit"
-    nt.links.new(src.outputs[0], bg.inputs["Strength"] if node == "ShaderNodeLightPath"
-                 else bg.inputs["Color"])
+    nt.links.new(src.outputs["Is Glossy Ray"] if node == "ShaderNodeLightPath"
+                 else src.outputs[0],
+                 bg.inputs["Strength"] if node == "ShaderNodeLightPath" else bg.inputs["Color"])
     nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
     fresh.world = world
     exp = export(fresh)

@@ -252,6 +252,32 @@ def test_linked_checker_on_generated_coordinates_is_a_program(fresh):
     assert _program_at(program, (0.25, 0.05, 0.05)) == pytest.approx((0.6, 0.2, 0.0))
 
 
+def test_material_index_is_the_materials_pass_index(fresh):
+    """Object Info's Material Index reads the material's pass index (Cycles'
+    shader_pass_id): a constant where one is needed (a Diffuse Roughness through a Math
+    node) and in a program beside a varying input (a Checker's Color2), without a
+    warning."""
+    mat, node = node_material("Indexed", "ShaderNodeBsdfDiffuse")
+    mat.pass_index = 3
+    tree = mat.node_tree
+    info, maths = tree.nodes.new("ShaderNodeObjectInfo"), tree.nodes.new("ShaderNodeMath")
+    maths.operation = "DIVIDE"
+    maths.inputs[1].default_value = 10.0
+    tree.links.new(info.outputs["Material Index"], maths.inputs[0])
+    tree.links.new(maths.outputs[0], node.inputs["Roughness"])
+    tex = tree.nodes.new("ShaderNodeTexChecker")
+    tex.inputs["Color1"].default_value = (0.0, 0.0, 0.0, 1.0)
+    tree.links.new(maths.outputs[0], tex.inputs["Color2"])
+    tree.links.new(tex.outputs["Color"], node.inputs["Color"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    assert spec.kwargs["roughness"] == pytest.approx(0.3)
+    assert _program_at(spec.kwargs["colour_program"], (0.05, 0.05, 0.05)) == \
+        pytest.approx((0.3, 0.3, 0.3))
+    mat.pass_index = 7
+    assert convert(mat)[0].kwargs["roughness"] == pytest.approx(0.7)
+
+
 def test_unlinked_surface_uses_viewport_colour(fresh):
     mat, node = node_material("Bare", "ShaderNodeBsdfDiffuse")
     mat.node_tree.nodes.remove(node)

@@ -654,6 +654,14 @@ def _world_mapping_only_rotates():
         yield
 
 
+def _camera_map_for_every_ray(scene, settings):
+    """The backdrop camera rays see taken as the world every ray sees (no Light Path)."""
+    world = scene.world
+    scene.world = dataclasses.replace(world, environment=world.camera_environment,
+                                      camera_environment=None)
+    return scene, settings
+
+
 def _wireframe_size_scaled(factor):
     """Every Wireframe node's Size (unlinked) times `factor`."""
     from types import SimpleNamespace
@@ -1504,6 +1512,8 @@ INJECTIONS = {
     "world_baked_at_1024": ("world_nodes_sky", None, _world_baked_at_1024),
     "world_mapping_only_rotates": ("world_environment_mapped", None,
                                    _world_mapping_only_rotates),
+    "world_camera_map_for_every_ray": ("world_camera_backdrop", _camera_map_for_every_ray,
+                                       None),
 }
 
 

@@ -536,13 +536,11 @@ def _world_stage():
     return nt
 
 
-def world_nodes_sky():
-    """A world node tree baked into a map (issue 14): a Mix Shader of a sky and a ground
-    Background by a Map Range of the direction's height (Texture Coordinate Generated,
-    Separate XYZ), plus, through an Add Shader, an Emission whose strength is a sharp
-    power of the direction's cosine to a sun-like point, tinted by a Color Ramp of it."""
-    nt = _world_stage()
-    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+def _sky_and_sun(nt):
+    """A Mix Shader of a sky and a ground Background by a Map Range of the direction's
+    height (Texture Coordinate Generated, Separate XYZ), plus, through an Add Shader, an
+    Emission whose strength is a sharp power of the direction's cosine to a sun-like
+    point, tinted by a Color Ramp of it. Returns the Add Shader's output."""
     coords = nt.nodes.new("ShaderNodeTexCoord")
     xyz = nt.nodes.new("ShaderNodeSeparateXYZ")
     nt.links.new(coords.outputs["Generated"], xyz.inputs["Vector"])
@@ -579,7 +577,29 @@ def world_nodes_sky():
     add = nt.nodes.new("ShaderNodeAddShader")
     nt.links.new(mix.outputs["Shader"], add.inputs[0])
     nt.links.new(sun.outputs["Emission"], add.inputs[1])
-    nt.links.new(add.outputs["Shader"], out.inputs["Surface"])
+    return add.outputs["Shader"]
+
+
+def world_nodes_sky():
+    """A world node tree baked into a map (issue 14): _sky_and_sun."""
+    nt = _world_stage()
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    nt.links.new(_sky_and_sun(nt), out.inputs["Surface"])
+
+
+def world_camera_backdrop():
+    """The Light Path trick (issue 14): camera rays see a plain grey backdrop (a Mix Shader
+    by Is Camera Ray), every other ray _sky_and_sun: it lights the balls, the mirror ball
+    reflects it, the camera does not see it past them."""
+    nt = _world_stage()
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    backdrop = nt.nodes.new("ShaderNodeBackground")
+    backdrop.inputs["Color"].default_value = (0.6, 0.6, 0.6, 1.0)
+    path, mix = nt.nodes.new("ShaderNodeLightPath"), nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    nt.links.new(_sky_and_sun(nt), mix.inputs[1])
+    nt.links.new(backdrop.outputs["Background"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
 
 
 def world_environment_mapped():
@@ -3374,7 +3394,8 @@ for _setup in (glass_chart_145, glass_chart_24):
 for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light_spot, light_sun,
                light_sun_angle, light_area_square, light_area_rectangle_scaled,
                light_area_disk_visible, light_area_ellipse_spread, light_through_glass,
-               world_environment, world_nodes_sky, world_environment_mapped):
+               world_environment, world_nodes_sky, world_environment_mapped,
+               world_camera_backdrop):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):

@@ -165,3 +165,12 @@ def test_environment_projections_follow_cycles(rng):
         assert np.allclose((u, v), (0.5 * (x / div + 1.0), 0.5 * (z / div + 1.0)))
     assert shading.projection(3, 0.0, 1.0, 0.0) == (0.5, 0.5)
     assert shading.projection(2, 0.0, 0.0, 0.0) == (0.0, 0.0)
+
+
+def test_a_camera_image_needs_a_map_and_is_checked_as_one():
+    World(environment=np.ones((2, 4, 3)), camera_environment=np.ones((1, 2, 3))).validate()
+    with pytest.raises(ValueError, match="needs an environment"):
+        World(camera_environment=np.ones((2, 4, 3))).validate()
+    with pytest.raises(ValueError, match="camera_environment must be finite"):
+        World(environment=np.ones((2, 4, 3)),
+              camera_environment=np.full((2, 4, 3), np.nan)).validate()
