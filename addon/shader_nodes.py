@@ -1195,21 +1195,13 @@ def compile_world(surface, texture_cache):
         c = Compiler(texture_cache)
         c.world = True
         c.program.out = _world_radiance(c, surface)
-        for op, *_ in c.program.code:
-            if op in (c.sh.OP_REFLECTION, c.sh.OP_PROJECT):
-                raise Unsupported("a node reading the ray or the camera in a world, whose "
-                                  "map serves every ray alike")
+        # (The Camera, Window, Reflection and UV outputs refuse themselves in a world.)
         allowed = core.load().environment.WORLD_MAPS
         for name in c.program.uv_maps:
             if name not in allowed:
-                raise Unsupported(f"coordinates a world does not have ({_map_label(name)})")
+                raise Unsupported(f"{c.sh.map_label(name)}, which a world does not have")
         return c.program
     return _attempt(build)
-
-
-def _map_label(name):
-    """A per-corner map's name as a user knows it."""
-    return "a UV map" if not name.startswith("\x00") else name.lstrip("\x00").split(":")[0]
 
 
 def _world_radiance(c, socket):

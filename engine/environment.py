@@ -93,8 +93,10 @@ def bake(program, width: int, height: int, flags: int = 0) -> np.ndarray:
 
 @njit(**ALLOCATING)
 def _bake(pt, signs, out, flags, image):
+    """Each texel's direction into the maps (one "triangle" whose corners all hold it),
+    then the program run there."""
     h, w = image.shape[0], image.shape[1]
-    corners = np.zeros((len(signs), w, 3, 3), np.float32)
+    corners = np.zeros((len(signs), 1, 3, 3), np.float32)
     reg = np.zeros(MAX_REGISTERS)
     set_light_path(reg, flags, np.inf, 0, 0, 0, 0, 0)
     for i in range(h):
@@ -102,13 +104,11 @@ def _bake(pt, signs, out, flags, image):
             x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)
             for m in range(len(signs)):
                 for c in range(3):
-                    corners[m, j, c, 0] = signs[m] * x
-                    corners[m, j, c, 1] = signs[m] * y
-                    corners[m, j, c, 2] = signs[m] * z
-        for j in range(w):
-            x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)
+                    corners[m, 0, c, 0] = signs[m] * x
+                    corners[m, 0, c, 1] = signs[m] * y
+                    corners[m, 0, c, 2] = signs[m] * z
             set_geometry(reg, -x, -y, -z, -x, -y, -z, False)
-            run(0, len(pt.code), pt, corners, j, 0.0, 0.0, reg)
+            run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
             for c in range(3):
                 v = reg[out + c]
                 image[i, j, c] = v if 0.0 < v < FLOAT32_MAX else 0.0
