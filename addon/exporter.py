@@ -129,8 +129,8 @@ def _texture_spaces(mesh, co, tri_verts, spaces, tri_loops=None, normals=None) -
     maps it ((P - location) / (2 size) + 1/2; 1/2 along a flat axis); Normal, the corner
     normals (`normals`, object space; a flat face's are its own); colour attributes
     (shading.COLOUR_ATTRIBUTE), linear RGB, per corner or per point, and attributes of
-    any kind (shading.ATTRIBUTE) (a mesh without the attribute has no map: it reads 0
-    there, warned, as Cycles' missing attribute)."""
+    any kind (shading.ATTRIBUTE) (a mesh without the attribute has no map: it reads
+    shading.absent_map_value there, warned, as Cycles' missing attribute)."""
     sh = core.load().shading
     out = {}
     # Attribute maps: (prefix, reader, whether the reader's flag is set for this prefix).

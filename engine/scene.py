@@ -20,7 +20,7 @@ import numpy as np
 
 from .jit import ALLOCATING, JIT, njit
 from .media import medium_table
-from .shading import VIEW_MAPS, Program, ProgramTable, map_label, pack
+from .shading import VIEW_MAPS, Program, ProgramTable, absent_map_value, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
@@ -1280,8 +1280,8 @@ class SceneBuilder:
     def _programs(self, materials: Materials, counts) -> tuple:
         """The scene's (uv, ProgramTable, map names) for the materials' colour programs,
         (None, None, []) without any: the maps the programs read, gathered over every mesh
-        (a mesh without one of them gets coordinates 0 there, as in Cycles, and a warning;
-        the camera's maps are left to the render)."""
+        (a mesh without one of them reads shading.absent_map_value there, as in Cycles, and
+        a warning; the camera's maps are left to the render)."""
         if materials.colour_programs is None:
             return None, None, []
         progs = [[p for p in pair if p is not None] for pair in
@@ -1296,11 +1296,13 @@ class SceneBuilder:
                     continue
                 if uv_name in VIEW_MAPS:
                     continue
+                uv[j, start:start + count] = absent_map_value(uv_name)
                 users = [materials.names[k] for k in np.unique(mi)
                          if any(uv_name in p.uv_maps for p in progs[k])]
                 if users:
                     msg = (f"object '{name}' has no {map_label(uv_name)}, which material "
-                           f"'{users[0]}' reads: its values there are 0")
+                           f"'{users[0]}' reads: its values there are 0"
+                           + (" (Alpha 1)" if any(absent_map_value(uv_name)) else ""))
                     self.warnings.append(msg)
                     warnings.warn(msg, stacklevel=3)
             start += count

@@ -220,6 +220,14 @@ def map_label(name: str) -> str:
             return f"attribute '{name[len(prefix):]}'"
     return f"UV map '{name}'" if name else "UV map"
 
+
+def absent_map_value(name: str) -> tuple:
+    """What a program reads from a map the mesh does not have: 0, except a missing
+    attribute's Alpha, which is 1 (Cycles' svm_node_attr reads a missing attribute as a
+    zero vector and stores Alpha 1 for any type without a fourth channel; the Color
+    Attribute node's missing Alpha stays 0, svm_node_vertex_color)."""
+    return (0.0, 1.0, 0.0) if name.startswith(ATTRIBUTE_SCALARS) else (0.0, 0.0, 0.0)
+
 # Blend modes of OP_BLEND (Cycles' svm_mix, kernel/svm/color_util.h): per channel up to
 # HUE, then the four that work in HSV on the whole colour.
 BLENDS = ("MIX", "ADD", "MULTIPLY", "SUBTRACT", "SCREEN", "DIVIDE", "DIFFERENCE", "DARKEN",

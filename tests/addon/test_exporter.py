@@ -715,8 +715,8 @@ def test_colour_attributes_are_read_per_corner_and_named_when_missing(fresh, cor
 def test_attribute_node_reads_each_type_and_names_a_missing_one(fresh, core):
     """An Attribute node reads a face attribute per triangle (every corner of a face the
     face's value), its Fac from the attribute's type (a 2D value's x); an Object-type
-    Attribute is unsupported and named; a missing attribute reads 0 and is named with its
-    object."""
+    Attribute is unsupported and named; a missing attribute reads 0, its Alpha 1 (as a real
+    Cycles render of one reads), and is named with its object."""
     obj = cube_object("Tagged")
     faces = obj.data.attributes.new("tag", "FLOAT", "FACE")
     values = np.arange(1, len(faces.data) + 1, dtype=np.float32)
@@ -734,8 +734,10 @@ def test_attribute_node_reads_each_type_and_names_a_missing_one(fresh, core):
     assert (scalars[:, :, 0] == scalars[:, :1, 0]).all() and (scalars[:, :, 1] == 1).all()
     attr.attribute_name = "missing"
     scene, warnings = exporter.to_core(export(fresh), core)
-    assert any("'Tagged'" in w and "attribute 'missing'" in w for w in warnings), warnings
-    assert not scene.uv.any()
+    assert any("'Tagged'" in w and "attribute 'missing'" in w and "Alpha 1" in w
+               for w in warnings), warnings
+    (scalars,) = scene.uv
+    assert (scalars[:, :, 0] == 0).all() and (scalars[:, :, 1] == 1).all()
     attr.attribute_type = "OBJECT"
     spec, warnings = materials.convert(mat)
     assert spec.ctor == "diffuse" and "colour_program" not in spec.kwargs
