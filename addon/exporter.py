@@ -70,6 +70,9 @@ class Instance:
     colour: tuple = (1.0, 1.0, 1.0, 1.0)
     random: float = 0.0
     pass_index: int = 0
+    # What Attribute nodes of type Object read: property name -> its 1-4 values (None:
+    # the object has no such property).
+    properties: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -238,7 +241,22 @@ def _named_attribute(mesh, name, tri_verts, tri_loops, scalars=False):
     key, width = ATTRIBUTE_TYPES[attr.data_type]
     raw = np.zeros(len(attr.data) * width, np.float32)  # (colours linear, bytes decoded)
     attr.data.foreach_get(key, raw)
-    raw = raw.reshape(-1, width)
+    out = attribute_channels(raw.reshape(-1, width), scalars)
+    if attr.domain == "FACE":
+        faces = np.zeros(len(tri_verts), np.int32)
+        mesh.loop_triangles.foreach_get("polygon_index", faces)
+        return out[np.repeat(faces[:, None], 3, axis=1)]
+    return out[tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)]
+
+
+def attribute_channels(raw, scalars=False) -> np.ndarray:
+    """(n, 3) float32 of n values of 1-4 components (n, width) as the Attribute node's
+    outputs read them (Cycles' svm_node_attr_store by the attribute's type): its vector (a
+    scalar repeated, a 2D value with z = 0, the first three components), or with `scalars`
+    (Fac, Alpha, 0): Fac a scalar, a 2D value's x or the mean of three components; Alpha
+    the fourth component, else 1."""
+    raw = np.asarray(raw, np.float32)
+    width = raw.shape[1]
     out = np.zeros((len(raw), 3), np.float32)
     if scalars:
         out[:, 0] = raw[:, 0] if width <= 2 else raw[:, :3].mean(axis=1)
@@ -247,11 +265,34 @@ def _named_attribute(mesh, name, tri_verts, tri_loops, scalars=False):
         out[:, :min(width, 3)] = raw[:, :3]
         if width == 1:
             out[:, 1:] = raw
-    if attr.domain == "FACE":
-        faces = np.zeros(len(tri_verts), np.int32)
-        mesh.loop_triangles.foreach_get("polygon_index", faces)
-        return out[np.repeat(faces[:, None], 3, axis=1)]
-    return out[tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)]
+    return out
+
+
+def object_property(obj, name):
+    """The values (a tuple of 1-4 floats) of the property `name` an Attribute node of type
+    Object reads on `obj`: a custom property, else an RNA path, of the object, then of its
+    data (as the Blender manual describes Cycles' lookup; measured against Cycles: a
+    custom property on both reads the object's). An integer, float or boolean, or an array
+    of 1-4 of them; None otherwise (a string, five components, nothing of that name)."""
+    for owner in (obj, obj.data):
+        if owner is None:
+            continue
+        value = owner.get(name) if hasattr(owner, "get") else None
+        if value is None:
+            try:
+                value = owner.path_resolve(name)
+            except (ValueError, TypeError):
+                value = None
+        if value is None:
+            continue
+        if isinstance(value, (bool, int, float)):
+            return (float(value),)
+        try:
+            values = tuple(float(v) for v in value)
+        except (TypeError, ValueError):
+            return None
+        return values if 1 <= len(values) <= 4 else None
+    return None
 
 
 def _tangents(mesh, tri_loops, names, warn) -> dict:
@@ -355,6 +396,7 @@ class _Exporter:
         self._warned = set()
         self.textured = False
         self.spaces = []  # the texture spaces programs read (shading.GENERATED, OBJECT)
+        self.properties = []  # the object properties Attribute nodes of type Object read
 
     def warn(self, text):
         if text not in self._warned:
@@ -390,8 +432,13 @@ class _Exporter:
                               or name.startswith((sh.COLOUR_ATTRIBUTE, sh.COLOUR_ALPHA,
                                                   sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS,
                                                   sh.RADIAL, sh.UV_TANGENT))})
-        self.out.object_maps = [n for n in sh.OBJECT_MAPS if any(n in p.uv_maps
-                                                                 for p in programs)]
+        read = {n for p in programs for n in p.uv_maps}
+        self.out.object_maps = [n for n in sh.OBJECT_MAPS if n in read] + sorted(
+            n for n in read if n.startswith((sh.OBJECT_ATTRIBUTE, sh.OBJECT_ATTRIBUTE_SCALARS)))
+        self.properties = sorted({n[len(prefix):] for n in self.out.object_maps
+                                  for prefix in (sh.OBJECT_ATTRIBUTE,
+                                                 sh.OBJECT_ATTRIBUTE_SCALARS)
+                                  if n.startswith(prefix)})
         self.tangent_maps = sorted({m.normal_uv for m in self.out.materials
                                     if m.normal_uv is not None})
         for inst in self.depsgraph.object_instances:
@@ -440,7 +487,26 @@ class _Exporter:
             self.terminator_offset(obj), tuple(obj.color),
             core.load().noise.object_random(obj.name, inst.random_id if inst.is_instance
                                             else None),
-            int(obj.pass_index)))
+            int(obj.pass_index), self.object_properties(obj, lut)))
+
+    def object_properties(self, obj, lut) -> dict:
+        """The properties Attribute nodes of type Object read, on `obj`; one its materials
+        read and it lacks is warned (it reads 0 there, Alpha included, as in Cycles)."""
+        out = {name: object_property(obj, name) for name in self.properties}
+        sh = core.load().shading
+        for name, values in out.items():
+            if values is not None:
+                continue
+            keys = (sh.OBJECT_ATTRIBUTE + name, sh.OBJECT_ATTRIBUTE_SCALARS + name)
+            users = [m.name for m in (self.out.materials[k] for k in sorted(set(lut.tolist())))
+                     if any(spec.kwargs.get(key) is not None
+                            and any(n in spec.kwargs[key].uv_maps for n in keys)
+                            for spec in m.parts() for key in materials.PROGRAM_KEYS)]
+            if users:
+                self.warn(f"object '{obj.name}' has no property '{name}' (a number or 1-4 "
+                          f"numbers) that material '{users[0]}' reads with an Attribute "
+                          f"node: it reads 0 there")
+        return out
 
     def terminator_offset(self, obj) -> float:
         """The object's shadow terminator geometry offset (Blender 3.0+; Cycles' default
@@ -827,6 +893,13 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
         sh.OBJECT_INVERSE_ORIGIN: lambda: inverses[:, :3, 3],
         **{axis: (lambda j=j: matrices[:, :3, j]) for j, axis in enumerate(sh.OBJECT_AXES)},
         **{axis: (lambda j=j: inverses[:, :3, j]) for j, axis in enumerate(sh.OBJECT_INVERSE)}}
+    for name in object_maps:
+        for prefix in (sh.OBJECT_ATTRIBUTE, sh.OBJECT_ATTRIBUTE_SCALARS):
+            if name.startswith(prefix):
+                per_instance[name] = lambda n=name[len(prefix):], s=prefix != sh.OBJECT_ATTRIBUTE: \
+                    np.array([attribute_channels([i.properties[n]], s)[0]
+                              if i.properties.get(n) is not None else np.zeros(3)
+                              for i in insts])
     t = len(mesh.triangles)
     for name in object_maps:
         values = np.asarray(per_instance[name](), np.float32)

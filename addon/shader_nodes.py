@@ -551,14 +551,20 @@ def _n_color_attribute(c, node, out):
 
 def _n_attribute(c, node, out):
     """Attribute of type Geometry: the mesh's attribute of that name (generic, colour or a
-    UV map) on points, corners or faces, each output as Cycles reads the attribute's type."""
-    if node.attribute_type != "GEOMETRY":
-        raise Unsupported(f"attribute '{node.name}' of type {node.attribute_type}")
+    UV map) on points, corners or faces; of type Object: the shaded object's property of
+    that name (filled per instance by the exporter). Each output as Cycles reads the
+    attribute's type."""
     sh, name = c.sh, node.attribute_name
+    if node.attribute_type == "GEOMETRY":
+        vector, scalars = sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS
+    elif node.attribute_type == "OBJECT":
+        vector, scalars = sh.OBJECT_ATTRIBUTE, sh.OBJECT_ATTRIBUTE_SCALARS
+    else:
+        raise Unsupported(f"attribute '{node.name}' of type {node.attribute_type}")
     if out.identifier in ("Color", "Vector"):
-        return c.program.uv(sh.ATTRIBUTE + name), "RGBA" if out.identifier == "Color" \
+        return c.program.uv(vector + name), "RGBA" if out.identifier == "Color" \
             else "VECTOR"
-    reg = c.program.uv(sh.ATTRIBUTE_SCALARS + name)
+    reg = c.program.uv(scalars + name)
     return (reg + 1 if out.identifier == "Alpha" else reg), "VALUE"
 
 

@@ -180,6 +180,12 @@ OBJECT_INVERSE = ("\x00object_inverse:x", "\x00object_inverse:y", "\x00object_in
 OBJECT_INVERSE_ORIGIN = "\x00object_inverse:t"
 OBJECT_MAPS = (OBJECT_LOCATION, OBJECT_COLOUR, OBJECT_NUMBERS, *OBJECT_AXES, *OBJECT_INVERSE,
                OBJECT_INVERSE_ORIGIN)
+# The Attribute node of type Object reads a property of the shaded object (a custom
+# property or an RNA path, on the object, then on its data) as two per-object maps laid out
+# as ATTRIBUTE's and ATTRIBUTE_SCALARS' (Cycles stores it as an object attribute read by
+# the same svm_node_attr); a property the object lacks reads 0, Alpha included.
+OBJECT_ATTRIBUTE = "\x00object_attribute:"
+OBJECT_ATTRIBUTE_SCALARS = "\x00object_attribute_scalars:"
 # The Tangent node's Radial directions (and the Geometry node's Tangent, Radial Z): the map
 # of this prefix and the axis ("X", "Y", "Z") holds, per corner, the direction around that
 # axis of the texture space, (-(g_y - 1/2), g_x - 1/2, 0) for Z from Generated g, turned
@@ -206,6 +212,9 @@ def map_label(name: str) -> str:
         return "object transform"
     if name in OBJECT_MAPS:
         return "object info"
+    for prefix in (OBJECT_ATTRIBUTE, OBJECT_ATTRIBUTE_SCALARS):
+        if name.startswith(prefix):
+            return f"object property '{name[len(prefix):]}'"
     if name.startswith(RADIAL):
         return "Generated coordinates"
     if name.startswith(UV_TANGENT):

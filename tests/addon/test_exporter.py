@@ -738,7 +738,61 @@ def test_attribute_node_reads_each_type_and_names_a_missing_one(fresh, core):
                for w in warnings), warnings
     (scalars,) = scene.uv
     assert (scalars[:, :, 0] == 0).all() and (scalars[:, :, 1] == 1).all()
-    attr.attribute_type = "OBJECT"
+    attr.attribute_type = "INSTANCER"
     spec, warnings = materials.convert(mat)
     assert spec.ctor == "diffuse" and "colour_program" not in spec.kwargs
-    assert any(attr.name in w and "OBJECT" in w for w in warnings), warnings
+    assert any(attr.name in w and "INSTANCER" in w for w in warnings), warnings
+
+
+# What a Cycles 5.0 render of an Emission fed by an Attribute node of type Object read, per
+# property (one-off render, 1 spp, values rounded): (Color, Fac, Alpha).
+CYCLES_OBJECT_ATTRIBUTES = {
+    "f": ((0.25, 0.25, 0.25), 0.25, 1.0),            # a float (the object's, not the mesh's)
+    "i": ((3.0, 3.0, 3.0), 3.0, 1.0),                # an integer
+    "v2": ((0.1, 0.2, 0.0), 0.1, 1.0),               # two numbers: Fac is x
+    "v4": ((0.1, 0.2, 0.3), 0.2, 0.4),               # four: Fac the mean of three, Alpha w
+    "md": ((0.75, 0.75, 0.75), 0.75, 1.0),           # on the mesh only
+    "color": ((0.6, 0.5, 0.4), 0.5, 0.7),            # the built-in viewport colour
+    "location": ((0.05, 0.0, 0.0), 0.05 / 3, 1.0),   # an RNA path
+    "s": ((0.0, 0.0, 0.0), 0.0, 0.0),                # a string: not a number
+    "v5": ((0.0, 0.0, 0.0), 0.0, 0.0),               # five numbers
+    "missing": ((0.0, 0.0, 0.0), 0.0, 0.0),
+}
+
+
+def test_attribute_node_of_type_object_reads_each_objects_property(fresh, core):
+    """An Attribute node of type Object reads, per object, a custom property or RNA path of
+    the object, then of its mesh, as Cycles does (the values a Cycles render read, above);
+    two objects sharing the material read their own values; a property an object lacks
+    reads 0, Alpha included, and is warned naming the object and the material."""
+    sh = core.shading
+    a, b = cube_object("A"), cube_object("B")
+    a.location.x, b.location.x = 0.05, 3.0
+    a["f"], a.data["f"], a.data["md"] = 0.25, 0.9, 0.75
+    a["i"], a["v2"], a["v4"], a["s"] = 3, [0.1, 0.2], [0.1, 0.2, 0.3, 0.4], "text"
+    a["v5"], a.color = [1.0, 2, 3, 4, 5], (0.6, 0.5, 0.4, 0.7)
+    b["f"] = 0.5
+    mat, node = node_material("Props", "ShaderNodeEmission")
+    tree = mat.node_tree
+    attr = tree.nodes.new("ShaderNodeAttribute")
+    attr.attribute_type = "OBJECT"
+    tree.links.new(attr.outputs["Color"], node.inputs["Color"])
+    tree.links.new(attr.outputs["Alpha"], node.inputs["Strength"])
+    a.data.materials.append(mat)
+    b.data.materials.append(mat)
+    for name, (colour, fac, alpha) in CYCLES_OBJECT_ATTRIBUTES.items():
+        attr.attribute_name = name
+        exported = export(fresh)
+        scene, _ = exporter.to_core(exported, core)
+        by_name = dict(zip(scene.uv_names, scene.uv))
+        vector = by_name[sh.OBJECT_ATTRIBUTE + name][:12]  # A's twelve triangles
+        scalars = by_name[sh.OBJECT_ATTRIBUTE_SCALARS + name][:12]
+        assert np.allclose(vector, colour, atol=1e-6), name
+        assert np.allclose(scalars[..., :2], (fac, alpha), atol=1e-6), name
+        warned = any("object 'A'" in w and f"property '{name}'" in w and "'Props'" in w
+                     for w in exported.warnings)
+        assert warned == (alpha == 0.0), (name, exported.warnings)
+    attr.attribute_name = "f"
+    scene, _ = exporter.to_core(export(fresh), core)
+    values = dict(zip(scene.uv_names, scene.uv))[sh.OBJECT_ATTRIBUTE_SCALARS + "f"][:, 0, 0]
+    assert sorted(set(values.tolist())) == [0.25, 0.5]

@@ -400,6 +400,24 @@ def _object_random_zero():
 
 
 @contextmanager
+def _object_property_number_as_x():
+    """An Attribute node of type Object reading a number as the vector (v, 0, 0) rather than
+    (v, v, v), as a 2D value's z is 0."""
+    from addon import exporter
+    channels = exporter.attribute_channels
+
+    def as_x(raw, scalars=False):
+        out = channels(raw, scalars)
+        if not scalars and np.asarray(raw).shape[1] == 1:
+            out[:, 1:] = 0.0
+        return out
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(exporter, "attribute_channels", as_x)
+        yield
+
+
+@contextmanager
 def _position_recentred():
     """The Geometry node's Position relative to the scene's recentring origin, not the
     world's."""
@@ -1400,6 +1418,8 @@ INJECTIONS = {
     "mapping_links_unread": ("texture_coordinates", None, _mapping_links_unread),
     "white_noise_dimensions_rotated": ("white_noise", None, _white_noise_dimensions_rotated),
     "object_random_zero": ("geometry_and_object_info", None, _object_random_zero),
+    "object_property_number_as_x": ("geometry_and_object_info", None,
+                                    _object_property_number_as_x),
     "position_recentred": ("geometry_and_object_info", None, _position_recentred),
     "backfacing_ignored": ("geometry_and_object_info", None, _backfacing_ignored),
     # Vector Transform: normals as directions; points as directions (origins dropped);

@@ -1361,7 +1361,8 @@ def _diffuse_fed(name, feed):
 
 
 def _object_info_feed(tree):
-    """Object Info: its Color mixed toward (Random, Alpha, Object Index / 4) by Alpha."""
+    """Object Info: its Color mixed toward (Random, Alpha, Object Index / 4) by Alpha, times
+    the Color of an Attribute node of type Object reading the property "tint"."""
     info = tree.nodes.new("ShaderNodeObjectInfo")
     combine = tree.nodes.new("ShaderNodeCombineColor")
     quarter = tree.nodes.new("ShaderNodeMath")
@@ -1377,7 +1378,15 @@ def _object_info_feed(tree):
     tree.links.new(info.outputs["Alpha"], ins["Factor_Float"])
     tree.links.new(info.outputs["Color"], ins["A_Color"])
     tree.links.new(combine.outputs["Color"], ins["B_Color"])
-    return mix.outputs[2]
+    tint = tree.nodes.new("ShaderNodeAttribute")
+    tint.attribute_type, tint.attribute_name = "OBJECT", "tint"
+    times = tree.nodes.new("ShaderNodeMix")
+    times.data_type, times.blend_type = "RGBA", "MULTIPLY"
+    ins = {s.identifier: s for s in times.inputs}
+    ins["Factor_Float"].default_value = 1.0
+    tree.links.new(mix.outputs[2], ins["A_Color"])
+    tree.links.new(tint.outputs["Color"], ins["B_Color"])
+    return times.outputs[2]
 
 
 def _position_feed(tree):
@@ -1426,18 +1435,21 @@ def _backfacing_feed(tree):
 
 
 def geometry_and_object_info():
-    """The Geometry node (Position, Normal, True Normal, Incoming, Backfacing) and Object
-    Info (Color, Alpha, Random, Object Index) (issue 14, point 1): a ball and three cubes
-    sharing one mesh, each with its own colour, alpha and pass index (Random differs by
-    object); a ball chequered on world positions; a faceted ball (flat and smooth halves)
+    """The Geometry node (Position, Normal, True Normal, Incoming, Backfacing), Object
+    Info (Color, Alpha, Random, Object Index) and the Attribute node of type Object (issue
+    14, point 1): a ball and three cubes sharing one mesh, each with its own colour, alpha,
+    pass index and "tint" (the ball's on its mesh; a vector, a number, four numbers) (Random
+    differs by object); a ball chequered on world positions; a faceted ball (flat and smooth halves)
     coloured by its normals; and a card seen from behind whose back face is green."""
     _box()
     info = _diffuse_fed("Info", _object_info_feed)
     ball = _sphere(info, (-0.6, 0.0, 0.27), 0.27, "InfoBall")
     ball.color, ball.pass_index = (0.9, 0.5, 0.2, 0.3), 3
+    ball.data["tint"] = (1.0, 0.6, 0.8)
     mesh = None
-    for i, (colour, index) in enumerate((((0.2, 0.6, 0.9, 0.8), 1), ((0.8, 0.8, 0.2, 0.0), 2),
-                                         ((0.9, 0.2, 0.5, 0.5), 4))):
+    for i, (colour, index, tint) in enumerate((
+            ((0.2, 0.6, 0.9, 0.8), 1, (0.5, 1.0, 1.0)), ((0.8, 0.8, 0.2, 0.0), 2, 0.7),
+            ((0.9, 0.2, 0.5, 0.5), 4, (0.9, 0.8, 0.6, 0.5)))):
         cube = _cube(f"InfoCube{i}", (-0.75 + 0.3 * i, 0.5, 0.8), (0.18, 0.18, 0.18), info)
         if mesh is None:
             mesh = cube.data
@@ -1445,6 +1457,7 @@ def geometry_and_object_info():
             old, cube.data = cube.data, mesh
             bpy.data.meshes.remove(old)
         cube.color, cube.pass_index = colour, index
+        cube["tint"] = tint
     _sphere(_diffuse_fed("Position", _position_feed), (0.0, 0.0, 0.27), 0.27, "PositionBall")
     faceted = _sphere(_diffuse_fed("Normals", _normals_feed), (0.6, 0.0, 0.27), 0.27,
                       "NormalsBall")
