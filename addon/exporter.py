@@ -241,58 +241,12 @@ def _named_attribute(mesh, name, tri_verts, tri_loops, scalars=False):
     key, width = ATTRIBUTE_TYPES[attr.data_type]
     raw = np.zeros(len(attr.data) * width, np.float32)  # (colours linear, bytes decoded)
     attr.data.foreach_get(key, raw)
-    out = attribute_channels(raw.reshape(-1, width), scalars)
+    out = shader_nodes.attribute_channels(raw.reshape(-1, width), scalars)
     if attr.domain == "FACE":
         faces = np.zeros(len(tri_verts), np.int32)
         mesh.loop_triangles.foreach_get("polygon_index", faces)
         return out[np.repeat(faces[:, None], 3, axis=1)]
     return out[tri_verts if attr.domain == "POINT" else tri_loops.reshape(-1, 3)]
-
-
-def attribute_channels(raw, scalars=False) -> np.ndarray:
-    """(n, 3) float32 of n values of 1-4 components (n, width) as the Attribute node's
-    outputs read them (Cycles' svm_node_attr_store by the attribute's type): its vector (a
-    scalar repeated, a 2D value with z = 0, the first three components), or with `scalars`
-    (Fac, Alpha, 0): Fac a scalar, a 2D value's x or the mean of three components; Alpha
-    the fourth component, else 1."""
-    raw = np.asarray(raw, np.float32)
-    width = raw.shape[1]
-    out = np.zeros((len(raw), 3), np.float32)
-    if scalars:
-        out[:, 0] = raw[:, 0] if width <= 2 else raw[:, :3].mean(axis=1)
-        out[:, 1] = raw[:, 3] if width == 4 else 1.0
-    else:
-        out[:, :min(width, 3)] = raw[:, :3]
-        if width == 1:
-            out[:, 1:] = raw
-    return out
-
-
-def object_property(obj, name):
-    """The values (a tuple of 1-4 floats) of the property `name` an Attribute node of type
-    Object reads on `obj`: a custom property, else an RNA path, of the object, then of its
-    data (as the Blender manual describes Cycles' lookup; measured against Cycles: a
-    custom property on both reads the object's). An integer, float or boolean, or an array
-    of 1-4 of them; None otherwise (a string, five components, nothing of that name)."""
-    for owner in (obj, obj.data):
-        if owner is None:
-            continue
-        value = owner.get(name) if hasattr(owner, "get") else None
-        if value is None:
-            try:
-                value = owner.path_resolve(name)
-            except (ValueError, TypeError):
-                value = None
-        if value is None:
-            continue
-        if isinstance(value, (bool, int, float)):
-            return (float(value),)
-        try:
-            values = tuple(float(v) for v in value)
-        except (TypeError, ValueError):
-            return None
-        return values if 1 <= len(values) <= 4 else None
-    return None
 
 
 def _tangents(mesh, tri_loops, names, warn) -> dict:
@@ -418,6 +372,15 @@ class _Exporter:
         return np.array([self.material(s) for s in slots], np.int32)
 
     def run(self):
+        layer = shader_nodes.RENDER_LAYER.set(tuple(
+            owner for owner in (self.depsgraph.view_layer, self.scene, self.scene.world)
+            if owner is not None))
+        try:
+            return self._run()
+        finally:
+            shader_nodes.RENDER_LAYER.reset(layer)
+
+    def _run(self):
         # Materials first: whether any has a texture decides if meshes carry UV maps.
         for id_ in self.depsgraph.ids:
             if isinstance(id_, bpy.types.Material):
@@ -492,7 +455,8 @@ class _Exporter:
     def object_properties(self, obj, lut) -> dict:
         """The properties Attribute nodes of type Object read, on `obj`; one its materials
         read and it lacks is warned (it reads 0 there, Alpha included, as in Cycles)."""
-        out = {name: object_property(obj, name) for name in self.properties}
+        out = {name: shader_nodes.id_property((obj, obj.data), name)
+               for name in self.properties}
         sh = core.load().shading
         for name, values in out.items():
             if values is not None:
@@ -897,7 +861,7 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
         for prefix in (sh.OBJECT_ATTRIBUTE, sh.OBJECT_ATTRIBUTE_SCALARS):
             if name.startswith(prefix):
                 per_instance[name] = lambda n=name[len(prefix):], s=prefix != sh.OBJECT_ATTRIBUTE: \
-                    np.array([attribute_channels([i.properties[n]], s)[0]
+                    np.array([shader_nodes.attribute_channels([i.properties[n]], s)[0]
                               if i.properties.get(n) is not None else np.zeros(3)
                               for i in insts])
     t = len(mesh.triangles)

@@ -318,6 +318,12 @@ def _c_object_info(k, node, out):
         else None
 
 
+def _c_attribute(k, node, out):
+    """An Attribute node of type View Layer, a constant of the render; other types vary."""
+    return shader_nodes.view_layer_attribute(node, out) \
+        if node.attribute_type == "VIEW_LAYER" else None
+
+
 def _c_image(k, node, out):
     image = node.image
     if image is None:
@@ -468,6 +474,7 @@ def _c_vector_math(k, node, out):
 NODE_CONSTANTS = {
     "NodeReroute": _c_reroute,
     "ShaderNodeObjectInfo": _c_object_info,
+    "ShaderNodeAttribute": _c_attribute,
     "ShaderNodeRGB": _c_value,
     "ShaderNodeValue": _c_value,
     "ShaderNodeTexImage": _c_image,
@@ -583,6 +590,26 @@ class _Reader:
         # id(emission program) -> its recipe (shader_nodes.compile_emission), so that a mix
         # or an Alpha over it can compile it again, within its own
         self.emission_sources = {}
+
+    def note_view_layer_attributes(self, tree, seen=None):
+        """Warn of each linked Attribute node of type View Layer (in the tree or its groups)
+        whose property the render's view layer, scene and world lack: it reads 0, as in
+        Cycles, which says nothing."""
+        owners = shader_nodes.RENDER_LAYER.get()
+        seen = set() if seen is None else seen
+        if not owners or tree is None or tree.as_pointer() in seen:
+            return
+        seen.add(tree.as_pointer())
+        for node in tree.nodes:
+            if node.bl_idname == "ShaderNodeGroup":
+                self.note_view_layer_attributes(node.node_tree, seen)
+            elif node.bl_idname == "ShaderNodeAttribute" and \
+                    node.attribute_type == "VIEW_LAYER" and \
+                    any(o.is_linked for o in node.outputs) and \
+                    shader_nodes.id_property(owners, node.attribute_name) is None:
+                self.warn(f"Attribute node '{node.name}' reads '{node.attribute_name}', "
+                          f"which the view layer, scene and world do not hold as a number "
+                          f"or 1-4 numbers: it reads 0")
 
     def warn(self, text):
         """Record a warning once (a Principled BSDF's lobes read the same inputs)."""
@@ -776,6 +803,7 @@ class _Reader:
         uses_nodes = tree is not None and (bpy.app.version >= (5, 0) or mat.use_nodes)
         if not uses_nodes:
             return MaterialSpec("diffuse", mat.name, {"colour": _rgb(mat.diffuse_color)})
+        self.note_view_layer_attributes(tree)
         out = tree.get_output_node('CYCLES')
         if out is None:
             return self.viewport_fallback("no active Material Output node for Cycles")

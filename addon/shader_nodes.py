@@ -41,6 +41,9 @@ VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
 # Material Index, a constant of the material's programs (Cycles' shader_pass_id). A world
 # reads 0.
 MATERIAL_PASS_INDEX = contextvars.ContextVar("material_pass_index", default=0)
+# What an Attribute node of type View Layer reads (the exporter sets it): the render's view
+# layer, scene and world, searched in that order (id_property).
+RENDER_LAYER = contextvars.ContextVar("render_layer", default=())
 
 
 class Unsupported(Exception):
@@ -549,12 +552,78 @@ def _n_color_attribute(c, node, out):
     return c.program.uv(c.sh.COLOUR_ATTRIBUTE + node.layer_name), "RGBA"
 
 
+def attribute_channels(raw, scalars=False) -> np.ndarray:
+    """(n, 3) float32 of n values of 1-4 components (n, width) as the Attribute node's
+    outputs read them (Cycles' svm_node_attr_store by the attribute's type): its vector (a
+    scalar repeated, a 2D value with z = 0, the first three components), or with `scalars`
+    (Fac, Alpha, 0): Fac a scalar, a 2D value's x or the mean of three components; Alpha
+    the fourth component, else 1."""
+    raw = np.asarray(raw, np.float32)
+    width = raw.shape[1]
+    out = np.zeros((len(raw), 3), np.float32)
+    if scalars:
+        out[:, 0] = raw[:, 0] if width <= 2 else raw[:, :3].mean(axis=1)
+        out[:, 1] = raw[:, 3] if width == 4 else 1.0
+    else:
+        out[:, :min(width, 3)] = raw[:, :3]
+        if width == 1:
+            out[:, 1:] = raw
+    return out
+
+
+def id_property(owners, name):
+    """The values (a tuple of 1-4 floats) of the property `name` an Attribute node of type
+    Object or View Layer reads: on each of `owners` in turn (an object, then its data; the
+    view layer, then the scene, then the world), a custom property, else an RNA path, as the
+    Blender manual describes Cycles' lookup (measured against Cycles renders: a custom
+    property on the object beats its mesh's, the view layer's the scene's, the scene's the
+    world's). An integer, float or boolean, or an array of 1-4 of them; None otherwise (a
+    string, five components, nothing of that name)."""
+    for owner in owners:
+        if owner is None:
+            continue
+        value = owner.get(name) if hasattr(owner, "get") else None
+        if value is None:
+            try:
+                value = owner.path_resolve(name)
+            except (ValueError, TypeError):
+                value = None
+        if value is None:
+            continue
+        if isinstance(value, (bool, int, float)):
+            return (float(value),)
+        try:
+            values = tuple(float(v) for v in value)
+        except (TypeError, ValueError):
+            return None
+        return values if 1 <= len(values) <= 4 else None
+    return None
+
+
+def view_layer_attribute(node, out):
+    """An Attribute node of type View Layer: a constant of the render (RENDER_LAYER), its
+    output `out` as the Geometry type reads a value of that width (0, Alpha included, for a
+    property that is not there); a float, or (r, g, b) for Color and Vector."""
+    values = id_property(RENDER_LAYER.get(), node.attribute_name)
+    if values is None:
+        return (0.0, 0.0, 0.0) if out.identifier in ("Color", "Vector") else 0.0
+    if out.identifier in ("Color", "Vector"):
+        return tuple(float(v) for v in attribute_channels([values])[0])
+    return float(attribute_channels([values], True)[0, 1 if out.identifier == "Alpha" else 0])
+
+
 def _n_attribute(c, node, out):
     """Attribute of type Geometry: the mesh's attribute of that name (generic, colour or a
     UV map) on points, corners or faces; of type Object: the shaded object's property of
-    that name (filled per instance by the exporter). Each output as Cycles reads the
-    attribute's type."""
+    that name (filled per instance by the exporter); of type View Layer: a constant (see
+    view_layer_attribute). Each output as Cycles reads the attribute's type."""
     sh, name = c.sh, node.attribute_name
+    if node.attribute_type == "VIEW_LAYER":
+        value = view_layer_attribute(node, out)
+        if isinstance(value, tuple):
+            return c.program.const(list(value)), "RGBA" if out.identifier == "Color" \
+                else "VECTOR"
+        return c.program.const([value]), "VALUE"
     if node.attribute_type == "GEOMETRY":
         vector, scalars = sh.ATTRIBUTE, sh.ATTRIBUTE_SCALARS
     elif node.attribute_type == "OBJECT":

@@ -760,6 +760,65 @@ CYCLES_OBJECT_ATTRIBUTES = {
 }
 
 
+# What a Cycles 5.0 render read through an Attribute node of type View Layer, with "a" on
+# the view layer (0.2), the scene (0.5) and the world (0.9), "b" on the scene (0.3) and the
+# world (0.8), "c" on the world, "d" only on the object: (Color, Fac, Alpha).
+CYCLES_VIEW_LAYER_ATTRIBUTES = {
+    "a": ((0.2, 0.2, 0.2), 0.2, 1.0),
+    "b": ((0.3, 0.3, 0.3), 0.3, 1.0),
+    "c": ((0.1, 0.2, 0.3), 0.2, 1.0),
+    "frame_current": ((7.0, 7.0, 7.0), 7.0, 1.0),      # the scene's RNA property
+    "samples": ((0.0, 0.0, 0.0), 0.0, 1.0),            # the view layer's own (0)
+    "color": ((0.05, 0.05, 0.05), 0.05, 1.0),          # the world's viewport colour
+    "d": ((0.0, 0.0, 0.0), 0.0, 0.0),                  # an object's: not looked up
+    "name": ((0.0, 0.0, 0.0), 0.0, 0.0),               # a string
+}
+
+
+def test_attribute_node_of_type_view_layer_is_a_constant_of_the_render(fresh, core):
+    """An Attribute node of type View Layer reads the view layer's, else the scene's, else
+    the world's custom property or RNA path, a constant of the render, as a Cycles render
+    read (above); a property none of them holds reads 0 and is warned naming the node."""
+    from engine import shading
+    obj = cube_object("Lit")
+    obj["d"] = 0.4
+    world = bpy.data.worlds.new("World")
+    world.color = (0.05, 0.05, 0.05)
+    fresh.world = world
+    fresh.frame_current = 7
+    bpy.context.view_layer["a"], fresh["a"], world["a"] = 0.2, 0.5, 0.9
+    fresh["b"], world["b"], world["c"] = 0.3, 0.8, [0.1, 0.2, 0.3]
+    mat, node = node_material("VL", "ShaderNodeEmission")
+    tree = mat.node_tree
+    attr = tree.nodes.new("ShaderNodeAttribute")
+    attr.attribute_type = "VIEW_LAYER"
+    obj.data.materials.append(mat)
+
+    def emitted(output, colour):
+        for old in list(tree.links):
+            if old.from_node == attr:
+                tree.links.remove(old)
+        tree.links.new(attr.outputs[output], node.inputs["Strength"])
+        if colour:
+            tree.links.new(attr.outputs["Color"], node.inputs["Color"])
+        exported = export(fresh)
+        spec = next(m for m in exported.materials if m.name == "VL")
+        program = spec.kwargs.get("emission_program")
+        value = (shading.evaluate(program)[program.out:program.out + 3] if program is not None
+                 else np.asarray(spec.kwargs.get("colour", (0.0,) * 3)) *
+                 spec.kwargs.get("strength", 0.0))
+        return value, exported.warnings
+
+    for name, (colour, fac, alpha) in CYCLES_VIEW_LAYER_ATTRIBUTES.items():
+        attr.attribute_name = name
+        value, warnings = emitted("Alpha", True)
+        assert np.allclose(value, np.multiply(colour, alpha), atol=1e-6), (name, value)
+        value, _ = emitted("Fac", False)
+        assert np.allclose(value, fac, atol=1e-6), (name, value)
+        warned = any(f"Attribute node '{attr.name}' reads '{name}'" in w for w in warnings)
+        assert warned == (alpha == 0.0), (name, warnings)
+
+
 def test_attribute_node_of_type_object_reads_each_objects_property(fresh, core):
     """An Attribute node of type Object reads, per object, a custom property or RNA path of
     the object, then of its mesh, as Cycles does (the values a Cycles render read, above);

@@ -403,8 +403,8 @@ def _object_random_zero():
 def _object_property_number_as_x():
     """An Attribute node of type Object reading a number as the vector (v, 0, 0) rather than
     (v, v, v), as a 2D value's z is 0."""
-    from addon import exporter
-    channels = exporter.attribute_channels
+    from addon import shader_nodes
+    channels = shader_nodes.attribute_channels
 
     def as_x(raw, scalars=False):
         out = channels(raw, scalars)
@@ -413,7 +413,7 @@ def _object_property_number_as_x():
         return out
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(exporter, "attribute_channels", as_x)
+        mp.setattr(shader_nodes, "attribute_channels", as_x)
         yield
 
 
