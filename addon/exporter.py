@@ -858,18 +858,24 @@ def _instance_uvs(mesh: MeshData, insts, object_maps=()) -> dict:
         **{axis: (lambda j=j: matrices[:, :3, j]) for j, axis in enumerate(sh.OBJECT_AXES)},
         **{axis: (lambda j=j: inverses[:, :3, j]) for j, axis in enumerate(sh.OBJECT_INVERSE)}}
     for name in object_maps:
-        for prefix in (sh.OBJECT_ATTRIBUTE, sh.OBJECT_ATTRIBUTE_SCALARS):
+        for prefix, scalars in ((sh.OBJECT_ATTRIBUTE, False),
+                                (sh.OBJECT_ATTRIBUTE_SCALARS, True)):
             if name.startswith(prefix):
-                per_instance[name] = lambda n=name[len(prefix):], s=prefix != sh.OBJECT_ATTRIBUTE: \
-                    np.array([shader_nodes.attribute_channels([i.properties[n]], s)[0]
-                              if i.properties.get(n) is not None else np.zeros(3)
-                              for i in insts])
+                per_instance[name] = lambda n=name[len(prefix):], s=scalars: \
+                    _property_channels(insts, n, s)
     t = len(mesh.triangles)
     for name in object_maps:
         values = np.asarray(per_instance[name](), np.float32)
         maps[name] = np.broadcast_to(np.repeat(values, t, axis=0)[:, None, :],
                                      (len(insts) * t, 3, 3))
     return maps
+
+
+def _property_channels(insts, name, scalars) -> np.ndarray:
+    """(k, 3) each instance's object property `name` as an Attribute node of type Object
+    reads it (shader_nodes.attribute_channels; zeros where the object lacks it)."""
+    return np.array([shader_nodes.attribute_channels([i.properties[name]], scalars)[0]
+                     if i.properties.get(name) is not None else np.zeros(3) for i in insts])
 
 
 def _as_normals(local, matrix_world) -> np.ndarray:
