@@ -124,7 +124,7 @@ class MaterialSpec:
                 extra["coat_ior"] = float(k["coat_ior"])
             if k.get("sheen_layer"):
                 extra["sheen_layer"] = True
-            for key in ("emission_program", "tint_program"):
+            for key in ("emission_program", "tint_program", "height_program", "sets_normal"):
                 if key in k:
                     extra[key] = k[key]
             return dataclasses.replace(m, **extra) if extra else m
@@ -863,6 +863,9 @@ class _Reader:
                 self.warn(f"{where} varies through {why}, which Specula does not evaluate "
                           f"per point yet; rendered without it")
             return
+        for part in spec.parts():  # a mix's factor reads the displaced normal too
+            if part.ctor == "mix":
+                part.kwargs.update(height_program=program, sets_normal=True)
         for leaf in spec.leaves():
             if leaf.kwargs.get("normal_program") is not None or leaf.ctor in UNSHADED:
                 continue  # a normal map's frame is the mesh's

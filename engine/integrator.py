@@ -363,8 +363,8 @@ def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
     if HAS_TEXTURES and mt.kind[mat] == MIX:  # a factor may read the hit's geometry
         g = sc.geometry
         front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
-        sx, sy, sz = shading_normal(f, np.float64(bu), np.float64(bv),
-                                    1.0 if front else -1.0, sc)
+        sx, sy, sz = surface_normal(f, np.float64(bu), np.float64(bv),
+                                    1.0 if front else -1.0, mat, sc, paths)
         shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
     while mt.kind[mat] == MIX:
         fac = mt.mix_fac[mat]
@@ -485,7 +485,7 @@ def under_layers(mat, f, u, v, dx, dy, dz, l0, l1, l2, full, sc, paths):
     g = sc.geometry
     if HAS_TEXTURES:  # a layer's weight may read the geometry (as choose_closure)
         front = dx * g.tri_normal[f, 0] + dy * g.tri_normal[f, 1] + dz * g.tri_normal[f, 2] < 0
-        sx, sy, sz = shading_normal(f, u, v, 1.0 if front else -1.0, sc)
+        sx, sy, sz = surface_normal(f, u, v, 1.0 if front else -1.0, layer, sc, paths)
         shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
     d0 = d1 = d2 = kept = 1.0  # the tint's (per channel) and the albedo's
     while mt.kind[layer] == MIX:
@@ -567,12 +567,26 @@ def surface_interaction(i, f, mat, tfar, bu, bv, sc, paths):
         sx, sy, sz = perturbed_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
     if HAS_NORMAL_MAPS and sc.materials.sets_normal[mat]:  # the displaced surface's own
         bx, by, bz = sx, sy, sz
+        if HAS_TEXTURES:  # and the normal its nodes read (Cycles' SetNormal runs first)
+            shading.set_geometry(paths.svm, sx, sy, sz, -dx, -dy, -dz, not front)
     mx, my, mz = sx, sy, sz
     if k != DIFFUSE and k != TRANSLUCENT and k != SHEEN:
         mx, my, mz = bsdf.valid_specular_normal(nx, ny, nz, -dx, -dy, -dz, sx, sy, sz)
     scale = offset_scale(g, f, px, py, pz)
     return Vertex(px, py, pz, nx, ny, nz, sx, sy, sz, mx, my, mz, -dx, -dy, -dz, front, f, u,
                   v, mat, np.float64(tfar), scale, bx, by, bz)
+
+
+def surface_normal(f, u, v, sign, mat, sc, paths):
+    """The normal the nodes of material row `mat` read as the surface's (Geometry's Normal,
+    Fresnel, Layer Weight, a mix's factor among them) at barycentrics (u, v), on the side
+    `sign`: the mesh's smooth normal, or the displaced one where the material has a
+    displacement (Bump Only): Cycles' SetNormal runs before the shader's other nodes."""
+    sx, sy, sz = shading_normal(f, u, v, sign, sc)
+    if HAS_NORMAL_MAPS and sc.materials.sets_normal[mat] and \
+            sc.materials.programs.height[mat, 0] >= 0:
+        sx, sy, sz = bumped_normal(f, u, v, sign, sx, sy, sz, mat, sc, paths)
+    return sx, sy, sz
 
 
 def shading_normal(f, u, v, sign, sc):
@@ -1661,7 +1675,7 @@ def all_finite(radiance, depth, normal):
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
-    surface_interaction, shading_normal,
+    surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_tint_at, metal_edge_at,
     handle_emission, caustic_weight,

@@ -1316,6 +1316,15 @@ def _displacement_shadowed_from_the_mesh(scene, settings):
     return scene, settings
 
 
+def _mix_reads_the_mesh_normal(scene, settings):
+    """A displaced material's mix factor read on the mesh's normal, not the displaced one
+    (no mix row sets the normal)."""
+    m = scene.materials
+    mix = m.kind == renderers.core().scene.MIX
+    scene.materials = dataclasses.replace(m, sets_normal=m.sets_normal & ~mix)
+    return scene, settings
+
+
 def _bumps_ignored(scene, settings):
     pt = scene.programs
     scene.programs = pt._replace(height=np.full_like(pt.height, -1))
@@ -1520,6 +1529,8 @@ INJECTIONS = {
     "displacement_object_as_world": ("displacement_bump", None, _displacement_in_world_space),
     "displacement_shadowed_from_the_mesh": ("displacement_bump",
                                             _displacement_shadowed_from_the_mesh, None),
+    "displacement_mix_on_the_mesh_normal": ("displacement_bump", _mix_reads_the_mesh_normal,
+                                            None),
     "alpha_emission_undimmed": ("emission_under_alpha", _emission_undimmed, None),
     "alpha_glow_unweighted": ("emission_under_alpha", None, _alpha_glow_unweighted),
     "sheen_as_its_means": ("textured_tints", _sheen_as_its_means, None),

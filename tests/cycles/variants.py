@@ -3214,12 +3214,27 @@ def _displaced(mat, axis, frequency, scale, space="WORLD", midlevel=0.5):
     return mat
 
 
+def _normal_coloured(mat):
+    """`mat` with its last Diffuse BSDF's Color the Geometry node's Normal x 0.5 + 0.5."""
+    tree = mat.node_tree
+    diffuse = [n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse"][-1]
+    geometry, scaled = (tree.nodes.new(t) for t in ("ShaderNodeNewGeometry",
+                                                    "ShaderNodeVectorMath"))
+    scaled.operation = "MULTIPLY_ADD"
+    scaled.inputs[1].default_value = scaled.inputs[2].default_value = (0.5, 0.5, 0.5)
+    tree.links.new(geometry.outputs["Normal"], scaled.inputs[0])
+    tree.links.new(scaled.outputs[0], diffuse.inputs["Color"])
+    return mat
+
+
 def displacement_bump():
     """A Material Output's Displacement rendered as Cycles renders Bump Only (issue 14,
     point 1): ripples on the box's floor (Diffuse, World space); a rough Principled ball
-    under a coat (both its lobes bumped), World space; a rough Glossy ball in Object space
-    on an object scaled 1.5 (the ripples' depth grows with the scale, as Cycles'
-    M normalize(M^T n) does)."""
+    under a coat (both its lobes bumped), World space; a ball mixing a red Diffuse and one
+    coloured by the Geometry node's Normal by Layer Weight's Facing, where the mix factor
+    and the colour read the displaced normal (Cycles' SetNormal runs before the shader's
+    other nodes); a rough Glossy ball in Object space on an object scaled 1.5 (the
+    ripples' depth grows with the scale, as Cycles' M normalize(M^T n) does)."""
     from mathutils import Matrix
 
     _box()
@@ -3229,7 +3244,11 @@ def displacement_bump():
     _balls([_displaced(_principled("CoatedBands", **{
                 "Base Color": (0.8, 0.3, 0.2, 1.0), "Roughness": 0.3, "Coat Weight": 0.6,
                 "Coat Roughness": 0.05}), "Z", 30.0, 0.01),
-            bs.diffuse("Plain", (0.5, 0.5, 0.5)),
+            _displaced(_normal_coloured(_view_factor(_mix_of(
+                "RippledFacing", "ShaderNodeMixShader",
+                ("ShaderNodeBsdfDiffuse", {"Color": (0.8, 0.1, 0.1, 1.0)}),
+                ("ShaderNodeBsdfDiffuse", {})), "ShaderNodeLayerWeight", "Facing",
+                Blend=0.3)), "Z", 30.0, 0.015),
             _displaced(bs.material("ScaledGlossy", "ShaderNodeBsdfGlossy",
                                    Color=(0.9, 0.8, 0.5, 1.0), Roughness=0.15), "X", 30.0,
                        0.004, space="OBJECT")])
