@@ -485,6 +485,8 @@ def _flatten_mixes(materials: list[Material]) -> tuple[list[Material], list]:
         # components' included (a Principled BSDF's under its Alpha: alpha x E per point);
         # their mixed constants are its mean.
         total = _mixed_emission(m) if i < given else np.asarray(m.emission, np.float64)
+        if i < given and m.emission_program is not None and not total.max() > 0:
+            total = _emission_stand_in(m)
         out[i] = _with_emission(m, total, m.emission_program)
         rows = []
         for c in m.components:
@@ -503,6 +505,22 @@ def _mixed_emission(m: Material) -> np.ndarray:
     if m.coat_ior > 0 or m.sheen_layer:  # the layer's lobe emits nothing; what is below
         return own + a  # (dimmed at each hit: _emission_parts)
     return own + m.scale * ((1.0 - m.fac) * a + m.fac * b)
+
+
+def _emission_stand_in(m: Material) -> np.ndarray:
+    """A positive constant to stand for mix m's textured emission where its components'
+    constants mix to nothing, though its program emits (a glTF cut-out's Alpha, a step of
+    its texture, whose constant reads 0): the kernel leaves out a surface whose constants
+    emit nothing, and light choice weighs emitters by them. Any positive value keeps the
+    render unbiased (the program gives the emission); the largest of its components'
+    emissions, unweighted by the mixes, else 1."""
+    def largest(x):
+        own = np.asarray(x.emission, np.float64)
+        if x.kind != "mix":
+            return own
+        return own + x.scale * np.maximum(largest(x.components[0]), largest(x.components[1]))
+    e = largest(m)
+    return e if e.max() > 0 else np.ones(3)
 
 
 def _emission_parts(m: Material) -> tuple:

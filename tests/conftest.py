@@ -17,6 +17,11 @@ def rng():
 # and checks they give the same bits). Inherited by the Blender processes the tests start.
 os.environ.setdefault("SPECULA_KERNEL", "generic")
 
+# A material the reader fails on is rendered as grey 0.8 with a warning for a user; in the
+# tests it raises, so that a bug in the reader fails the test that met it instead of
+# passing as grey (addon.materials.convert).
+os.environ.setdefault("SPECULA_STRICT_MATERIALS", "1")
+
 
 # `make test` runs the suite in two processes (pytest-xdist): most of its time is numba
 # compiling kernels, which uses one core. A file's tests stay in one process (its module

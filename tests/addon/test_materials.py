@@ -1685,3 +1685,22 @@ def test_a_textured_emission_in_a_constant_mix_is_the_mix_s_own_program(fresh, s
         want = weight * strength * np.array([0.3, 0.9, 0.4])
         np.testing.assert_allclose(_program_at(spec.kwargs["emission_program"], uv), want,
                                    atol=1e-5)
+
+
+def test_a_reader_failure_is_grey_and_named_for_a_user_and_raises_in_the_tests(fresh,
+                                                                              monkeypatch):
+    """A user's render goes on past a bug in the reader (the material grey 0.8, warned with
+    the exception); the test suite (SPECULA_STRICT_MATERIALS=1, tests/conftest.py) sees the
+    exception itself, so no test passes on a material silently rendered grey."""
+    mat, _ = node_material("Broken", "ShaderNodeBsdfDiffuse", Color=(0.6, 0.2, 0.2, 1))
+
+    def fails(self):
+        raise KeyError("the bug")
+    monkeypatch.setattr(materials._Reader, "read", fails)
+    with pytest.raises(KeyError, match="the bug"):
+        materials.convert(mat)
+    monkeypatch.setenv("SPECULA_STRICT_MATERIALS", "0")
+    spec, warnings = materials.convert(mat)
+    assert (spec.ctor, spec.kwargs) == ("diffuse", {"colour": materials.DEFAULT_GREY})
+    assert len(warnings) == 1 and "Broken" in warnings[0] and "KeyError" in warnings[0] \
+        and "grey 0.8" in warnings[0], warnings

@@ -158,3 +158,30 @@ def test_unsupported_material_renders_with_fallback(fresh, tmp_path, core):
     assert np.isfinite(pixels).all()
     # The cube (image centre) is not black: it fell back to a diffuse colour.
     assert pixels[20:28, 28:36, :3].mean() > 0
+
+
+def test_a_cut_out_glow_whose_alpha_constant_reads_0_renders(fresh, tmp_path, core, repo):
+    """Khronos' TextureLinearInterpolationTest (CC0, tests/assets/gltf/) through Blender's
+    glTF importer: its labels glow from a texture under the importer's alpha-mask chain,
+    whose constant reads 0 (the alpha's mean, 0.44, is under the cutoff 0.5). The export
+    failed on it ("a textured emission needs a positive constant emission standing for
+    it"); a positive constant now stands in for light choice (scene._emission_stand_in)
+    and the labels glow, white (1 plus the grey world), over the green spheres (0.5)."""
+    from mathutils import Vector
+    path = os.path.join(repo, "tests", "assets", "gltf", "TextureLinearInterpolationTest",
+                        "TextureLinearInterpolationTest.glb")
+    bpy.ops.import_scene.gltf(filepath=path)
+    corners = [o.matrix_world @ Vector(c) for o in fresh.objects if o.type == "MESH"
+               for c in o.bound_box]
+    centre = sum(corners, Vector()) / len(corners)
+    radius = max((c - centre).length for c in corners)
+    camera_object(location=tuple(centre + Vector((0, -2.6 * radius, 0))),
+                  rotation=(np.pi / 2, 0, 0))
+    world = bpy.data.worlds.new("Grey")
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.3, 0.3, 0.3, 1)
+    fresh.world = world
+    pixels = render_to_exr(fresh, tmp_path / "out.exr", samples=4, size=(64, 48))
+    assert np.isfinite(pixels).all()
+    top, bottom = pixels[24:, :, :3], pixels[:24, :, :3]  # (row 0 at the bottom)
+    assert top[..., 0].max() > 1.2, top[..., 0].max()  # the labels glow white
+    assert bottom[..., 1].max() > 0.45 and bottom[..., 0].max() < 0.35  # green spheres
