@@ -257,7 +257,9 @@ CONVERSIONS = ("RGB_TO_HSV", "RGB_TO_HSL", "HSV_TO_RGB", "HSL_TO_RGB")
 MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "MINIMUM", "MAXIMUM",
          "LESS_THAN", "GREATER_THAN", "ABSOLUTE", "SQRT", "FLOOR", "CEIL", "FRACT", "MODULO",
          "SINE", "COSINE", "WRAP", "PINGPONG", "ROUND", "TRUNC", "SIGN", "EXPONENT",
-         "LOGARITHM", "SNAP", "COMPARE", "FLOORED_MODULO")
+         "LOGARITHM", "SNAP", "COMPARE", "FLOORED_MODULO", "INVERSE_SQRT", "RADIANS",
+         "DEGREES", "TANGENT", "SINH", "COSH", "TANH", "ARCSINE", "ARCCOSINE", "ARCTANGENT",
+         "ARCTAN2", "SMOOTH_MIN", "SMOOTH_MAX")
 # Operations of OP_VECTOR_MATH (Cycles' svm_vector_math, kernel/svm/vector_math.h), and for
 # those done per component the Math operation that does it (-1: its own formula).
 VECTOR_MATHS = ("ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "CROSS_PRODUCT",
@@ -619,7 +621,45 @@ def _math_more(op, a, b, c):
         return math.floor(a / b) * b if b != 0.0 else 0.0
     if op == 26:
         return 1.0 if abs(a - b) <= max(c, 1e-5) else 0.0
-    return a - math.floor(a / b) * b if b != 0.0 else 0.0
+    if op == 27:
+        return a - math.floor(a / b) * b if b != 0.0 else 0.0
+    return _math_trigonometry(op, a, b, c)
+
+
+@njit(**JIT)
+def _math_trigonometry(op, a, b, c):
+    """The Math node's operations from INVERSE_SQRT on: conversions of angles, the
+    trigonometric and hyperbolic functions (Cycles' safe ones: arcsine and arccosine of
+    the clamped value, atan2 of the origin 0) and the smooth minimum and maximum
+    (smoothminf: a cubic blend over the distance c)."""
+    if op == 28:
+        return 1.0 / math.sqrt(a) if a > 0.0 else 0.0
+    if op == 29:
+        return a * (math.pi / 180.0)
+    if op == 30:
+        return a * (180.0 / math.pi)
+    if op == 31:
+        return math.tan(a)
+    if op == 32:  # (sinh and cosh overflow past |a| 710; Cycles' floats give inf earlier)
+        return math.sinh(min(max(a, -700.0), 700.0))
+    if op == 33:
+        return math.cosh(min(max(a, -700.0), 700.0))
+    if op == 34:
+        return math.tanh(a)
+    if op == 35:
+        return math.asin(min(max(a, -1.0), 1.0))
+    if op == 36:
+        return math.acos(min(max(a, -1.0), 1.0))
+    if op == 37:
+        return math.atan(a)
+    if op == 38:
+        return math.atan2(a, b) if a != 0.0 or b != 0.0 else 0.0
+    sign = 1.0 if op == 39 else -1.0  # SMOOTH_MAX is -smoothmin(-a, -b, c)
+    a, b = sign * a, sign * b
+    if c != 0.0:
+        h = max(c - abs(a - b), 0.0) / c
+        return sign * (min(a, b) - h * h * h * c * (1.0 / 6.0))
+    return sign * min(a, b)
 
 
 @njit(**JIT)
@@ -662,10 +702,8 @@ def node_vector_math(ins, reg):
         value = math.sqrt(ax * ax + ay * ay + az * az)
     elif op == 13:
         x, y, z = ax * scale, ay * scale, az * scale
-    elif op == 14:
+    else:  # NORMALIZE (the others are per component)
         x, y, z = _safe_normalize(ax, ay, az)
-    else:  # TANGENT
-        x, y, z = math.tan(ax), math.tan(ay), math.tan(az)
     reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = x, y, z, value
 
 

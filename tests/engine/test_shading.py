@@ -145,6 +145,36 @@ def test_math_is_safe_where_cycles_is(op, a, b, want):
     assert math.isfinite(got) and got == pytest.approx(want)
 
 
+def test_math_angles_trigonometry_and_smooth_extrema_are_cycles(rng):
+    """The Math node's angle, trigonometric, hyperbolic and smooth min/max operations
+    against their formulas (Cycles' svm_math: arcsine and arccosine of the clamped value,
+    atan2 of the origin 0, smoothminf's cubic blend over the distance c), at random values
+    and where Cycles is safe; every operation Blender's Math node offers is one of them."""
+    for a, b, c in rng.normal(size=(20, 3)) * 2.0:
+        h = max(abs(c) - abs(a - b), 0.0) / abs(c)
+        want = {"INVERSE_SQRT": 1 / np.sqrt(a) if a > 0 else 0.0, "RADIANS": np.radians(a),
+                "DEGREES": np.degrees(a), "TANGENT": np.tan(a), "SINH": np.sinh(a),
+                "COSH": np.cosh(a), "TANH": np.tanh(a), "ARCSINE": np.arcsin(np.clip(a, -1, 1)),
+                "ARCCOSINE": np.arccos(np.clip(a, -1, 1)), "ARCTANGENT": np.arctan(a),
+                "ARCTAN2": np.arctan2(a, b),
+                "SMOOTH_MIN": min(a, b) - h ** 3 * abs(c) / 6,
+                "SMOOTH_MAX": max(a, b) + h ** 3 * abs(c) / 6}
+        for op, w in want.items():
+            got = shading.math_op(shading.MATHS.index(op), a, b, abs(c))
+            assert got == pytest.approx(w, rel=1e-12, abs=1e-12), (op, a, b, c)
+    assert shading.math_op(shading.MATHS.index("ARCTAN2"), 0.0, 0.0, 0.0) == 0.0
+    assert shading.math_op(shading.MATHS.index("SMOOTH_MIN"), 0.3, 0.7, 0.0) == 0.3
+    assert shading.math_op(shading.MATHS.index("SMOOTH_MAX"), 0.3, 0.7, 0.0) == 0.7
+    assert math.isfinite(shading.math_op(shading.MATHS.index("COSH"), 1e4, 0.0, 0.0))
+    blender = {"ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "LOGARITHM",
+               "SQRT", "INVERSE_SQRT", "ABSOLUTE", "EXPONENT", "MINIMUM", "MAXIMUM",
+               "LESS_THAN", "GREATER_THAN", "SIGN", "COMPARE", "SMOOTH_MIN", "SMOOTH_MAX",
+               "ROUND", "FLOOR", "CEIL", "TRUNC", "FRACT", "MODULO", "FLOORED_MODULO", "WRAP",
+               "SNAP", "PINGPONG", "SINE", "COSINE", "TANGENT", "ARCSINE", "ARCCOSINE",
+               "ARCTANGENT", "ARCTAN2", "SINH", "COSH", "TANH", "RADIANS", "DEGREES"}
+    assert set(shading.MATHS) == blender
+
+
 def _vector_math(op, a, b, c=(0.0, 0.0, 0.0), scale=1.0):
     prog = Program()
     ra, rb, rc, rs = prog.const(a), prog.const(b), prog.const(c), prog.const([scale])
