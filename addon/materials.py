@@ -1050,7 +1050,8 @@ class _Reader:
             parts.append(part)
         if not add and program is None and fac in (0.0, 1.0):
             return parts[int(fac)]
-        return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0, program)
+        return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0, program,
+                          fac_socket=None if add else enabled_input(node, "Fac"))
 
     def textured_unit(self, node, socket_name, default):
         """A factor in [0, 1] that may vary over the surface: (its constant, e.g. the image's
@@ -1058,11 +1059,15 @@ class _Reader:
         c, program = self.textured_colour(node, socket_name, (default,) * 3)
         return min(max(c[0], 0.0), 1.0), program
 
-    def mixed(self, first, second, fac, scale=1.0, fac_program=None, emission_program=None):
+    def mixed(self, first, second, fac, scale=1.0, fac_program=None, emission_program=None,
+              fac_socket=None):
         """The mix spec of two specs; their normal maps must read one UV map (a triangle has
-        one set of tangents), else the second's is dropped, warned. A textured factor mixes
-        the components' emission by its constant (warned). `emission_program`: the mix's
-        whole emission per point, given (with_alpha), its parts' constants its mean."""
+        one set of tangents), else the second's is dropped, warned. A textured factor
+        (`fac_socket`, a Mix Shader's Fac) mixes the components' emission per point, each
+        textured or not (mixed_emission; a glTF unlit material: a textured Emission and a
+        Transparent BSDF mixed by Light Path's Is Camera Ray), else by its constant
+        (warned). `emission_program`: the mix's whole emission per point, given
+        (with_alpha), its parts' constants its mean."""
         a, b = first.normal_uv, second.normal_uv
         if a is not None and b is not None and a != b:
             self.warn(f"mixed shaders' normal maps read UV maps '{a}' and '{b}'; only one per "
@@ -1073,13 +1078,13 @@ class _Reader:
         kwargs = {"first": first, "second": second, "fac": fac, "scale": scale}
         if emission_program is not None:
             kwargs["emission_program"] = emission_program
-        elif fac_program is None:
-            kwargs.update(self.mixed_emission(first, second, fac, scale))
+        elif fac_program is None or fac_socket is not None:
+            kwargs.update(self.mixed_emission(first, second, fac, scale, fac_socket))
         for part in (*first.parts(), *second.parts()):
             if part.kwargs.pop("emission_program", None) is not None:
                 self.warn("a textured emission inside a mixed shader is not supported; "
                           "rendered as its constant (the texture's mean)")
-        if fac_program is not None and emission_program is None and any(
+        if fac_program is not None and "emission_program" not in kwargs and any(
                 max(_leaf_emission(leaf)) > 0 for leaf in (*first.leaves(), *second.leaves())):
             program = None
             if first.ctor != "mix" and second.ctor != "mix":
@@ -1099,9 +1104,10 @@ class _Reader:
             kwargs["fac_program"] = fac_program
         return MaterialSpec("mix", self.material.name, kwargs)
 
-    def mixed_emission(self, first, second, fac, scale):
-        """The emission of a Mix Shader of constant factor (or an Add Shader) over parts of
-        which one or both emit from a texture, as the mix's own program: their emissions
+    def mixed_emission(self, first, second, fac, scale, fac_socket=None):
+        """The emission of a Mix Shader (its factor constant, `fac`, or varying, the
+        `fac_socket` it reads, `fac` its constant) or an Add Shader over parts of which
+        one or both emit from a texture, as the mix's own program: their emissions
         mixed per point (shader_nodes.compile_emission), which the kernel evaluates where
         the mix is hit or sampled as a light. A part may be an Emission shader, a
         Principled BSDF (its emission under its Alpha, coat and sheen) or a mix with a
@@ -1122,7 +1128,8 @@ class _Reader:
                    else self.emission_sources.get(id(prog)) for p, prog in zip(parts, programs)]
         if any(source is None for source in sources):
             return {}
-        source = ("mix", sources[0], sources[1], fac, scale)
+        source = ("mix", sources[0], sources[1], fac if fac_socket is None else fac_socket,
+                  scale)
         program, why = shader_nodes.compile_emission(source, self.constants.image_cache)
         if program is None:
             self.warn(f"a mixed textured emission cannot be evaluated per point ({why})")
@@ -1349,8 +1356,13 @@ class _Reader:
         if program is None and alpha >= 1.0:
             return spec
         glow = spec.kwargs.pop("emission_program", None)
-        if alpha > 0.0 and (glow is not None or program is not None
-                            and max(spec.kwargs.get("emission", (0.0,))) > 0):
+        if program is None and alpha <= 0.0:
+            glow = None  # (Cycles weighs the emission by alpha: none of it glows)
+        elif glow is not None or program is not None and \
+                max(spec.kwargs.get("emission", (0.0,))) > 0:
+            # Weighed per point by the alpha, whatever its constant (a cut-out's reads 0
+            # where its mask's step is taken of the mean): unweighted, a textured glow shone
+            # through the cut-out's transparent parts.
             glow = self.alpha_glow(node, spec, glow, alpha, program)
         return self.mixed(transparent(self.material.name), spec, alpha, 1.0, program, glow)
 

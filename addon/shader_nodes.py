@@ -1220,7 +1220,8 @@ def compile_emission(source, texture_cache):
           Principled BSDF's emission, either varying);
       ("constant", (r, g, b)): an emission that does not vary;
       ("mix", first, second, fac, scale): scale x ((1 - fac) first + fac second), a Mix
-          Shader of constant factor (an Add Shader: fac 0.5, scale 2) over two sources;
+          Shader (fac a number or its Fac socket; an Add Shader: fac 0.5, scale 2) over
+          two sources;
       ("weighted", source, weight): source x weight, a number or a socket clamped to
           [0, 1] (a Principled BSDF's Alpha weighs its emission)."""
     def build():
@@ -1237,7 +1238,9 @@ def _emission_of(c, source):
         return p.const([float(x) for x in source[1]])
     if kind == "mix":
         _, first, second, fac, scale = source
-        mixed = p.emit(c.sh.OP_LERP, 3, a=p.const([float(fac)]), b=_emission_of(c, first),
+        f = p.const([float(fac)]) if isinstance(fac, (int, float)) else \
+            _clamped(c, c.input(fac, "VALUE"), 1)  # (a Mix Shader clamps its factor)
+        mixed = p.emit(c.sh.OP_LERP, 3, a=f, b=_emission_of(c, first),
                        c=_emission_of(c, second), d=3)
         return _times(c, mixed, p.const([float(scale)] * 3))
     if kind == "weighted":

@@ -1704,3 +1704,35 @@ def test_a_reader_failure_is_grey_and_named_for_a_user_and_raises_in_the_tests(f
     assert (spec.ctor, spec.kwargs) == ("diffuse", {"colour": materials.DEFAULT_GREY})
     assert len(warnings) == 1 and "Broken" in warnings[0] and "KeyError" in warnings[0] \
         and "grey 0.8" in warnings[0], warnings
+
+
+def test_an_unlit_gltf_material_glows_with_its_texture_for_the_camera(fresh):
+    """Blender's glTF importer makes a KHR_materials_unlit material a Mix Shader of a
+    Transparent BSDF and an Emission of its texture by Light Path's Is Camera Ray: the mix's
+    emission is the texture per point for camera rays and nothing for the others (it was
+    the texture's mean, warned; checked against Cycles on Khronos' TextureTransformMultiTest,
+    whose "Unlit" row shows its check marks)."""
+    from engine import shading
+    mat = bpy.data.materials.new("Unlit")
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    out, mix, glow, clear, path = (nodes.new(t) for t in (
+        "ShaderNodeOutputMaterial", "ShaderNodeMixShader", "ShaderNodeEmission",
+        "ShaderNodeBsdfTransparent", "ShaderNodeLightPath"))
+    img, stored = make_image("Unlit")
+    tex = texture(mat, img, glow, "Color")
+    tex.interpolation = "Closest"
+    links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    links.new(clear.outputs[0], mix.inputs[1])
+    links.new(glow.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert warnings == []
+    program = spec.kwargs["emission_program"]
+    camera = (shading.RAY_CAMERA, 0.0, 0, 0, 0, 0, 0)
+    for uv, texel in zip(TEXEL_CENTRES, srgb_to_linear(stored[:, :3])):
+        reg = shading.evaluate(program, uv, light_path=camera)
+        assert reg[program.out:program.out + 3] == pytest.approx(texel, abs=1e-5)
+        reg = shading.evaluate(program, uv, light_path=(shading.RAY_DIFFUSE, 1.0, 1, 1,
+                                                        0, 0, 0))
+        assert not reg[program.out:program.out + 3].any()

@@ -3337,6 +3337,17 @@ def gltf_texture_coordinates():
     _gltf("TextureCoordinateTest", direction=(0.0, -1.0, 0.2))
 
 
+def gltf_texture_linear_interpolation():
+    """Emissive spheres (an emissive factor beside an emission read from a 2 x 1 sRGB
+    texture) under emissive labels cut out by their texture's alpha (the importer's mask
+    chain), whose constant reads 0 (the alpha's mean, 0.44, is under the cutoff 0.5): the
+    labels' textured glow is weighed by the cut-out per point (it shone through the
+    transparent parts, where the texture is white, when that constant was taken to mean no
+    alpha program), and a positive constant stands in for light choice
+    (scene._emission_stand_in; without it the export failed)."""
+    _gltf("TextureLinearInterpolationTest", direction=(0.0, -1.0, 0.0))
+
+
 def gltf_attenuation():
     """KHR_materials_volume through the importer: Principled glass over Volume Absorption
     (attenuation colour and distance), cubes of five sizes and node scales, seen face-on."""
@@ -3530,6 +3541,7 @@ for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
                       (gltf_attenuation, "AttenuationTest"),
+                      (gltf_texture_linear_interpolation, "TextureLinearInterpolationTest"),
                       (gltf_glass_vase_flowers, "GlassVaseFlowers")):
     _add(Variant(_setup.__name__, _setup, max_bounces=8,
                  files=(os.path.join(GLTF_DIR, _name, _name + ".glb"),)))
