@@ -326,8 +326,10 @@ def _mapping_links_unread():
 
     def unlinked(c, node, out):
         sh = c.sh
-        regs = [c.program.const(list(node.inputs[name].default_value))
-                for name in ("Location", "Rotation", "Scale")]
+        # (Vector and Normal mappings have no Location.)
+        regs = [c.program.const(list(sock.default_value) if sock is not None else [0.0] * 3)
+                for sock in (shader_nodes.enabled_input(node, name)
+                             for name in ("Location", "Rotation", "Scale"))]
         vec = c.input(node.inputs["Vector"], "VECTOR")
         return c.program.emit(sh.OP_VECTOR_MAPPING, 3, vec, *regs,
                               e=sh.MAPPINGS.index(node.vector_type)), "VECTOR"
