@@ -30,6 +30,8 @@ Fallbacks:
     (Subsurface, Anisotropic, Thin Film) warn when used; Diffuse Roughness makes the base
     Oren-Nayar.
   * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
+  * Metallic BSDF: the Principled BSDF's F82 metal (Base Color, Edge Tint); a Physical
+    Conductor as Cycles' F82 fit of its IOR and Extinction (warned with its deviation).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
   * any other shader node (Toon, Hair, ...): diffuse of its 'Color' / 'Base Color'
@@ -139,6 +141,14 @@ class MaterialSpec:
         if anisotropy:  # (a Glossy BSDF at zero roughness is a mirror: it ignores them)
             m = m.with_anisotropy(**anisotropy)
         return dataclasses.replace(m, **normal) if normal else m
+
+
+def _factors_read_normal(spec):
+    """Whether a mix's factor or one below it reads the hit's normal: only then does its
+    choice need the displaced normal (a bump costs three height evaluations per hit), for
+    the kernel reads every factor below a mix on the normal set for it."""
+    return any(core.load().shading.reads_normal(part.kwargs.get("fac_program"))
+               for part in spec.parts() if part.ctor == "mix")
 
 
 # The MaterialSpec keywords of a material's medium (its Volume: scene.Material's fields).
@@ -865,8 +875,9 @@ class _Reader:
                           f"per point yet; rendered without it")
             return
         for part in spec.parts():  # a mix's factor reads the displaced normal too
-            if part.ctor == "mix":
+            if part.ctor == "mix" and _factors_read_normal(part):
                 part.kwargs.update(height_program=program, sets_normal=True)
+        self.warn_mesh_normal_coordinates(spec, where)
         for leaf in spec.leaves():
             if leaf.kwargs.get("normal_program") is not None or leaf.ctor in UNSHADED:
                 continue  # a normal map's frame is the mesh's
@@ -876,6 +887,21 @@ class _Reader:
                 continue
             leaf.kwargs.update(height_program=program, sets_normal=True)
             leaf.kwargs.setdefault("normal_program", None)
+
+    def warn_mesh_normal_coordinates(self, spec, where):
+        """Warn where a displaced material's programs read the Texture Coordinate node's
+        Normal: Specula's is the mesh's normal in object space, Cycles' the displaced one
+        (its object-space normal of the shading normal SetNormal leaves)."""
+        normal = core.load().shading.NORMAL
+        if not any(normal in program.uv_maps for part in spec.parts()
+                   for program in (part.kwargs.get(k) for k in PROGRAM_KEYS)
+                   if program is not None):
+            return
+        nodes = sorted(n.name for n in self.material.node_tree.nodes
+                       if n.bl_idname == "ShaderNodeTexCoord" and n.outputs["Normal"].is_linked)
+        named = f" (node {', '.join(repr(n) for n in nodes)})" if nodes else ""
+        self.warn(f"{where}: the Texture Coordinate's Normal{named} reads the mesh's normal "
+                  f"under the displacement, not the displaced one; rendered so")
 
     def volume(self, link):
         """The medium of the Material Output's Volume (MEDIUM_KEYS keywords: coefficients
@@ -1010,6 +1036,8 @@ class _Reader:
                 **({"emission_program": program} if program is not None else {})})
         if kind == "ShaderNodeBsdfPrincipled":
             return self.with_alpha(node, self.principled(node))
+        if kind == "ShaderNodeBsdfMetallic":
+            return self.metallic(node)
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
         if kind == "ShaderNodeBsdfSheen":
@@ -1212,6 +1240,33 @@ class _Reader:
                       f"supported); rendered with the default tangent (radial about Z)")
         return {"specular_anisotropy": a, "anisotropic_rotation": r, "tangent_program": tangent,
                 **_with(program, "anisotropy_program")}
+
+    def metallic(self, node):
+        """The Metallic BSDF: Cycles' F82 conductor of the Principled BSDF's metal (Base
+        Color its F0, Edge Tint its F82 tint, either may vary) with its roughness,
+        anisotropy and normal; a Physical Conductor (IOR and Extinction, constants) as the
+        F82 metal fitted to it (bsdf.conductor_as_f82), warned with the fit's deviation."""
+        self.normal(node)
+        self.ignored(node, "Thin Film Thickness", 0.0, "rendered without thin film")
+        kwargs = {**self.roughness(node), "multiscatter": self.multiscatter(node),
+                  **self.anisotropy(node, "Anisotropy", "Rotation")}
+        if getattr(node, "fresnel_type", "F82") == "F82":
+            base, program = self.textured_colour(node, "Base Color")
+            tint, tint_program = self.textured_colour(node, "Edge Tint", (1.0, 1.0, 1.0))
+            return MaterialSpec("metal", self.material.name, {
+                "base_colour": base, **_with(program), "specular_tint": tint,
+                **_with(tint_program, "tint_program"), **kwargs})
+        n, k = (np.maximum(np.nan_to_num(np.asarray(
+            _convert(self.value(node, name, default), "VECTOR", "VECTOR"), np.float64)[:3]), 0.0)
+            for name, default in (("IOR", (1.5,) * 3), ("Extinction", (0.0,) * 3)))
+        f0, tint, deviation = core.load().bsdf.conductor_as_f82(n, k)
+        self.warn(f"node '{node.name}' Physical Conductor (IOR {_fmt(tuple(n))}, Extinction "
+                  f"{_fmt(tuple(k))}) is rendered as Cycles' F82 fit of it (F0 {_fmt(tuple(f0))},"
+                  f" edge tint {_fmt(tuple(tint))}): exact at normal incidence and near 82 "
+                  f"degrees, within {deviation:.3f} of the exact reflectance between")
+        return MaterialSpec("metal", self.material.name, {
+            "base_colour": tuple(float(x) for x in f0),
+            "specular_tint": tuple(float(x) for x in tint), **kwargs})
 
     def principled_ignored(self, node):
         self.normal(node)

@@ -31,7 +31,7 @@ VARYING = ("ShaderNodeTexImage", "ShaderNodeTexEnvironment", "ShaderNodeTexCoord
            "ShaderNodeNewGeometry", "ShaderNodeObjectInfo", "ShaderNodeTexBrick",
            "ShaderNodeTexVoronoi", "ShaderNodeAttribute", "ShaderNodeLightPath",
            "ShaderNodeTangent", "ShaderNodeVectorTransform", "ShaderNodeWireframe",
-           "ShaderNodeDisplacement")
+           "ShaderNodeDisplacement", "ShaderNodeLightFalloff", "ShaderNodeCameraData")
 # Nodes that read the hit's view direction and normal: an emission cannot use them (a
 # light sampled from a shading point would need them from that point's side too).
 VIEW_DEPENDENT = ("ShaderNodeFresnel", "ShaderNodeLayerWeight")
@@ -306,7 +306,10 @@ class Compiler:
         extension = getattr(node, "extension", "REPEAT")
         key = (image.as_pointer(), node.interpolation, extension)
         if key not in self.textures:
-            texels, srgb = image_texels(image)
+            pixels = ("texels", image.as_pointer())  # one read under every filter
+            if pixels not in self.textures:
+                self.textures[pixels] = image_texels(image)
+            texels, srgb = self.textures[pixels]
             if texels is None:
                 raise Unsupported(f"image '{image.name}' (no pixels: a missing file?)")
             self.textures[key] = self.sh.Texture(image.name, texels, node.interpolation,
@@ -1093,6 +1096,46 @@ def _n_light_path(c, node, out):
                           d=sh.LIGHT_PATH_OUTPUTS.index(out.name)), "VALUE"
 
 
+def _n_light_falloff(c, node, out):
+    """Light Falloff: Strength times the ray's length to the power 0 (Quadratic), 1
+    (Linear) or 2 (Constant), then times L^2 / (Smooth + L^2) where Smooth > 0, as
+    Cycles' svm_node_light_falloff; L is the Light Path's Ray Length (for a light sample,
+    the distance to the light point)."""
+    sh, p = c.sh, c.program
+    strength = c.input(node.inputs["Strength"], "VALUE")
+    smooth = c.input(node.inputs["Smooth"], "VALUE")
+    length = p.emit(sh.OP_LIGHT_PATH, 1, d=sh.LIGHT_PATH_OUTPUTS.index("Ray Length"))
+
+    def maths(op, a, b, third=None):
+        return p.emit(sh.OP_MATH, 1, a=a, b=b, c=b if third is None else third,
+                      d=sh.MATHS.index(op))
+    squared = maths("MULTIPLY", length, length)
+    power = {"Quadratic": None, "Linear": length, "Constant": squared}[out.name]
+    if power is not None:
+        strength = maths("MULTIPLY", strength, power)
+    zero, one = p.const([0.0]), p.const([1.0])
+    smoothed = maths("DIVIDE", squared, maths("ADD", smooth, squared))  # (safe: 0 over 0 is 0)
+    on = maths("GREATER_THAN", smooth, zero)  # only a positive Smooth applies
+    factor = maths("MULTIPLY_ADD", maths("SUBTRACT", smoothed, one), on, one)
+    return maths("MULTIPLY", strength, factor), "VALUE"
+
+
+def _n_camera_data(c, node, out):
+    """Camera Data: the shading point in the camera's space (Texture Coordinate's Camera:
+    x right, y up, z along the view), as Cycles' svm_node_camera reads it: its direction
+    (View Vector), its z (View Z Depth) and its length (View Distance)."""
+    sh, p = c.sh, c.program
+    if c.world:
+        raise Unsupported(f"camera data '{node.name}' in a world")
+    local = p.uv(sh.CAMERA)
+    if out.name == "View Z Depth":
+        return local + 2, "VALUE"
+    op = "LENGTH" if out.name == "View Distance" else "NORMALIZE"
+    reg = p.emit(sh.OP_VECTOR_MATH, 4, a=local, b=local, c=local, d=sh.VECTOR_MATHS.index(op),
+                 e=p.const([1.0]))
+    return (reg + 3, "VALUE") if op == "LENGTH" else (reg, "VECTOR")
+
+
 def _normal(c, node):
     """The register of a Fresnel or Layer Weight node's Normal, -1 for the hit's own."""
     sock = node.inputs["Normal"]
@@ -1163,6 +1206,8 @@ NODES = {
     "ShaderNodeFresnel": _n_fresnel,
     "ShaderNodeLayerWeight": _n_layer_weight,
     "ShaderNodeLightPath": _n_light_path,
+    "ShaderNodeLightFalloff": _n_light_falloff,
+    "ShaderNodeCameraData": _n_camera_data,
 }
 
 

@@ -23,7 +23,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .fresnel import fresnel_dielectric, glass_fresnel, tinted_fresnel
+from .fresnel import fresnel_conductor, fresnel_dielectric, glass_fresnel, tinted_fresnel
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import (build_frame, concentric_disk, cosine_hemisphere, guided_interp,
                        interp_guide)
@@ -55,6 +55,23 @@ def f82_tint_b(f0, tint):
     f5 = f ** 5
     g = min(max(f0, 0.0), 1.0)
     return (g + (1.0 - g) * f5) * (7.0 / (f5 * f)) * (1.0 - min(max(tint, 0.0), 1.0))
+
+
+def conductor_as_f82(n, k) -> tuple:
+    """The F82 metal (fresnel_f82) standing for a conductor of complex IOR n + ik (3,):
+    exact at normal incidence and at cos = 1/7, Cycles' own fit of it for its energy
+    compensation (fresnel_conductor_Fss), so the multiple scattering matches. Returns (F0
+    (3,), the edge tint (3,), at most 1 as f82_tint_b takes it, and the largest deviation
+    of the fit from the exact reflectance over the angles, any channel)."""
+    mu = np.linspace(0.0, 1.0, 257)
+    f0 = fresnel_conductor(1.0, n, k)
+    f82 = fresnel_conductor(1.0 / 7.0, n, k)
+    schlick = f0 + (1.0 - f0) * (6.0 / 7.0) ** 5
+    tint = np.minimum(f82 / np.maximum(schlick, 1e-300), 1.0)
+    exact = fresnel_conductor(mu[:, None], n, k)
+    fit = np.array([[fresnel_f82(m, f0[j], f82_tint_b(f0[j], tint[j])) for j in range(3)]
+                    for m in mu])
+    return f0, tint, float(np.abs(fit - exact).max())
 
 
 @njit(**JIT)

@@ -20,7 +20,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .jit import INLINE, JIT, njit
+from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import concentric_disk, regular_polygon
 from .scene import Camera
 
@@ -82,18 +82,32 @@ def view_maps(model: CameraModel, corners: np.ndarray) -> tuple[np.ndarray, np.n
     """The per-corner values of Texture Coordinate's Camera and Window outputs
     (shading.CAMERA, WINDOW) at `corners` (t, 3, 3), recentred as the scene's vertices:
     the camera-space position, and homogeneous coordinates (X, Y, W) whose X / W, Y / W is
-    the position in the frame from 0 at its bottom left to 1 at its top right (Cycles'
-    worldtondc: the whole frame, shift included, whatever region is rendered). Perspective:
-    W is the depth, and (x / z - shift) / half + 1, halved, is the frame position (as
-    `project` finds the raster); orthographic: W = 1."""
+    the position in the frame (frame_position; Cycles' worldtondc: the whole frame, shift
+    included, whatever region is rendered). W is the depth, or 1 for an orthographic
+    camera, so that the shader interpolates X, Y and W over a triangle and divides."""
     local = (corners - model.position) @ model.world_from_camera
-    x, y, z = local[..., 0], local[..., 1], local[..., 2]
-    cam = model.cam
-    sx, sy = cam.shift_x * 2 * model.fit_half, cam.shift_y * 2 * model.fit_half
-    w = np.ones_like(z) if cam.type == "ORTHO" else z
-    window = np.stack([(x + (model.half_x - sx) * w) / (2 * model.half_x),
-                       (y + (model.half_y - sy) * w) / (2 * model.half_y), w], axis=-1)
-    return local, window
+    return local, window_coordinates(local.reshape(-1, 3), model.data()).reshape(local.shape)
+
+
+@njit(**ALLOCATING)
+def window_coordinates(local, cam):
+    """view_maps' homogeneous window coordinates of camera-space points (n, 3)."""
+    out = np.empty_like(local)
+    for i in range(len(local)):
+        w = 1.0 if cam.ortho else local[i, 2]
+        out[i, 0], out[i, 1] = frame_position(local[i, 0], local[i, 1], w, cam)
+        out[i, 2] = w
+    return out
+
+
+@njit(**INLINE)
+def frame_position(x, y, w, cam):
+    """A viewplane point (x, y) (at z = 1, or in scene units for an orthographic camera)
+    given homogeneously with weight w -> (X, Y) whose X / w, Y / w is its place in the
+    frame, 0 at the bottom left, 1 at the top right: the inverse of raster_to_plane over
+    the pixel counts."""
+    shift_x, shift_y = cam.shift_x * 2 * cam.fit_half * w, cam.shift_y * 2 * cam.fit_half * w
+    return ((x - shift_x) / cam.half_x + w) * 0.5, ((y - shift_y) / cam.half_y + w) * 0.5
 
 
 @njit(**INLINE)
@@ -180,8 +194,8 @@ def project(px, py, pz, lx, ly, cam):
     # viewplane point (x, y) does: x = lx / focus + vx / vz (lx = 0 without a lens).
     x = lx / cam.focus + vx / vz
     y = ly / cam.focus + vy / vz
-    rx = ((x - cam.shift_x * 2 * cam.fit_half) / cam.half_x + 1.0) * 0.5 * cam.width
-    ry = ((y - cam.shift_y * 2 * cam.fit_half) / cam.half_y + 1.0) * 0.5 * cam.height
+    fx, fy = frame_position(x, y, 1.0, cam)
+    rx, ry = fx * cam.width, fy * cam.height
     dist = math.sqrt(vx * vx + vy * vy + vz * vz)
     z_inv = math.sqrt(x * x + y * y + 1.0)  # 1 / the pinhole ray's z (its clip distances)
     near = cam.clip_start * z_inv

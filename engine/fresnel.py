@@ -1,9 +1,12 @@
 """The Fresnel reflectance of a smooth dielectric: one formula for the BSDFs (bsdf.py) and
-the shader programs' Fresnel and Layer Weight nodes (shading.py)."""
+the shader programs' Fresnel and Layer Weight nodes (shading.py); and of a smooth conductor,
+which the metals render through its F82 fit (bsdf.conductor_as_f82)."""
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from .jit import JIT, njit
 
@@ -65,3 +68,20 @@ def tinted_fresnel(f, eta, tint):
     t0 = min(max(f0 * tint, 0.0), 1.0)
     s = min(max((f - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
     return t0 + (1.0 - t0) * s
+
+
+def fresnel_conductor(cos_i, n, k):
+    """Unpolarised Fresnel reflectance of a smooth conductor of complex IOR n + ik seen from
+    vacuum (Cycles' fresnel_conductor; Born and Wolf 14.4.1), elementwise over numpy
+    arrays: the Metallic BSDF's Physical Conductor. At k = 0 it is fresnel_dielectric's."""
+    c = np.clip(np.abs(np.asarray(cos_i, np.float64)), 0.0, 1.0)
+    n, k = np.asarray(n, np.float64), np.asarray(k, np.float64)
+    c2, s2 = c * c, 1.0 - c * c
+    t0 = n * n - k * k - s2
+    a2b2 = np.sqrt(t0 * t0 + 4.0 * n * n * k * k)  # |(n + ik)^2 - sin^2|
+    a = np.sqrt(np.maximum(0.5 * (a2b2 + t0), 0.0))
+    t1, t2 = a2b2 + c2, 2.0 * a * c
+    r_s = (t1 - t2) / np.maximum(t1 + t2, 1e-300)
+    t3, t4 = c2 * a2b2 + s2 * s2, t2 * s2
+    r_p = r_s * (t3 - t4) / np.maximum(t3 + t4, 1e-300)
+    return 0.5 * (r_s + r_p)

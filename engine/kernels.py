@@ -267,8 +267,9 @@ def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:
     again), and the Geometry node's Position (world space) and True Normal (`tri_normal`,
     per triangle)."""
     names = [n for n in VIEW_MAPS if n in scene.uv_names]
-    if not names:
+    if not names or scene.view_maps_camera is cam:  # (the generic kernel's, then its own)
         return
+    scene.view_maps_camera = cam
     local, window = view_maps(cam, scene.vertices) if {CAMERA, WINDOW} & set(names) else \
         (None, None)
     values = {CAMERA: local, WINDOW: window, POSITION: scene.vertices + scene.origin,

@@ -1121,6 +1121,8 @@ class Scene:
     uv_names: list = field(default_factory=list)
     # The world volume's row of `materials` (World.volume; on no triangle), or -1.
     world_medium: int = -1
+    # The camera (camera.CameraModel) whose view maps `uv` holds (kernels.fill_view_maps).
+    view_maps_camera: object = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         if self.terminator_offset is None:

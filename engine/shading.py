@@ -347,8 +347,10 @@ class Texture:
         if self.extension not in EXTENSIONS:
             raise ValueError(f"image '{self.name}': extension {self.extension!r} not one of "
                              f"{EXTENSIONS}")
-        # A NaN or inf texel would put one in a pixel: Cycles reads them as 0 too.
-        self.texels = np.nan_to_num(t, nan=0.0, posinf=0.0, neginf=0.0)
+        # A NaN or inf texel would put one in a pixel: Cycles reads them as 0 too. Finite
+        # texels stay the array given, which other Textures of the image share (pack).
+        self.texels = t if np.isfinite(t).all() else np.nan_to_num(t, nan=0.0, posinf=0.0,
+                                                                   neginf=0.0)
 
 
 @dataclass
@@ -442,22 +444,32 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
+    # An image read by several programs (a base colour and its alpha, one texture under
+    # two materials) or under two filters keeps one copy of its texels: keyed by identity,
+    # for the exporter hands every reader of an image the same Texture and texel array.
+    first_texel, row_of = {}, {}
     for slot, mat, prog in [(j, m, p) for j, progs in enumerate(slots)
                             for m, p in enumerate(progs)]:
         if prog is None:
             continue
-        first_tex = len(tex_rows)
+        table_rows = []
         for t in prog.textures:
+            if id(t.texels) not in first_texel:
+                first_texel[id(t.texels)] = n_texels
+                texels.append(t.texels.reshape(-1, 4))
+                n_texels += t.texels.shape[0] * t.texels.shape[1]
             h, w = t.texels.shape[:2]
-            tex_rows.append((n_texels, w, h, INTERPOLATIONS.index(t.interpolation),
-                             EXTENSIONS.index(t.extension), int(t.srgb)))
-            texels.append(t.texels.reshape(-1, 4))
-            n_texels += w * h
+            row = (first_texel[id(t.texels)], w, h, INTERPOLATIONS.index(t.interpolation),
+                   EXTENSIONS.index(t.extension), int(t.srgb))
+            if row not in row_of:
+                row_of[row] = len(tex_rows)
+                tex_rows.append(row)
+            table_rows.append(row_of[row])
         for op, out, a, b, c, d, e, p in prog.code:
             if op in (OP_UV, OP_WIREFRAME):
                 a = uv_index(prog.uv_maps[a])
             elif op == OP_IMAGE:
-                b += first_tex
+                b = table_rows[b]
             code.append((op, out, a, b, c, d, e, p + n_params))
         rows[slot, mat] = (n_code, n_code + len(prog.code), prog.out)
         n_code += len(prog.code)
@@ -1517,6 +1529,14 @@ TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NO
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
                  OP_BLACKBODY, OP_WAVELENGTH, OP_TRANSFORM, OP_BOX, OP_PROJECTION)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
+# The opcodes reading the hit's normal (set_geometry's registers): a program without them
+# reads the same value on the mesh's normal as on a displaced one.
+NORMAL_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FRESNEL, OP_LAYER_WEIGHT)
+
+
+def reads_normal(program: Program | None) -> bool:
+    """Whether a program reads the hit's normal (NORMAL_OPS)."""
+    return program is not None and any(ins[0] in NORMAL_OPS for ins in program.code)
 
 
 @njit(**JIT)

@@ -1313,6 +1313,66 @@ def test_specular_tint_tints_every_fresnel(fresh, core):
         assert leaves[ctor].to_core(core).specular_tint == pytest.approx((0.2, 1.5, 0.0))
 
 
+def test_the_metallic_bsdf_is_the_principled_metal(fresh, core):
+    """The Metallic BSDF (F82): the Principled BSDF's metal, Base Color its F0 and Edge Tint
+    its F82 tint (a texture on either evaluated per point), with its roughness, anisotropy
+    and distribution; smooth, the delta metal. Thin film is warned. A Physical Conductor is
+    its F82 fit: F0 and the reflectance near 82 degrees those of its complex IOR, warned
+    with the fit's largest deviation. It was a grey diffuse."""
+    from engine import fresnel
+    mat, node = node_material("Brushed", "ShaderNodeBsdfMetallic", **{
+        "Base Color": (0.9, 0.6, 0.3, 1.0), "Edge Tint": (0.5, 0.8, 1.2, 1.0),
+        "Roughness": 0.3, "Anisotropy": 0.5, "Rotation": 0.125})
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.ctor == "metal"
+    m = spec.to_core(core)
+    assert (m.kind, m.roughness) == ("rough_metal", pytest.approx(0.3))
+    assert m.colour == pytest.approx((0.9, 0.6, 0.3))
+    assert m.reflection_tint == pytest.approx((0.5, 0.8, 1.0))
+    assert (m.specular_anisotropy, m.anisotropic_rotation) == (0.5, 0.125)
+    assert m.tangent_program is not None and m.multiscatter
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Edge Tint"])
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.kwargs["tint_program"] is not None
+    node.inputs["Roughness"].default_value = 0.0
+    node.inputs["Thin Film Thickness"].default_value = 200.0
+    node.distribution = "GGX"
+    spec, warnings = convert(mat)
+    assert spec.to_core(core).kind == "metal" and not spec.kwargs["multiscatter"]
+    assert len(warnings) == 1 and "Thin Film Thickness" in warnings[0]
+    node.inputs["Thin Film Thickness"].default_value = 0.0
+    node.fresnel_type = "PHYSICAL_CONDUCTOR"
+    n, k = (0.2, 0.9, 1.1), (3.9, 2.5, 2.1)
+    node.inputs["IOR"].default_value, node.inputs["Extinction"].default_value = n, k
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    assert m.colour == pytest.approx(fresnel.fresnel_conductor(1.0, n, k))
+    assert np.array(m.reflection_tint) * (np.array(m.colour) + (1 - np.array(m.colour))
+                                          * (6 / 7) ** 5) == pytest.approx(
+        fresnel.fresnel_conductor(1 / 7, n, k))
+    assert len(warnings) == 1 and "Physical Conductor" in warnings[0] and \
+        node.name in warnings[0] and "within 0.010 " in warnings[0]
+
+
+def test_the_conductor_fresnel_is_the_dielectric_at_no_extinction_and_fits_f82():
+    """fresnel_conductor at k = 0 is the exact dielectric Fresnel; for metals it lies above
+    it; its F82 fit is exact at cos 1 and 1/7 and close between (Cycles' own fit)."""
+    from engine import bsdf, fresnel
+    for cos in np.linspace(0.0, 1.0, 11):
+        assert fresnel.fresnel_conductor(cos, 1.5, 0.0) == pytest.approx(
+            fresnel.fresnel_dielectric(cos, 1.5, True)[0], abs=1e-12)
+        assert cos == 0.0 or fresnel.fresnel_conductor(cos, 1.5, 2.0) > fresnel.fresnel_conductor(
+            cos, 1.5, 0.0)
+    n, k = np.array([2.757, 2.513, 2.231]), np.array([3.867, 3.404, 3.009])
+    f0, tint, deviation = bsdf.conductor_as_f82(n, k)
+    for j in range(3):
+        for cos in (1.0, 1 / 7):
+            assert bsdf.fresnel_f82(cos, f0[j], bsdf.f82_tint_b(f0[j], tint[j])) == \
+                pytest.approx(fresnel.fresnel_conductor(cos, n[j], k[j]), abs=1e-9)
+    assert 0.005 < deviation < 0.02
+
+
 def add_displacement(mat, space="WORLD"):
     """A Displacement node on the Material Output (Midlevel 0.3, Scale 0.2) whose Height is
     the UV's u times 2."""
@@ -1371,6 +1431,46 @@ def test_displacement_is_a_bump_under_every_closure_without_a_normal(fresh, core
     spec, warnings = convert(mat)
     assert warnings == [] and all("height_program" not in leaf.kwargs
                                   for leaf in spec.leaves())
+
+
+def test_a_displaced_mix_reads_the_displaced_normal_where_its_factors_read_a_normal(
+        fresh, core):
+    """A mix under a displacement carries the height program (the kernel bumps the normal
+    its factors read) only where a factor at or below it reads the hit's normal: a Layer
+    Weight's, not a factor of the UV alone, whose choice the bump would not change (the
+    bump costs three height evaluations on every hit). A Texture Coordinate's Normal under
+    a displacement is warned: Specula's is the mesh's."""
+    mat, mix = node_material("Displaced mix", "ShaderNodeMixShader")
+    tree = mat.node_tree
+    diffuse, glossy = (tree.nodes.new(t) for t in ("ShaderNodeBsdfDiffuse",
+                                                    "ShaderNodeBsdfGlossy"))
+    tree.links.new(diffuse.outputs[0], mix.inputs[1])
+    tree.links.new(glossy.outputs[0], mix.inputs[2])
+    coords, xyz = tree.nodes.new("ShaderNodeTexCoord"), tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coords.outputs["UV"], xyz.inputs[0])
+    tree.links.new(xyz.outputs["X"], mix.inputs["Fac"])
+    add_displacement(mat)
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.ctor == "mix" and spec.kwargs.get("fac_program")
+    assert "height_program" not in spec.kwargs
+    assert all(leaf.kwargs["height_program"] is not None for leaf in spec.leaves())
+    weight = tree.nodes.new("ShaderNodeLayerWeight")
+    tree.links.new(weight.outputs["Facing"], mix.inputs["Fac"])
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.kwargs["height_program"] is not None
+    assert spec.to_core(core).sets_normal
+    outer = tree.nodes.new("ShaderNodeMixShader")  # the Layer Weight one level down
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(mix.outputs[0], outer.inputs[1])
+    tree.links.new(diffuse.outputs[0], outer.inputs[2])
+    tree.links.new(xyz.outputs["Y"], outer.inputs["Fac"])
+    tree.links.new(outer.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.kwargs["height_program"] is not None
+    tree.links.new(coords.outputs["Normal"], xyz.inputs[0])  # warned: the mesh's normal
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and "Texture Coordinate's Normal" in warnings[0] and \
+        coords.name in warnings[0] and "Displaced mix" in warnings[0]
 
 
 def test_bump_map_correction_off_is_warned():
@@ -1623,6 +1723,42 @@ def test_light_path_outputs_read_the_path_state(fresh, output):
                 "Transparent Depth": 6, "Transmission Depth": 7, "Portal Depth": 0,
                 "Is Singular Ray": 1, "Is Volume Scatter Ray": 1}[output]
     assert value == pytest.approx(expected)
+
+
+@pytest.mark.parametrize("smooth", [0.0, 1.5, -1.0])
+def test_light_falloff_scales_its_strength_by_the_ray_length(fresh, smooth):
+    """Light Falloff: Strength x L^0, L^1, L^2 (Quadratic, Linear, Constant) for the Light
+    Path's Ray Length L, times L^2 / (Smooth + L^2) where Smooth > 0 (Cycles'
+    svm_node_light_falloff). It was an unsupported node (the input's own value)."""
+    from engine import shading
+    mat, node = node_material("Fading", "ShaderNodeBsdfDiffuse")
+    falloff = mat.node_tree.nodes.new("ShaderNodeLightFalloff")
+    falloff.inputs["Strength"].default_value = 10.0
+    falloff.inputs["Smooth"].default_value = smooth
+    length = 2.5
+    for output, power in (("Quadratic", 0), ("Linear", 1), ("Constant", 2)):
+        mat.node_tree.links.new(falloff.outputs[output], node.inputs["Color"])
+        spec, warnings = convert(mat)
+        assert warnings == []
+        value = _program_at_state(spec.kwargs["colour_program"],
+                                  (shading.RAY_CAMERA, length, 0, 0, 0, 0, 0))
+        damping = length ** 2 / (smooth + length ** 2) if smooth > 0 else 1.0
+        assert value == pytest.approx(10.0 * length ** power * damping), output
+
+
+def test_camera_data_reads_the_point_in_camera_space(fresh):
+    """Camera Data: the shading point in camera space (the Texture Coordinate's Camera
+    map): its direction, its z and its length (Cycles' svm_node_camera)."""
+    mat, node = node_material("Viewed", "ShaderNodeBsdfDiffuse")
+    camera_data = mat.node_tree.nodes.new("ShaderNodeCameraData")
+    point = np.array([0.3, -0.4, 2.0])
+    for output, want in (("View Vector", point / np.linalg.norm(point)),
+                         ("View Z Depth", 2.0), ("View Distance", np.linalg.norm(point))):
+        mat.node_tree.links.new(camera_data.outputs[output], node.inputs["Color"])
+        spec, warnings = convert(mat)
+        assert warnings == []
+        got = _program_at(spec.kwargs["colour_program"], tuple(point))
+        np.testing.assert_allclose(got, np.broadcast_to(want, 3), rtol=1e-6), output
 
 
 def _program_at_state(program, state):

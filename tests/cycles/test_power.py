@@ -844,6 +844,68 @@ def _anisotropy_changed(scale=1.0, turn=0.0):
 
 
 @contextmanager
+def _falloff_unsmoothed():
+    """Light Falloff compiled as if its Smooth were 0."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeLightFalloff"]
+
+    def changed(c, node, out):
+        read = c.input
+        c.input = lambda s, kind: c.program.const([0.0]) if s.name == "Smooth" else read(s, kind)
+        try:
+            return compile_node(c, node, out)
+        finally:
+            del c.input
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeLightFalloff", changed)
+        yield
+
+
+@contextmanager
+def _depth_as_distance():
+    """Camera Data's View Z Depth compiled as its View Distance."""
+    from addon import shader_nodes
+
+    compile_node = shader_nodes.NODES["ShaderNodeCameraData"]
+
+    def changed(c, node, out):
+        if out.name == "View Z Depth":
+            out = node.outputs["View Distance"]
+        return compile_node(c, node, out)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setitem(shader_nodes.NODES, "ShaderNodeCameraData", changed)
+        yield
+
+
+def _edge_tint_white(scene, settings):
+    """Every metal's F82 edge tint white (Schlick's Fresnel from its F0), its tint programs
+    dropped."""
+    m = scene.materials
+    kinds = renderers.core().scene
+    tint = m.reflection_tint.copy()
+    tint[np.isin(m.kind, (kinds.METAL, kinds.ROUGH_METAL))] = 1.0
+    scene.materials = dataclasses.replace(m, reflection_tint=tint)
+    if scene.programs is not None:
+        scene.programs = scene.programs._replace(tint=np.full_like(scene.programs.tint, -1))
+    return scene, settings
+
+
+def _conductor_without_extinction(scene, settings):
+    """The Physical Conductor (the Metallic BSDF's defaults) fitted with Extinction 0."""
+    m = scene.materials
+    row = m.names.index("Conductor")
+    f0, tint, _ = renderers.core().bsdf.conductor_as_f82(
+        np.array([2.757, 2.513, 2.231]), np.zeros(3))
+    colour, edge = m.colour.copy(), m.reflection_tint.copy()
+    colour[row], edge[row] = f0, tint
+    scene.materials = dataclasses.replace(m, colour=colour, reflection_tint=edge)
+    return scene, settings
+
+
+@contextmanager
 def _tangents_in_object_space():
     """The radial tangents left in the object's own space (not turned into the world's)."""
     from addon import exporter
@@ -1486,6 +1548,15 @@ INJECTIONS = {
     "anisotropy_uv_tangent_as_radial": ("anisotropic", None, _uv_tangents_as_radial),
     "gltf_anisotropy_ignored": ("gltf_anisotropy_strength", _anisotropy_changed(scale=0.0),
                                 None),
+    # Light Falloff's Smooth ignored; Camera Data's View Z Depth read as its distance.
+    "light_falloff_smooth_ignored": ("falloff_and_camera_data", None, _falloff_unsmoothed),
+    "camera_data_depth_as_distance": ("falloff_and_camera_data", None, _depth_as_distance),
+    # Metallic BSDF: the Edge Tint ignored (white: Schlick's metal); the Physical
+    # Conductor's Extinction read as 0. (Its F82 fit without the tint, Schlick's from its
+    # F0, differs on a thin rim only and passed: max |z| 3.45.)
+    "metallic_edge_tint_ignored": ("metallic_bsdf", _edge_tint_white, None),
+    "metallic_conductor_without_extinction": ("metallic_bsdf", _conductor_without_extinction,
+                                              None),
     # Light Path: the shadow rays' flag never set; glossy rays read as diffuse ones; the
     # depth one less.
     "light_path_shadow_rays_unseen": ("light_path", None,

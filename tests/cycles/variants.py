@@ -2691,6 +2691,81 @@ def anisotropic():
     bpy.context.scene.collection.objects.link(mapped)
 
 
+def metallic_bsdf():
+    """The Metallic BSDF (issue 14, point 2: rough metal as Cycles renders it): a rough
+    copper ball, anisotropic, whose Edge Tint is a Checker of green and white; a smooth
+    pale ball of a strong blue Edge Tint (the delta metal); and a rough Physical Conductor
+    of the node's default IOR and Extinction (rendered as Cycles' F82 fit of it). An
+    emitter above the camera's view, in front of the box, lights their grazing rims."""
+    _box()
+    _emitter_quad("Front", (0.0, -1.6, 1.4), 0.5, 12.0, (-math.pi / 3, 0.0, 0.0))
+    copper = bs.material("Copper", "ShaderNodeBsdfMetallic",
+                         **{"Base Color": (0.95, 0.64, 0.54, 1.0), "Roughness": 0.25,
+                            "Anisotropy": 0.6, "Rotation": 0.1})
+    tree = copper.node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 4.0
+    checker.inputs["Color1"].default_value = (0.2, 0.9, 0.3, 1.0)
+    checker.inputs["Color2"].default_value = (1.0, 1.0, 1.0, 1.0)
+    metal = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfMetallic")
+    tree.links.new(checker.outputs["Color"], metal.inputs["Edge Tint"])
+    _sphere(copper, (-0.5, 0.2, 0.33), 0.33, "Copper")
+    pale = bs.material("Pale", "ShaderNodeBsdfMetallic",
+                       **{"Base Color": (0.9, 0.9, 0.85, 1.0), "Edge Tint": (0.1, 0.3, 1.0, 1.0),
+                          "Roughness": 0.0})
+    _sphere(pale, (0.5, 0.2, 0.3), 0.3, "Pale")
+    conductor = bs.material("Conductor", "ShaderNodeBsdfMetallic", Roughness=0.3)
+    next(n for n in conductor.node_tree.nodes
+         if n.bl_idname == "ShaderNodeBsdfMetallic").fresnel_type = "PHYSICAL_CONDUCTOR"
+    _sphere(conductor, (0.0, -0.45, 0.22), 0.22, "Conductor")
+
+
+def falloff_and_camera_data():
+    """Light Falloff and Camera Data (issue 14, point 1): an Emission card on the back wall
+    whose Strength is a Light Falloff's Linear output (Strength 1.2, Smooth 0.5: brighter
+    with the ray's length, the camera's and a light sample's alike); a Diffuse ball coloured
+    by the Camera Data's View Vector (its absolute value) and a cube by its View Z Depth
+    and by how much its View Distance exceeds it (scaled into colours)."""
+    _box()
+    card = bs.material("Fading", "ShaderNodeEmission", Color=(1.0, 0.9, 0.7, 1.0))
+    tree = card.node_tree
+    falloff = tree.nodes.new("ShaderNodeLightFalloff")
+    falloff.inputs["Strength"].default_value = 1.2
+    falloff.inputs["Smooth"].default_value = 0.5
+    tree.links.new(falloff.outputs["Linear"], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission").inputs["Strength"])
+    _card("Fading", (0.0, 0.95, 0.8), (0.8, 0.5), card)
+    viewed = bs.material("Viewed", "ShaderNodeBsdfDiffuse")
+    tree = viewed.node_tree
+    view = tree.nodes.new("ShaderNodeCameraData")
+    absolute = tree.nodes.new("ShaderNodeVectorMath")
+    absolute.operation = "ABSOLUTE"
+    tree.links.new(view.outputs["View Vector"], absolute.inputs[0])
+    tree.links.new(absolute.outputs[0], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse").inputs["Color"])
+    _sphere(viewed, (-0.45, 0.1, 0.3), 0.3, "Viewed")
+    ranged = bs.material("Ranged", "ShaderNodeBsdfDiffuse")
+    tree = ranged.node_tree
+    view = tree.nodes.new("ShaderNodeCameraData")
+    combine = tree.nodes.new("ShaderNodeCombineXYZ")
+    off_axis = tree.nodes.new("ShaderNodeMath")  # distance less depth: 0 on the view axis
+    off_axis.operation = "SUBTRACT"
+    tree.links.new(view.outputs["View Distance"], off_axis.inputs[0])
+    tree.links.new(view.outputs["View Z Depth"], off_axis.inputs[1])
+    for socket, value, scale in ((0, off_axis.outputs[0], 4.0),
+                                 (1, view.outputs["View Z Depth"], 0.25)):
+        times = tree.nodes.new("ShaderNodeMath")
+        times.operation = "MULTIPLY"
+        times.inputs[1].default_value = scale
+        tree.links.new(value, times.inputs[0])
+        tree.links.new(times.outputs[0], combine.inputs[socket])
+    combine.inputs[2].default_value = 0.3
+    tree.links.new(combine.outputs[0], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse").inputs["Color"])
+    cube = _cube("Ranged", (0.45, -0.1, 0.25), (0.3, 0.6, 0.5), ranged)
+    cube.rotation_euler = (0.0, 0.0, 0.6)
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -3526,6 +3601,9 @@ _add(Variant("wavelength", wavelength, resolution=(128, 32), max_bounces=0, samp
 _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("oren_nayar", oren_nayar, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("anisotropic", anisotropic, max_bounces=8, samples=1024, cycles_samples=2048))
+_add(Variant("metallic_bsdf", metallic_bsdf, max_bounces=8, samples=512, cycles_samples=1024))
+_add(Variant("falloff_and_camera_data", falloff_and_camera_data, max_bounces=8, samples=256,
+             cycles_samples=512))
 _add(Variant("light_path", light_path, resolution=(96, 72), max_bounces=8, samples=1024,
              cycles_samples=2048))
 _add(Variant("textured_glass", textured_glass, max_bounces=8, samples=512,

@@ -288,6 +288,28 @@ def test_programs_of_several_materials_keep_their_own_images_and_parameters():
     assert shading.colour_at(1, 0, 0.2, 0.2, pt, uv, reg, 0.5, 0.6, 0.7) == (0.5, 0.6, 0.7)
 
 
+def test_an_image_read_by_several_programs_is_stored_once():
+    """Two programs reading one Texture, and a Texture of the same texels under another
+    filter, keep one copy of the texels in the table; each lookup keeps its own filter."""
+    texels = np.random.default_rng(3).random((4, 4, 4)).astype(np.float32)
+    linear, closest = Texture("t", texels, "Linear"), Texture("t", texels, "Closest")
+    assert linear.texels is closest.texels is texels
+    progs = []
+    for tex in (linear, linear, closest):
+        p = Program()
+        p.out = p.image(tex, p.uv(""), False)
+        progs.append(p)
+    pt = shading.pack(progs, None, lambda name: 0)
+    assert len(pt.texels) == 16 and len(pt.textures) == 2
+    uv = np.zeros((1, 1, 3, 3), np.float32)
+    uv[0, 0, :, :2] = ((0.1, 0.1), (0.9, 0.1), (0.1, 0.9))
+    reg = np.zeros(shading.MAX_REGISTERS)
+    c = [shading.colour_at(m, 0, 0.3, 0.2, pt, uv, reg, -1.0, -1.0, -1.0) for m in range(3)]
+    alone = shading.pack([progs[2]], None, lambda name: 0)
+    assert c[0] == c[1] and c[2] == shading.colour_at(0, 0, 0.3, 0.2, alone, uv, reg,
+                                                       -1.0, -1.0, -1.0) and c[0] != c[2]
+
+
 def test_textures_validate_their_input():
     with pytest.raises(ValueError, match="'bad'.*interpolation"):
         Texture("bad", np.zeros((2, 2, 4)), "Bilinear")
