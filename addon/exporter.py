@@ -537,8 +537,32 @@ def light_settings(light, matrix_world, name, warn):
         spec.update(shape=light.shape, size_x=float(light.size), size_y=float(light.size_y),
                     spread=float(getattr(light, "spread", np.pi)))
     if getattr(light, "use_nodes", False) and getattr(light, "node_tree", None) is not None:
-        warn(f"light '{name}': light node trees are not supported; using its colour and power")
+        spec["power"] = tuple(power * light_tree_emission(light.node_tree, name, warn))
     return spec
+
+
+def light_tree_emission(tree, name, warn) -> np.ndarray:
+    """What a light's node tree multiplies its emission by, as Cycles evaluates it: the
+    Emission node on its Light Output, Color x Strength (white and 1 in the tree Blender
+    makes: no change); nothing there, 0 (it emits nothing, as in Cycles: checked on a
+    render). Anything else (a texture, Light Falloff, another shader) is warned and left
+    out (1)."""
+    out = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputLight"
+                and n.is_active_output), None)
+    link = None if out is None else shader_nodes.live_link(out.inputs["Surface"])
+    node = None if link is None else link.from_node
+    if node is None:
+        warn(f"light '{name}': its node tree has nothing on its Light Output; it emits "
+             f"nothing, as in Cycles")
+        return np.zeros(3)
+    if node.bl_idname == "ShaderNodeEmission" and not any(
+            shader_nodes.live_link(s) is not None for s in node.inputs if s.enabled):
+        return (np.array(node.inputs["Color"].default_value[:3], np.float64)
+                * float(node.inputs["Strength"].default_value))
+    warn(f"light '{name}': its node tree (node '{node.name}' ({node.bl_label or node.bl_idname})"
+         f" on its Light Output) is not supported beyond a constant Emission; using its "
+         f"colour and power")
+    return np.ones(3)
 
 
 def export(depsgraph) -> ExportedScene:

@@ -1038,6 +1038,8 @@ class _Reader:
             return self.with_alpha(node, self.principled(node))
         if kind == "ShaderNodeBsdfMetallic":
             return self.metallic(node)
+        if kind == "ShaderNodeGroup":  # (a group with its Group Output is looked through)
+            return self.empty_group(node)
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
         if kind == "ShaderNodeBsdfSheen":
@@ -1240,6 +1242,23 @@ class _Reader:
                       f"supported); rendered with the default tangent (radial about Z)")
         return {"specular_anisotropy": a, "anisotropic_rotation": r, "tangent_program": tangent,
                 **_with(program, "anisotropy_program")}
+
+    def empty_group(self, node):
+        """A group node giving no shader: its node tree missing (linked from a library
+        that could not be read: Blender keeps an empty placeholder) or without a Group
+        Output. Cycles renders it as no shader: black, and no light passes."""
+        tree = node.node_tree
+        library = getattr(tree, "library", None)
+        if tree is None:
+            why = "has no node group"
+        elif library is not None and getattr(tree, "is_missing", False):
+            why = (f"uses node group '{tree.name}' from library '{library.filepath}', which "
+                   f"could not be read")
+        else:
+            why = f"uses node group '{tree.name}', which has no Group Output"
+        self.warn(f"node '{node.name}' {why}; rendered black, as Cycles renders it (no shader)")
+        return MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),
+                                                                  "strength": 0.0})
 
     def metallic(self, node):
         """The Metallic BSDF: Cycles' F82 conductor of the Principled BSDF's metal (Base
@@ -1448,12 +1467,10 @@ class _Reader:
 
     def dielectric(self, node, specular_tint=None):
         """The Principled BSDF's dielectric part: a Lambert base under a GGX specular layer
-        (Cycles' Principled v2), its Fresnel under the Specular Tint (specular_tint's
-        keywords)."""
+        (Cycles' Principled v2; Multiscatter GGX compensated, GGX not, the base then taking
+        what the lobe's single scattering leaves), its Fresnel under the Specular Tint
+        (specular_tint's keywords)."""
         base, program = self.textured_colour(node, "Base Color")
-        if getattr(node, "distribution", "MULTI_GGX") != "MULTI_GGX" and self.rough(node):
-            self.warn(f"node '{node.name}' distribution GGX is not supported for the "
-                      f"dielectric layer; rendered as Multiscatter GGX")
         level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
             if "Specular IOR Level" in node.inputs else 0.5
         diffuse = {}
@@ -1464,6 +1481,7 @@ class _Reader:
         return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), **self.roughness(node),
             "ior": self.ior(node), "specular_ior_level": level,
+            "multiscatter": self.multiscatter(node),
             **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)}), **diffuse})
 
 

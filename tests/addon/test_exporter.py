@@ -263,6 +263,39 @@ def test_lights_are_exported_with_cycles_strength(fresh):
     assert not any("not supported" in w for w in exp.warnings)
 
 
+def test_a_light_node_tree_scales_its_emission_as_in_cycles(fresh):
+    """A light's node tree: its Emission's constant Color x Strength multiplies the light's
+    power (the tree Blender makes, white at 1, changes nothing and warns nothing); nothing
+    on the Light Output emits nothing (both as a Cycles render of the factory scene
+    measured: 2 x red, 0.4 x green at Color (1, 0.2, 0.2), Strength 2); a texture there
+    is warned and left out. It was always warned and left out."""
+    point = bpy.data.lights.new("Key", "POINT")
+    point.energy, point.color = 100.0, (1.0, 0.5, 0.25)
+    link(bpy.data.objects.new("Key", point))
+    point.use_nodes = True
+    tree = point.node_tree
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+
+    def exported():
+        exp = export(fresh)
+        return np.array(exp.lights[0]["power"]), exp.warnings
+    power, warnings = exported()
+    assert np.allclose(power, (100.0, 50.0, 25.0)) and warnings == []
+    emission.inputs["Color"].default_value = (1.0, 0.2, 0.2, 1.0)
+    emission.inputs["Strength"].default_value = 2.0
+    power, warnings = exported()
+    assert np.allclose(power, (200.0, 20.0, 10.0)) and warnings == []
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    tree.links.new(checker.outputs["Color"], emission.inputs["Color"])
+    power, warnings = exported()
+    assert np.allclose(power, (100.0, 50.0, 25.0))
+    assert len(warnings) == 1 and "'Key'" in warnings[0] and emission.name in warnings[0]
+    for old in list(tree.links):
+        tree.links.remove(old)
+    power, warnings = exported()
+    assert np.allclose(power, 0.0) and len(warnings) == 1 and "emits nothing" in warnings[0]
+
+
 def test_lights_reach_the_core(fresh, core):
     cube_object()
     link(bpy.data.objects.new("Key", bpy.data.lights.new("Key", "POINT"))).location = (0, 0, 3)

@@ -31,11 +31,13 @@ def convert(mat):
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
                                   "IOR": 1.45}, "principled",
      {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.45,
-      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0), "diffuse_roughness": 0.0}),
+      "specular_ior_level": 0.5, "multiscatter": True, "specular_tint": (1.0, 1.0, 1.0),
+      "diffuse_roughness": 0.0}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.5, 0.25, 0.125, 1), "Roughness": 0.3,
                                   "Diffuse Roughness": 0.8}, "principled",
      {"base_colour": (0.5, 0.25, 0.125), "roughness": 0.3, "ior": 1.5,
-      "specular_ior_level": 0.5, "specular_tint": (1.0, 1.0, 1.0), "diffuse_roughness": 0.8}),
+      "specular_ior_level": 0.5, "multiscatter": True, "specular_tint": (1.0, 1.0, 1.0),
+      "diffuse_roughness": 0.8}),
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.9, 0.6, 0.2, 1), "Metallic": 1.0,
                                   "Roughness": 0.0}, "metal",
      {"base_colour": (0.9, 0.6, 0.2), "roughness": 0.0, "multiscatter": True,
@@ -47,6 +49,7 @@ def convert(mat):
     ("ShaderNodeBsdfPrincipled", {"Base Color": (0.1, 0.1, 0.1, 1), "Emission Color":
                                   (1.0, 0.5, 0.0, 1), "Emission Strength": 4.0}, "principled",
      {"base_colour": (0.1, 0.1, 0.1), "roughness": 0.5, "ior": 1.5, "specular_ior_level": 0.5,
+      "multiscatter": True,
       "specular_tint": (1.0, 1.0, 1.0), "emission": (4.0, 2.0, 0.0), "diffuse_roughness": 0.0}),
 ])
 def test_supported_nodes(fresh, shader, inputs, ctor, kwargs):
@@ -1564,6 +1567,51 @@ def test_an_unsupported_node_inside_a_group_is_named(fresh):
     spec, warnings = convert(mat)
     assert spec.ctor == "diffuse" and spec.kwargs["colour"] == pytest.approx((0.2, 0.4, 0.6))
     assert any("InnerToon" in w for w in warnings), warnings
+
+
+def test_a_group_whose_tree_is_missing_renders_black_as_in_cycles(fresh, tmp_path):
+    """A material's group node whose node group was linked from a library that can no
+    longer be read (Blender keeps an empty placeholder; Khronos' glTF-Blender-IO test
+    scenes link theirs from a sibling folder) gives no shader: Cycles renders it black
+    (checked: 01_sphere.blend's sphere reads 0), so does Specula, warning with the group
+    and the library. It was a grey diffuse, warned as an unsupported node. So is a group
+    without a Group Output."""
+    import os
+    g = bpy.data.node_groups.new("Shell", "ShaderNodeTree")
+    g.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    g.links.new(g.nodes.new("ShaderNodeBsdfDiffuse").outputs[0],
+                g.nodes.new("NodeGroupOutput").inputs["BSDF"])
+    library = str(tmp_path / "shells.blend")
+    bpy.data.libraries.write(library, {g})
+    bpy.data.node_groups.remove(g)
+    with bpy.data.libraries.load(library, link=True) as (_, into):
+        into.node_groups = ["Shell"]
+    mat, placeholder = node_material("Linked", "ShaderNodeBsdfDiffuse")
+    mat.use_fake_user = True
+    tree = mat.node_tree
+    tree.nodes.remove(placeholder)
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.name = "Shell node"
+    node.node_tree = into.node_groups[0]
+    tree.links.new(node.outputs["BSDF"], next(
+        n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial").inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert warnings == [] and spec.ctor == "diffuse"  # (the library is there)
+    main = str(tmp_path / "main.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=main)
+    os.remove(library)
+    bpy.ops.wm.open_mainfile(filepath=main)
+    mat = bpy.data.materials["Linked"]
+    spec, warnings = convert(mat)
+    assert spec.ctor == "emission_only" and spec.kwargs["colour"] == (0.0, 0.0, 0.0)
+    assert len(warnings) == 1 and all(s in warnings[0] for s in (
+        "Linked", "Shell node", "'Shell'", "shells.blend", "could not be read", "black"))
+    empty = bpy.data.node_groups.new("Empty", "ShaderNodeTree")
+    empty.interface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    mat.node_tree.nodes["Shell node"].node_tree = empty
+    spec, warnings = convert(mat)
+    assert spec.ctor == "emission_only" and len(warnings) == 1 and \
+        "'Empty', which has no Group Output" in warnings[0]
 
 
 @pytest.mark.parametrize("shader, colour_socket, strength_socket", [

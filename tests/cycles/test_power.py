@@ -843,6 +843,13 @@ def _anisotropy_changed(scale=1.0, turn=0.0):
     return inject
 
 
+def _all_multiscatter(scene, settings):
+    """Every microfacet lobe Multiscatter GGX (energy compensated)."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, multiscatter=np.ones_like(m.multiscatter))
+    return scene, settings
+
+
 @contextmanager
 def _falloff_unsmoothed():
     """Light Falloff compiled as if its Smooth were 0."""
@@ -1548,6 +1555,8 @@ INJECTIONS = {
     "anisotropy_uv_tangent_as_radial": ("anisotropic", None, _uv_tangents_as_radial),
     "gltf_anisotropy_ignored": ("gltf_anisotropy_strength", _anisotropy_changed(scale=0.0),
                                 None),
+    # The Principled BSDF's GGX rendered as Multiscatter GGX (the old fallback).
+    "principled_ggx_as_multiscatter": ("principled_ggx", _all_multiscatter, None),
     # Light Falloff's Smooth ignored; Camera Data's View Z Depth read as its distance.
     "light_falloff_smooth_ignored": ("falloff_and_camera_data", None, _falloff_unsmoothed),
     "camera_data_depth_as_distance": ("falloff_and_camera_data", None, _depth_as_distance),

@@ -2766,6 +2766,25 @@ def falloff_and_camera_data():
     cube.rotation_euler = (0.0, 0.0, 0.6)
 
 
+def principled_ggx():
+    """The Principled BSDF's GGX distribution (the default of files from before Blender
+    4.0): no energy compensation on any lobe, the base under the dielectric taking what
+    its single scattering leaves. Rough dielectric balls (roughness 0.7 on orange, 0.95 at
+    IOR 2.2 on blue) and a rough metal half of Metallic 0.5."""
+    _box()
+    for name, centre, radius, inputs in (
+            ("GGXOrange", (-0.45, 0.15, 0.35), 0.35,
+             {"Base Color": (0.9, 0.45, 0.1, 1.0), "Roughness": 0.7}),
+            ("GGXBlue", (0.45, 0.15, 0.35), 0.35,
+             {"Base Color": (0.1, 0.25, 0.8, 1.0), "Roughness": 0.95, "IOR": 2.2}),
+            ("GGXHalf", (0.0, -0.45, 0.22), 0.22,
+             {"Base Color": (0.8, 0.8, 0.75, 1.0), "Roughness": 0.8, "Metallic": 0.5})):
+        mat = _principled(name, **inputs)
+        next(n for n in mat.node_tree.nodes
+             if n.bl_idname == "ShaderNodeBsdfPrincipled").distribution = "GGX"
+        _sphere(mat, centre, radius, name)
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -3602,6 +3621,7 @@ _add(Variant("translucency", translucency, max_bounces=8))
 _add(Variant("oren_nayar", oren_nayar, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("anisotropic", anisotropic, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("metallic_bsdf", metallic_bsdf, max_bounces=8, samples=512, cycles_samples=1024))
+_add(Variant("principled_ggx", principled_ggx, max_bounces=8, samples=512, cycles_samples=1024))
 _add(Variant("falloff_and_camera_data", falloff_and_camera_data, max_bounces=8, samples=256,
              cycles_samples=512))
 _add(Variant("light_path", light_path, resolution=(96, 72), max_bounces=8, samples=1024,
