@@ -9,9 +9,10 @@ changes what kind of thing an object is (a surface never becomes a light, a volu
 becomes an opaque wall).
 
 Fallbacks:
-  * no node tree / no Cycles output / nothing linked to Surface: diffuse of the
-    material's viewport colour (`diffuse_color`); but nothing on Surface and something on
-    Volume: an invisible boundary (crossed by paths and shadow rays, counted as Cycles
+  * no node tree (before 5.0): diffuse of the material's viewport colour (`diffuse_color`),
+    as Cycles; no Cycles output / nothing linked to Surface: black, no light passing (Cycles'
+    empty closure), warned; but nothing on Surface and something on Volume: an invisible
+    boundary (crossed by paths and shadow rays, counted as Cycles
     counts volume bounds) around the volume's medium.
   * Volume: its medium fills the mesh (absorption, Henyey-Greenstein scattering and
     emission of Volume Absorption, Volume Scatter, Principled Volume, Volume
@@ -172,6 +173,23 @@ PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_pro
 # The MaterialSpec keywords of an anisotropic GGX lobe (scene.Material.with_anisotropy).
 ANISOTROPY_KEYS = ("specular_anisotropy", "anisotropic_rotation", "tangent_program",
                    "anisotropy_program")
+
+
+# The volume shaders: on a Surface they make no closure (Cycles' svm_node_closure_volume
+# returns outside a volume).
+VOLUME_SHADERS = ("ShaderNodeVolumeAbsorption", "ShaderNodeVolumeScatter",
+                  "ShaderNodeVolumePrincipled", "ShaderNodeVolumeCoefficients")
+
+
+def no_shader(name):
+    """Cycles' empty closure: black, and no light passes (an unlinked shader input)."""
+    return MaterialSpec("emission_only", name, {"colour": (0.0, 0.0, 0.0), "strength": 0.0})
+
+
+def _is_no_shader(spec):
+    """Whether `spec` adds nothing: an emission of nothing (an Add Shader leaves it out)."""
+    return spec.ctor == "emission_only" and "emission_program" not in spec.kwargs and (
+        spec.kwargs["strength"] <= 0.0 or max(spec.kwargs["colour"]) <= 0.0)
 
 
 def default_material():
@@ -798,10 +816,11 @@ class _Reader:
                       f"Specula does not evaluate per point yet; rendered without the bump")
         return below if program is None else {**below, "height_program": program}
 
-    def viewport_fallback(self, why):
-        self.warn(f"{why}; rendered as diffuse of its viewport colour")
-        return MaterialSpec("diffuse", self.material.name,
-                            {"colour": _rgb(self.material.diffuse_color)})
+    def no_surface(self, why):
+        """A node tree giving the surface no shader renders black, and no light passes, as
+        Cycles renders it (measured: an unlinked Surface, no Material Output)."""
+        self.warn(f"{why}; rendered black, as Cycles renders it (no shader)")
+        return no_shader(self.material.name)
 
     def read(self):
         mat = self.material
@@ -817,7 +836,7 @@ class _Reader:
         self.note_view_layer_attributes(tree)
         out = tree.get_output_node('CYCLES')
         if out is None:
-            return self.viewport_fallback("no active Material Output node for Cycles")
+            return self.no_surface("no active Material Output node for Cycles")
         surface = out.inputs.get("Surface")
         link = None if surface is None else live_link(surface)
         volume = out.inputs.get("Volume")
@@ -828,7 +847,7 @@ class _Reader:
             # boundary light and shadow rays cross unchanged, around the medium (Cycles).
             return invisible_boundary(mat.name, medium)
         if link is None:
-            return self.viewport_fallback(f"nothing is linked to '{out.name}' Surface")
+            return self.no_surface(f"nothing is linked to '{out.name}' Surface")
         for socket_name, meaning in OUTPUT_IGNORED:
             sock = out.inputs.get(socket_name)
             ignored = None if sock is None else live_link(sock)
@@ -838,8 +857,7 @@ class _Reader:
                           f"({_label(src)}), which Specula ignores: {meaning}")
         source = _past_reroutes(link)
         if source is None:
-            return self.viewport_fallback(f"a reroute before '{out.name}' Surface leads "
-                                          f"nowhere")
+            return self.no_surface(f"a reroute before '{out.name}' Surface leads nowhere")
         spec = self.shader(source.from_node)
         _give_normal_map(spec, self.normal_map)
         self.displacement(out, spec)
@@ -1040,6 +1058,11 @@ class _Reader:
             return self.metallic(node)
         if kind == "ShaderNodeGroup":  # (a group with its Group Output is looked through)
             return self.empty_group(node)
+        if kind in VOLUME_SHADERS:
+            self.warn(f"node '{node.name}' ({_label(node)}) is a volume shader on the Surface, "
+                      f"where it adds nothing, as in Cycles (a medium goes on the Material "
+                      f"Output's Volume)")
+            return no_shader(name)
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
         if kind == "ShaderNodeBsdfSheen":
@@ -1073,13 +1096,14 @@ class _Reader:
             link = _past_reroutes(live_link(sock))
             self.normal_map = None
             part = self.shader(link.from_node) if link is not None else \
-                MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),
-                                                                   "strength": 0.0})
+                no_shader(self.material.name)
             _give_normal_map(part, self.normal_map)
             self.normal_map = None
             parts.append(part)
         if not add and program is None and fac in (0.0, 1.0):
             return parts[int(fac)]
+        if add and any(_is_no_shader(p) for p in parts):  # adding nothing is the other
+            return parts[1] if _is_no_shader(parts[0]) else parts[0]
         return self.mixed(parts[0], parts[1], fac, 2.0 if add else 1.0, program,
                           fac_socket=None if add else enabled_input(node, "Fac"))
 
@@ -1247,7 +1271,7 @@ class _Reader:
         """A group node giving no shader: its node tree missing (linked from a library
         that could not be read: Blender keeps an empty placeholder) or without a Group
         Output. Cycles renders it as no shader: black, and no light passes."""
-        tree = node.node_tree
+        tree = getattr(node.node_tree, "original", node.node_tree)  # (not the depsgraph's copy)
         library = getattr(tree, "library", None)
         if tree is None:
             why = "has no node group"
@@ -1257,8 +1281,7 @@ class _Reader:
         else:
             why = f"uses node group '{tree.name}', which has no Group Output"
         self.warn(f"node '{node.name}' {why}; rendered black, as Cycles renders it (no shader)")
-        return MaterialSpec("emission_only", self.material.name, {"colour": (0.0, 0.0, 0.0),
-                                                                  "strength": 0.0})
+        return no_shader(self.material.name)
 
     def metallic(self, node):
         """The Metallic BSDF: Cycles' F82 conductor of the Principled BSDF's metal (Base

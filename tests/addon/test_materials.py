@@ -281,21 +281,38 @@ def test_material_index_is_the_materials_pass_index(fresh):
     assert convert(mat)[0].kwargs["roughness"] == pytest.approx(0.7)
 
 
-def test_unlinked_surface_uses_viewport_colour(fresh):
+def test_unlinked_surface_renders_black_as_in_cycles(fresh):
+    """Nothing on the Surface: no shader, black with no light passing, as a Cycles render
+    of the factory cube shows (its pixels 0, its shadow kept); it was the viewport
+    colour's diffuse. A volume shader on the Surface makes no closure there either (Cycles'
+    svm_node_closure_volume), and beside a BSDF in an Add Shader it adds nothing."""
     mat, node = node_material("Bare", "ShaderNodeBsdfDiffuse")
     mat.node_tree.nodes.remove(node)
     mat.diffuse_color = (0.2, 0.5, 0.7, 1.0)
     spec, warnings = convert(mat)
-    assert spec.kwargs["colour"] == pytest.approx((0.2, 0.5, 0.7), abs=1e-6)
-    assert len(warnings) == 1 and "viewport colour" in warnings[0]
+    assert spec.ctor == "emission_only" and spec.kwargs["colour"] == (0.0, 0.0, 0.0)
+    assert len(warnings) == 1 and "black, as Cycles" in warnings[0]
+    tree = mat.node_tree
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    volume = tree.nodes.new("ShaderNodeVolumeAbsorption")
+    tree.links.new(volume.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert spec.ctor == "emission_only" and spec.kwargs["colour"] == (0.0, 0.0, 0.0)
+    assert len(warnings) == 1 and volume.name in warnings[0] and "adds nothing" in warnings[0]
+    add, glossy = tree.nodes.new("ShaderNodeAddShader"), tree.nodes.new("ShaderNodeBsdfGlossy")
+    tree.links.new(glossy.outputs[0], add.inputs[0])
+    tree.links.new(volume.outputs[0], add.inputs[1])
+    tree.links.new(add.outputs[0], out.inputs["Surface"])
+    spec, warnings = convert(mat)
+    assert spec.ctor == "glossy" and len(warnings) == 1
 
 
-def test_no_cycles_output_uses_viewport_colour(fresh):
+def test_no_cycles_output_renders_black(fresh):
     mat, _ = node_material("EeveeOnly", "ShaderNodeBsdfDiffuse")
     out = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     out.target = "EEVEE"
     spec, warnings = convert(mat)
-    assert spec.ctor == "diffuse" and len(warnings) == 1
+    assert spec.ctor == "emission_only" and len(warnings) == 1 and "Cycles" in warnings[0]
 
 
 def test_reroute_is_followed(fresh):
@@ -355,9 +372,11 @@ def test_mix_and_add_shaders_mix_their_shaders(fresh, core):
     tree.links.new(diffuse.outputs[0], add.inputs[0])
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     tree.links.new(add.outputs[0], out.inputs["Surface"])
+    spec, _ = convert(mat)  # an unlinked input adds no shader: the diffuse alone
+    assert spec.ctor == "diffuse"
+    tree.links.new(glossy.outputs[0], add.inputs[1])
     spec, _ = convert(mat)
     assert (spec.ctor, spec.kwargs["fac"], spec.kwargs["scale"]) == ("mix", 0.5, 2.0)
-    assert spec.kwargs["second"].ctor == "emission_only"  # unlinked: no shader, black
 
 
 def test_materials_without_nodes_use_viewport_colour(fresh):
