@@ -395,6 +395,26 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
             m["anisotropy"] = {"value": _r(stretch.uniform(low, 0.9 if low < 0 else 1.0), 3),
                                "rotation": _r(stretch.random(), 3)
                                if stretch.random() < 0.5 else 0.0}
+    # Some Principled BSDFs of the GGX distribution (no energy compensation: files from
+    # before Blender 4.0), from a stream of their own.
+    plain = np.random.default_rng([seed, 0x6611])
+    for o in params["objects"]:
+        if o["material"]["kind"] in ("principled", "metal", "principled_glass") and \
+                plain.random() < 0.25:
+            o["material"]["ggx"] = True
+    # Some metals a Metallic BSDF (F82 of the same base colour and tint, or a Physical
+    # Conductor of a metal's complex IOR, which has no colour to texture), where nothing
+    # else lies on the Principled BSDF (coat, sheen, alpha, emission), from a stream of
+    # their own.
+    metallic = np.random.default_rng([seed, 0x3e7b])
+    for o in params["objects"]:
+        m = o["material"]
+        if m["kind"] == "metal" and metallic.random() < 0.4 and not any(
+                m.get(k) for k in ("coat", "sheen", "alpha", "emission_strength")):
+            f82 = metallic.random() < 0.5
+            n, k = metallic.uniform(0.1, 3.0, 3), metallic.uniform(1.0, 5.0, 3)
+            m["metallic_bsdf"] = {"conductor": None if f82 or m.get("colour_texture") else
+                                  [[_r(c, 3) for c in n], [_r(c, 3) for c in k]]}
     if avoid_known:
         params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
@@ -441,6 +461,9 @@ def features(params) -> list[str]:
                  + (":bump" if m.get("bump") else "")
                  + (":displacement" if m.get("bump", {}).get("displacement") else "")
                  + (":specular_tint" if m.get("specular_tint") else "")
+                 + (":ggx" if m.get("ggx") else "")
+                 + ((":conductor" if m["metallic_bsdf"]["conductor"] else ":metallic_bsdf")
+                    if m.get("metallic_bsdf") else "")
                  + (":refraction" if m.get("refraction") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
@@ -662,6 +685,11 @@ def _simpler_material(m):
                     {k: v for k, v in m.items() if k != "specular_tint"}))
     if m.get("refraction"):
         out.append(("Glass, not Refraction", {k: v for k, v in m.items() if k != "refraction"}))
+    if m.get("ggx"):
+        out.append(("Multiscatter GGX", {k: v for k, v in m.items() if k != "ggx"}))
+    if m.get("metallic_bsdf"):
+        out.append(("Principled, not Metallic", {k: v for k, v in m.items()
+                                                 if k != "metallic_bsdf"}))
     if m.get("mix", {}).get("factor"):
         out.append(("constant mix factor", {**m, "mix": {k: v for k, v in m["mix"].items()
                                                          if k != "factor"}}))
@@ -877,6 +905,8 @@ def _bpy_surface_shader(name, m):
                            Roughness=m.get("roughness", 0.0), IOR=m["ior"])
     if kind == "emission":
         return bs.material(name, "ShaderNodeEmission", Color=rgba, Strength=m["strength"])
+    if m.get("metallic_bsdf"):
+        return _bpy_metallic(name, m, rgba, stretch)
     inputs = {"Base Color": rgba, "Roughness": m.get("roughness", 0.0),
               "Anisotropic": stretch["value"], "Anisotropic Rotation": stretch["rotation"]}
     if kind == "principled":
@@ -901,7 +931,28 @@ def _bpy_surface_shader(name, m):
     if m.get("emission_strength"):
         inputs.update({"Emission Color": (*m["emission_colour"], 1.0),
                        "Emission Strength": m["emission_strength"]})
-    return bs.material(name, "ShaderNodeBsdfPrincipled", **inputs)
+    mat = bs.material(name, "ShaderNodeBsdfPrincipled", **inputs)
+    if m.get("ggx"):
+        next(n for n in mat.node_tree.nodes
+             if n.bl_idname == "ShaderNodeBsdfPrincipled").distribution = "GGX"
+    return mat
+
+
+def _bpy_metallic(name, m, rgba, stretch):
+    """A metal as the Metallic BSDF: F82 (Base Color, Edge Tint) or a Physical Conductor."""
+    from blend_scenes import build_scenes as bs
+    mat = bs.material(name, "ShaderNodeBsdfMetallic", **{
+        "Base Color": rgba, "Edge Tint": (*m.get("specular_tint", (1.0, 1.0, 1.0)), 1.0),
+        "Roughness": m.get("roughness", 0.0), "Anisotropy": stretch["value"],
+        "Rotation": stretch["rotation"]})
+    node = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfMetallic")
+    conductor = m["metallic_bsdf"]["conductor"]
+    if conductor:
+        node.fresnel_type = "PHYSICAL_CONDUCTOR"
+        node.inputs["IOR"].default_value, node.inputs["Extinction"].default_value = conductor
+    if m.get("ggx"):
+        node.distribution = "GGX"
+    return mat
 
 
 def _world_map(scene, w):
