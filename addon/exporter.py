@@ -543,25 +543,34 @@ def light_settings(light, matrix_world, name, warn):
 
 def light_tree_emission(tree, name, warn) -> np.ndarray:
     """What a light's node tree multiplies its emission by, as Cycles evaluates it: the
-    Emission node on its Light Output, Color x Strength (white and 1 in the tree Blender
-    makes: no change); nothing there, 0 (it emits nothing, as in Cycles: checked on a
-    render). Anything else (a texture, Light Falloff, another shader) is warned and left
-    out (1)."""
+    Emission node on its Light Output, Color x Strength, each the constant its chain
+    reduces to (a Blackbody colour, a Light Falloff's Quadratic output without Smooth: its
+    Strength); white and 1 in the tree Blender makes: no change. Nothing there, or a group
+    whose tree is missing, emits nothing (as in Cycles: checked on a render). Anything
+    else (a texture, a falloff that varies with distance, another shader) is warned and
+    left out (1)."""
     out = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputLight"
                 and n.is_active_output), None)
     link = None if out is None else shader_nodes.live_link(out.inputs["Surface"])
     node = None if link is None else link.from_node
-    if node is None:
-        warn(f"light '{name}': its node tree has nothing on its Light Output; it emits "
+    if node is None or node.bl_idname == "ShaderNodeGroup":
+        what = "nothing" if node is None else f"group node '{node.name}' without its tree"
+        warn(f"light '{name}': its node tree has {what} on its Light Output; it emits "
              f"nothing, as in Cycles")
         return np.zeros(3)
-    if node.bl_idname == "ShaderNodeEmission" and not any(
-            shader_nodes.live_link(s) is not None for s in node.inputs if s.enabled):
-        return (np.array(node.inputs["Color"].default_value[:3], np.float64)
-                * float(node.inputs["Strength"].default_value))
+    if node.bl_idname == "ShaderNodeEmission":
+        reduce = materials.constant_of
+        (colour, c_notes), (strength, s_notes) = (reduce(node.inputs[s])
+                                                  for s in ("Color", "Strength"))
+        if colour is not None and strength is not None and not c_notes + s_notes:
+            return np.array(colour[:3], np.float64) * float(strength)
+        why = "; ".join(c_notes + s_notes) or "a chain Specula cannot reduce to a constant"
+        warn(f"light '{name}': its node tree's Emission varies ({why}); using its colour and "
+             f"power")
+        return np.ones(3)
     warn(f"light '{name}': its node tree (node '{node.name}' ({node.bl_label or node.bl_idname})"
-         f" on its Light Output) is not supported beyond a constant Emission; using its "
-         f"colour and power")
+         f" on its Light Output) is not supported beyond an Emission; using its colour and "
+         f"power")
     return np.ones(3)
 
 

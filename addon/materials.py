@@ -341,6 +341,18 @@ def _c_reroute(k, node, out):
     return k.input(node.inputs[0])
 
 
+def _c_light_falloff(k, node, out):
+    """Light Falloff's Quadratic output without Smooth is its Strength whatever the ray's
+    length (a light's node tree sets its strength so); the rest vary with it."""
+    smooth = k.input(node.inputs["Smooth"])
+    if out.name == "Quadratic" and smooth is not None and float(_convert(
+            smooth, "VALUE", "VALUE")) <= 0.0:
+        return k.input(node.inputs["Strength"])
+    k.notes.append(f"node '{node.name}' ({_label(node)}) output {out.name} varies with the "
+                   f"ray's length")
+    return None
+
+
 def _c_object_info(k, node, out):
     """Object Info's Material Index, the material's pass index; its other outputs vary."""
     return float(shader_nodes.MATERIAL_PASS_INDEX.get()) if out.name == "Material Index" \
@@ -502,6 +514,7 @@ def _c_vector_math(k, node, out):
 
 NODE_CONSTANTS = {
     "NodeReroute": _c_reroute,
+    "ShaderNodeLightFalloff": _c_light_falloff,
     "ShaderNodeObjectInfo": _c_object_info,
     "ShaderNodeAttribute": _c_attribute,
     "ShaderNodeRGB": _c_value,
@@ -1522,6 +1535,14 @@ def world_volume(world, image_cache=None):
     reader = _Reader(world, image_cache, label="world")
     medium = reader.volume(link)
     return (medium if _is_medium(medium) else None), reader.warnings
+
+
+def constant_of(socket):
+    """(the constant the chain behind an input reduces to, or None; the notes on what it
+    approximates, empty where it is exact): the material reader's reduction, for node
+    trees outside materials (a light's)."""
+    k = _Constants({})
+    return k.input(socket), k.notes
 
 
 def convert(material, image_cache=None):

@@ -263,12 +263,19 @@ def test_lights_are_exported_with_cycles_strength(fresh):
     assert not any("not supported" in w for w in exp.warnings)
 
 
+def core_blackbody(kelvin):
+    from engine import shading
+    return shading.blackbody(kelvin)
+
+
 def test_a_light_node_tree_scales_its_emission_as_in_cycles(fresh):
-    """A light's node tree: its Emission's constant Color x Strength multiplies the light's
-    power (the tree Blender makes, white at 1, changes nothing and warns nothing); nothing
-    on the Light Output emits nothing (both as a Cycles render of the factory scene
-    measured: 2 x red, 0.4 x green at Color (1, 0.2, 0.2), Strength 2); a texture there
-    is warned and left out. It was always warned and left out."""
+    """A light's node tree: its Emission's Color x Strength, each the constant its chain
+    reduces to, multiplies the light's power (the tree Blender makes, white at 1, changes
+    nothing and warns nothing; a Light Falloff's Quadratic output without Smooth is its
+    Strength, a Blackbody its colour); nothing on the Light Output emits nothing (both as
+    a Cycles render of the factory scene measured: 2 x red, 0.4 x green at Color (1, 0.2,
+    0.2), Strength 2); a texture or a falloff varying with distance is warned and left
+    out. It was always warned and left out."""
     point = bpy.data.lights.new("Key", "POINT")
     point.energy, point.color = 100.0, (1.0, 0.5, 0.25)
     link(bpy.data.objects.new("Key", point))
@@ -285,11 +292,28 @@ def test_a_light_node_tree_scales_its_emission_as_in_cycles(fresh):
     emission.inputs["Strength"].default_value = 2.0
     power, warnings = exported()
     assert np.allclose(power, (200.0, 20.0, 10.0)) and warnings == []
+    falloff = tree.nodes.new("ShaderNodeLightFalloff")  # (a 2.7x lamp's strength)
+    falloff.inputs["Strength"].default_value = 3.0
+    tree.links.new(falloff.outputs["Quadratic"], emission.inputs["Strength"])
+    power, warnings = exported()
+    assert np.allclose(power, (300.0, 30.0, 15.0)) and warnings == []
+    blackbody = tree.nodes.new("ShaderNodeBlackbody")
+    blackbody.inputs["Temperature"].default_value = 3000.0
+    tree.links.new(blackbody.outputs["Color"], emission.inputs["Color"])
+    power, warnings = exported()
+    want = np.array(core_blackbody(3000.0)) * 3.0 * np.array([100.0, 50.0, 25.0])
+    assert np.allclose(power, want) and warnings == []
+    tree.links.new(falloff.outputs["Linear"], emission.inputs["Strength"])
+    power, warnings = exported()  # varies with the distance: left out, warned
+    assert np.allclose(power, (100.0, 50.0, 25.0))
+    assert len(warnings) == 1 and "'Key'" in warnings[0] and "Linear" in warnings[0]
     checker = tree.nodes.new("ShaderNodeTexChecker")
     tree.links.new(checker.outputs["Color"], emission.inputs["Color"])
+    emission.inputs["Strength"].default_value = 1.0
+    tree.links.remove(emission.inputs["Strength"].links[0])
     power, warnings = exported()
     assert np.allclose(power, (100.0, 50.0, 25.0))
-    assert len(warnings) == 1 and "'Key'" in warnings[0] and emission.name in warnings[0]
+    assert len(warnings) == 1 and "'Key'" in warnings[0]
     for old in list(tree.links):
         tree.links.remove(old)
     power, warnings = exported()
