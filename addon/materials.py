@@ -1311,9 +1311,8 @@ class _Reader:
             return MaterialSpec("metal", self.material.name, {
                 "base_colour": base, **_with(program), "specular_tint": tint,
                 **_with(tint_program, "tint_program"), **kwargs})
-        n, k = (np.maximum(np.nan_to_num(np.asarray(
-            _convert(self.value(node, name, default), "VECTOR", "VECTOR"), np.float64)[:3]), 0.0)
-            for name, default in (("IOR", (1.5,) * 3), ("Extinction", (0.0,) * 3)))
+        n, k = (np.array(self.colour(node, name, default))  # (negative or NaN: 0)
+                for name, default in (("IOR", (1.5,) * 3), ("Extinction", (0.0,) * 3)))
         f0, tint, deviation = core.load().bsdf.conductor_as_f82(n, k)
         self.warn(f"node '{node.name}' Physical Conductor (IOR {_fmt(tuple(n))}, Extinction "
                   f"{_fmt(tuple(k))}) is rendered as Cycles' F82 fit of it (F0 {_fmt(tuple(f0))},"

@@ -1113,6 +1113,8 @@ def _n_light_falloff(c, node, out):
     power = {"Quadratic": None, "Linear": length, "Constant": squared}[out.name]
     if power is not None:
         strength = maths("MULTIPLY", strength, power)
+    if live_link(node.inputs["Smooth"]) is None and node.inputs["Smooth"].default_value <= 0:
+        return strength, "VALUE"  # (the common case: no smoothing to run at every hit)
     zero, one = p.const([0.0]), p.const([1.0])
     smoothed = maths("DIVIDE", squared, maths("ADD", smooth, squared))  # (safe: 0 over 0 is 0)
     on = maths("GREATER_THAN", smooth, zero)  # only a positive Smooth applies

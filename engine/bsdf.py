@@ -65,9 +65,8 @@ def conductor_as_f82(n, k) -> tuple:
     of the fit from the exact reflectance over the angles, any channel)."""
     mu = np.linspace(0.0, 1.0, 257)
     f0 = fresnel_conductor(1.0, n, k)
-    f82 = fresnel_conductor(1.0 / 7.0, n, k)
-    schlick = f0 + (1.0 - f0) * (6.0 / 7.0) ** 5
-    tint = np.minimum(f82 / np.maximum(schlick, 1e-300), 1.0)
+    schlick = np.array([fresnel_schlick_conductor(1.0 / 7.0, f) for f in f0])
+    tint = np.minimum(fresnel_conductor(1.0 / 7.0, n, k) / np.maximum(schlick, 1e-300), 1.0)
     exact = fresnel_conductor(mu[:, None], n, k)
     fit = np.array([[fresnel_f82(m, f0[j], f82_tint_b(f0[j], tint[j])) for j in range(3)]
                     for m in mu])

@@ -850,41 +850,27 @@ def _all_multiscatter(scene, settings):
     return scene, settings
 
 
-@contextmanager
 def _falloff_unsmoothed():
     """Light Falloff compiled as if its Smooth were 0."""
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeLightFalloff"]
-
-    def changed(c, node, out):
-        read = c.input
-        c.input = lambda s, kind: c.program.const([0.0]) if s.name == "Smooth" else read(s, kind)
-        try:
-            return compile_node(c, node, out)
-        finally:
-            del c.input
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeLightFalloff", changed)
-        yield
+    def replace(compile_node):
+        def changed(c, node, out):
+            read = c.input
+            c.input = lambda s, kind: c.program.const([0.0]) if s.name == "Smooth" \
+                else read(s, kind)
+            try:
+                return compile_node(c, node, out)
+            finally:
+                del c.input
+        return changed
+    return _node_replaced("ShaderNodeLightFalloff", replace)
 
 
-@contextmanager
 def _depth_as_distance():
     """Camera Data's View Z Depth compiled as its View Distance."""
-    from addon import shader_nodes
-
-    compile_node = shader_nodes.NODES["ShaderNodeCameraData"]
-
-    def changed(c, node, out):
-        if out.name == "View Z Depth":
-            out = node.outputs["View Distance"]
-        return compile_node(c, node, out)
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setitem(shader_nodes.NODES, "ShaderNodeCameraData", changed)
-        yield
+    def replace(compile_node):
+        return lambda c, node, out: compile_node(
+            c, node, node.outputs["View Distance"] if out.name == "View Z Depth" else out)
+    return _node_replaced("ShaderNodeCameraData", replace)
 
 
 def _edge_tint_white(scene, settings):
