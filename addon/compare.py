@@ -117,8 +117,8 @@ def _open(args):
     if args.resolution is not None:
         r.resolution_x, r.resolution_y = args.resolution
         r.resolution_percentage = 100
-    # Specula renders the world where Cycles' transparent film would leave alpha 0, and the
-    # comparison is of whole frames.
+    # The comparison is of RGB over whole frames: with the film opaque, the world the
+    # camera sees is compared too.
     r.film_transparent = False
     r.use_border = False
     s = scene.specula

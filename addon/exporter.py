@@ -369,6 +369,22 @@ class _Exporter:
             self.out.materials.append(spec)
         return index
 
+    def holdout_lut(self, obj, lut):
+        """The materials of an object marked Holdout (or in a Holdout collection of the view
+        layer): each slot's material held out from camera rays (materials.camera_holdout),
+        keeping its transparency as Cycles does."""
+        out = []
+        for k in lut.tolist():
+            index = self._material_index.get(("holdout", k))
+            if index is None:
+                spec, warnings = materials.camera_holdout(self.out.materials[k], obj.name)
+                for w in warnings:
+                    self.warn(w)
+                index = self._material_index[("holdout", k)] = len(self.out.materials)
+                self.out.materials.append(spec)
+            out.append(index)
+        return np.array(out, np.int32)
+
     def slot_lut(self, slots):
         return np.array([self.material(s) for s in slots], np.int32)
 
@@ -444,6 +460,8 @@ class _Exporter:
             lut = mesh_data.material_lut
         if len(lut) == 0:
             lut = np.array([self.material(None)], np.int32)
+        if obj.original.holdout_get(view_layer=self.depsgraph.view_layer):
+            lut = self.holdout_lut(obj, lut)
         name = obj.name if not inst.is_instance or inst.parent is None else \
             f"{inst.parent.name}/{obj.name}"
         self.out.instances.append(Instance(
@@ -785,7 +803,8 @@ def _rotation_only(vector):
 
 
 def render_settings_kwargs(scene, width, height, samples=None):
-    """Keyword arguments of the core's `RenderSettings` from `scene.specula`."""
+    """Keyword arguments of the core's `RenderSettings` from `scene.specula` (and Blender's
+    own Film > Transparent)."""
     s = scene.specula
     return dict(width=int(width), height=int(height),
                 samples=int(samples if samples is not None else s.samples),
@@ -796,7 +815,8 @@ def render_settings_kwargs(scene, width, height, samples=None):
                 fresnel=s.fresnel.lower(), filter_type=s.filter_type,
                 filter_width=float(s.filter_width), replicates=int(s.replicates),
                 replicate_range=replicate_range(s),
-                light_tracing=bool(s.use_light_tracing))
+                light_tracing=bool(s.use_light_tracing),
+                film_transparent=bool(scene.render.film_transparent))
 
 
 def replicate_range(s):

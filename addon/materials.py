@@ -74,7 +74,7 @@ PRINCIPLED_IGNORED = (
 # Material Output inputs beside Surface that Specula ignores, with what that means.
 OUTPUT_IGNORED = (("Thickness", "thickness is not used"),)
 # Leaves whose look does not depend on the shading normal.
-UNSHADED = ("transparent", "emission_only", "boundary")
+UNSHADED = ("transparent", "emission_only", "boundary", "holdout")
 
 
 def _layered(spec) -> bool:
@@ -190,6 +190,70 @@ def _is_no_shader(spec):
     """Whether `spec` adds nothing: an emission of nothing (an Add Shader leaves it out)."""
     return spec.ctor == "emission_only" and "emission_program" not in spec.kwargs and (
         spec.kwargs["strength"] <= 0.0 or max(spec.kwargs["colour"]) <= 0.0)
+
+
+def holdout(name):
+    """Cycles' Holdout: a hole in the image (alpha 0) where the camera sees it."""
+    return MaterialSpec("holdout", name, {})
+
+
+def _held_out(spec):
+    """What a camera ray sees of `spec` on a holdout object: Cycles keeps its transparent
+    closures and makes the rest one holdout (surface_shader_apply_holdout). A part with no
+    Transparent BSDF below it is a holdout; a mix keeps its factor over its parts held out.
+    None where a coat or sheen layer lies over transparency (not a plain mix)."""
+    if not any(p.ctor == "transparent" for p in spec.parts()):
+        return holdout(spec.name)
+    if spec.ctor != "mix":
+        return spec
+    k = spec.kwargs
+    if "coat_ior" in k or k.get("sheen_layer"):
+        return None
+    first, second = _held_out(k["first"]), _held_out(k["second"])
+    if first is None or second is None:
+        return None
+    kept = {key: k[key] for key in ("fac", "scale", "fac_program") if key in k}
+    return MaterialSpec("mix", spec.name, {"first": first, "second": second, **kept})
+
+
+def camera_holdout(spec, obj_name):
+    """(The spec of `spec` on the object `obj_name` marked Holdout, [warnings]): held out
+    (_held_out) to camera rays and `spec` to every other ray, as Cycles'
+    SD_OBJECT_HOLDOUT_MASK acts on camera paths only (integrate_surface_holdout), so the
+    object still shadows, reflects and lights the rest. A mix of the two by the Light
+    Path's Is Camera Ray; an emission is the mix's own, by the same factor (none to the
+    camera)."""
+    sh = core.load().shading
+    fac = sh.Program()
+    camera = fac.emit(sh.OP_LIGHT_PATH, 1, d=sh.LIGHT_PATH_OUTPUTS.index("Is Camera Ray"))
+    fac.out = fac.emit(sh.OP_COMBINE, 3, a=camera, b=camera, c=camera)
+    warnings = []
+    held = _held_out(spec)
+    if held is None:
+        warnings.append(f"object '{obj_name}' is a holdout: the transparency under the coat "
+                        f"or sheen of its material '{spec.name}' is not kept (Cycles keeps "
+                        f"it)")
+        held = holdout(spec.name)
+    kwargs = {"first": spec, "second": held, "fac": 0.0, "scale": 1.0, "fac_program": fac,
+              # The medium inside is the triangle's material's, the mix's as a whole.
+              **{key: spec.kwargs[key] for key in MEDIUM_KEYS if key in spec.kwargs}}
+    emission = _leaf_emission(spec) if spec.ctor != "mix" else np.zeros(3)
+    if spec.ctor == "mix" and any(max(_leaf_emission(leaf)) > 0 or
+                                  leaf.kwargs.get("emission_program") is not None
+                                  for leaf in spec.parts()) \
+            or spec.kwargs.get("emission_program") is not None:
+        warnings.append(f"object '{obj_name}' is a holdout: the emission of its material "
+                        f"'{spec.name}' is not held out from the camera (a mixed or "
+                        f"textured emission)")
+    elif max(emission) > 0:
+        spec = MaterialSpec(spec.ctor, spec.name, {k: v for k, v in spec.kwargs.items()
+                                                   if k not in ("emission", "strength")})
+        if spec.ctor == "emission_only":
+            spec.kwargs["strength"] = 0.0
+        kwargs["first"] = spec
+        kwargs["emission"] = tuple(float(e) for e in emission)
+        kwargs["emission_program"] = shader_nodes.mixed_by(fac, emission, (0.0, 0.0, 0.0))
+    return MaterialSpec("mix", spec.name, kwargs), warnings
 
 
 def default_material():
@@ -1078,6 +1142,8 @@ class _Reader:
             return no_shader(name)
         if kind == "ShaderNodeBsdfTransparent":
             return transparent(name, self.colour(node, "Color", (1.0, 1.0, 1.0)))
+        if kind == "ShaderNodeHoldout":
+            return holdout(name)
         if kind == "ShaderNodeBsdfSheen":
             if getattr(node, "distribution", "MICROFIBER") != "MICROFIBER":
                 self.warn(f"node '{node.name}' distribution {node.distribution} is not "

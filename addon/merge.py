@@ -11,7 +11,9 @@ more. The result is the same image and error, to the last bit, as one render of 
 replicates (tests/addon/test_merge.py): a still split across machines.
 
 Needs the OpenEXR package (a test and command-line dependency; the packaged add-on does not
-use it). Depth and Normal are not merged (they are not kept per replicate).
+use it). Depth and Normal are not merged (they are not kept per replicate). Each
+replicate's mean transparency ('Specula Replicate r Transparency': a transparent film or a
+holdout; zero otherwise) gives the merge's alpha (engine.film.alpha).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import numpy as np
 
 from . import console
 
-_PASS = re.compile(r"^(?P<layer>.*)\.Specula Replicate (?P<id>\d+)(?P<spread> Spread)?$")
+_PASS = re.compile(r"^(?P<layer>.*)\.Specula Replicate (?P<id>\d+)"
+                   r"(?P<kind> Spread| Transparency)?(\.X)?$")
 _SPAN = re.compile(r"^(\d+)-(\d+)/(\d+)$")
 
 
@@ -34,8 +37,8 @@ class MergeError(ValueError):
 
 
 def read(path):
-    """(header, {replicate id: (means (H, W, 3), counts (H, W), spread (H, W, 4))}, layer
-    name) of one EXR, rows from the top as stored."""
+    """(header, {replicate id: (means (H, W, 3), counts (H, W), spread (H, W, 4),
+    transparency (H, W) or None)}, layer name) of one EXR, rows from the top as stored."""
     import OpenEXR
     try:
         f = OpenEXR.File(path)
@@ -51,9 +54,15 @@ def read(path):
             if m is None:
                 continue
             px = np.asarray(channel.pixels, np.float32)
-            if px.ndim != 3 or px.shape[2] != 4:
+            kind = (m.group("kind") or "").strip()
+            if kind == "Transparency":
+                if px.ndim == 3 and px.shape[2] == 1:
+                    px = px[..., 0]
+                if px.ndim != 2:
+                    raise MergeError(f"{path}: pass '{name}' is not one channel")
+            elif px.ndim != 3 or px.shape[2] != 4:
                 raise MergeError(f"{path}: pass '{name}' is not RGBA")
-            found[(int(m.group("id")), bool(m.group("spread")))] = px
+            found[(int(m.group("id")), kind)] = px
             layer = m.group("layer")
     ids = sorted({r for r, _ in found})
     if not ids:
@@ -61,10 +70,11 @@ def read(path):
                          f"--replicates and an .exr output")
     replicates = {}
     for r in ids:
-        if (r, False) not in found or (r, True) not in found:
+        if (r, "") not in found or (r, "Spread") not in found:
             raise MergeError(f"{path}: replicate {r} lacks its mean or its spread pass")
-        px = found[(r, False)]
-        replicates[r] = (px[..., :3], px[..., 3], found[(r, True)])
+        px = found[(r, "")]
+        replicates[r] = (px[..., :3], px[..., 3], found[(r, "Spread")],
+                         found.get((r, "Transparency")))
     return header, replicates, layer
 
 
@@ -108,10 +118,18 @@ def merge(paths):
         return np.ascontiguousarray(np.stack(arrays, axis=2).reshape(h * w, len(ids),
                                                                      *channels))
 
-    est = film.estimate(stacked(1, ()).astype(np.int32), stacked(0, (3,)), stacked(2, (4,)),
-                        (h, w))
+    counts = stacked(1, ()).astype(np.int32)
+    est = film.estimate(counts, stacked(0, (3,)), stacked(2, (4,)), (h, w))
     combined = np.ones((h, w, 4), np.float32)
     combined[..., :3] = est.combined.reshape(h, w, 3)[::-1]
+    transparent = [gathered[r][0][3] is not None for r in ids]
+    if any(transparent) and not all(transparent):
+        r = ids[transparent.index(False)]
+        raise MergeError(f"{gathered[r][1]}: replicate {r} has no Transparency pass, unlike "
+                         f"{gathered[ids[transparent.index(True)]][1]} (written by an older "
+                         f"Specula?)")
+    if all(transparent):
+        combined[..., 3] = film.alpha(counts, stacked(3, ())).reshape(h, w)[::-1]
     contiguous = ids == list(range(ids[0], ids[-1] + 1))
     metadata = {
         "Specula Relative Error": f"{est.relative_error:.6g}",
@@ -133,12 +151,16 @@ def write(path, combined, error, replicates, metadata, layer):
                           f"{layer}.Combined"),
              OpenEXR.Part(dict(base), {f"{layer}.Specula Error.X": error},
                           f"{layer}.Specula Error")]
-    for r, (means, counts, spread) in replicates.items():
+    for r, (means, counts, spread, transparency) in replicates.items():
         rgba = np.concatenate([means, counts[..., None]], axis=2).astype(np.float32)
         name = f"{layer}.Specula Replicate {r}"
         parts.append(OpenEXR.Part(dict(base), {name: rgba}, name))
         parts.append(OpenEXR.Part(dict(base), {name + " Spread": np.ascontiguousarray(spread)},
                                   name + " Spread"))
+        if transparency is not None:
+            t_name = name + " Transparency"
+            parts.append(OpenEXR.Part(dict(base), {t_name + ".X": np.ascontiguousarray(
+                transparency, np.float32)}, t_name))
     os.makedirs(os.path.dirname(os.path.abspath(path)) or ".", exist_ok=True)
     OpenEXR.File(parts).write(path)
 

@@ -18,6 +18,8 @@ from . import core, exporter
 ERROR_PASS = "Specula Error"
 REPLICATE_PASS = "Specula Replicate {}"
 SPREAD_PASS = "Specula Replicate {} Spread"
+# The replicate's mean transparency (film.alpha; a transparent film or a holdout).
+TRANSPARENCY_PASS = "Specula Replicate {} Transparency"
 # The summary of the most recent render, for the command line's JSON line.
 last_summary: dict = {}
 
@@ -94,6 +96,10 @@ class RenderSession:
                                      'COLOR')
                 engine.register_pass(scene, view_layer, SPREAD_PASS.format(r), 4, "RGBA",
                                      'COLOR')
+                # (Zero where the render keeps no transparency: alpha 1, so merges of any
+                # renders read it alike.)
+                engine.register_pass(scene, view_layer, TRANSPARENCY_PASS.format(r), 1, "X",
+                                     'VALUE')
 
     def _write(self, layer, p):
         """Copy one core Pass into the result layer's passes (foreach_set, no lists)."""
@@ -120,6 +126,9 @@ class RenderSession:
             spread = passes.get(SPREAD_PASS.format(r))
             if spread is not None:
                 _set_rect(spread, p.replicate_m2[:, :, j])
+            transparency = passes.get(TRANSPARENCY_PASS.format(r))
+            if transparency is not None and p.replicate_transparency is not None:
+                _set_rect(transparency, p.replicate_transparency[:, :, j])
 
     def should_stop(self):
         """Esc in Blender (checked by the core between passes)."""

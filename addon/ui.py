@@ -89,6 +89,7 @@ class SPECULA_RENDER_PT_film(SpeculaPanel, bpy.types.Panel):
         s = context.scene.specula
         layout.prop(s, "filter_type")
         layout.prop(s, "filter_width")
+        layout.prop(context.scene.render, "film_transparent", text="Transparent")
 
 
 class SPECULA_VIEWLAYER_PT_passes(SpeculaPanel, bpy.types.Panel):

@@ -251,10 +251,14 @@ class Film:
         (Welford; R, G, B and luminance, float32). These are all the image and its error
         are made of, so films of disjoint replicate sets merge into exactly the film of
         their union (`estimate` over the gathered slots; addon/merge.py).
+    With a transparent film (`transparent`), each slot also keeps the running mean of its
+    samples' transparency (Cycles' film_write_transparent: the average throughput of a
+    camera path that reaches the world straight or through transparent surfaces), from
+    which the pixel's alpha follows (`alpha`); like the means, it merges exactly.
     Pixels are indexed row-major from the bottom row (Blender's order): index = y * W + x.
     """
 
-    def __init__(self, width: int, height: int, replicates=(0,)):
+    def __init__(self, width: int, height: int, replicates=(0,), transparent: bool = False):
         self.width, self.height = width, height
         self.replicates = tuple(int(r) for r in replicates)
         n, m = width * height, len(self.replicates)
@@ -262,27 +266,36 @@ class Film:
         self.replicate_count = np.zeros((n, m), np.int32)
         self.replicate_mean = np.zeros((n, m, 3), np.float32)
         self.replicate_m2 = np.zeros((n, m, 4), np.float32)
+        self.transparent = bool(transparent)
+        self.replicate_transparency = np.zeros((n, m) if transparent else (0, 0), np.float32)
         self.depth = np.zeros(n, np.float32)
         self.normal = np.zeros((n, 3), np.float32)
         self.rejected: list[str] = []
 
-    def add(self, pixels, slot, radiance, depth, normal, rejected=None) -> None:
+    def add(self, pixels, slot, radiance, depth, normal, rejected=None,
+            transparency=None) -> None:
         """Fold one sample for each pixel in `pixels` (n,), all of replicate slot `slot`,
         into the running statistics: radiance (n, 3), first-hit depth (n,) and normal
-        (n, 3). Updating per chunk keeps temporaries the size of a chunk, not of the image.
-        Samples with a non-finite radiance, depth or normal are left out; the integrator
-        names their stage in `rejected`."""
+        (n, 3), and with a transparent film the transparency (n,). Updating per chunk keeps
+        temporaries the size of a chunk, not of the image. Samples with a non-finite value
+        are left out; the integrator names their stage in `rejected`."""
         if rejected:
             self.rejected.extend(rejected)
-        _welford(pixels, slot, radiance, depth, normal, self.count, self.replicate_count,
-                 self.replicate_mean, self.replicate_m2, self.depth, self.normal, LUMINANCE)
+        if not self.transparent or transparency is None:
+            transparency = _NO_TRANSPARENCY
+        _welford(pixels, slot, radiance, depth, normal, transparency, self.count,
+                 self.replicate_count, self.replicate_mean, self.replicate_m2,
+                 self.replicate_transparency, self.depth, self.normal, LUMINANCE)
 
     def check_finite(self, sample: int) -> None:
         """Raise if any pass holds NaN or inf, naming the first bad pixel."""
         n = len(self.count)
         for name, arr in (("combined", self.replicate_mean), ("depth", self.depth),
-                          ("normal", self.normal), ("error", self.replicate_m2)):
+                          ("normal", self.normal), ("error", self.replicate_m2),
+                          ("alpha", self.replicate_transparency)):
             # One compiled pass, no temporaries: this runs after every pass.
+            if arr.size == 0:
+                continue
             i = _first_nonfinite_row(arr.reshape(n, -1))
             if i >= 0:
                 raise FloatingPointError(
@@ -302,12 +315,29 @@ class Film:
         h, w = self.height, self.width
         rgba = np.ones((h, w, 4), np.float32)
         rgba[..., :3] = est.combined.reshape(h, w, 3)
+        if self.transparent:
+            rgba[..., 3] = alpha(self.replicate_count, self.replicate_transparency).reshape(h, w)
         return Pass(combined=rgba, depth=self.depth.reshape(h, w).copy(),
                     normal=self.normal.reshape(h, w, 3).copy(), error=est.error.reshape(h, w),
                     variance=est.variance.reshape(h, w, 3), samples=samples, seconds=seconds,
                     relative_error=est.relative_error, progress=min(progress, 1.0),
                     error_interval=est.interval, dof=est.dof, t95=est.t95,
                     independent_relative_error=est.independent_relative_error)
+
+
+# What a film without transparency passes _welford in its place.
+_NO_TRANSPARENCY = np.zeros(0)
+
+
+def alpha(replicate_count, replicate_transparency) -> np.ndarray:
+    """Each pixel's alpha (n,) float32 from its replicates' counts (n, m) and mean
+    transparencies (n, m): one minus their count-weighted mean, within [0, 1] (Cycles'
+    combined pass: alpha = 1 - transparent / samples, saturated). A function of those
+    arrays alone, so a film and a merge of films give the same bits."""
+    counts = replicate_count.astype(np.float64)
+    total = counts.sum(axis=1)
+    mean = (counts * replicate_transparency).sum(axis=1) / np.maximum(total, 1.0)
+    return np.clip(1.0 - mean, 0.0, 1.0).astype(np.float32)
 
 
 def estimate(replicate_count, replicate_mean, replicate_m2, shape,
@@ -365,21 +395,27 @@ def estimate_of(result, radius: int | None = None) -> Estimate:
 
 
 @njit(**JIT)
-def _welford(pixels, slot, radiance, depth, normal, count, rcount, rmean, rm2, depth_acc,
-             normal_acc, lum):
+def _welford(pixels, slot, radiance, depth, normal, transparency, count, rcount, rmean, rm2,
+             rtransparency, depth_acc, normal_acc, lum):
     """Film.add: each sample into its replicate's running mean and sums of squared
-    deviations (Welford; float32, each rounded once per update) and the depth and normal
+    deviations (Welford; float32, each rounded once per update), with a transparent film
+    (transparency not empty) its replicate's mean transparency, and the depth and normal
     means; releases the GIL, so worker threads fold their own chunks."""
     f32 = np.float32
+    transparent = len(transparency) > 0
     for i in range(len(pixels)):
         r0, r1, r2, z = radiance[i, 0], radiance[i, 1], radiance[i, 2], depth[i]
         if not (np.isfinite(r0) and np.isfinite(r1) and np.isfinite(r2) and np.isfinite(z)
                 and np.isfinite(normal[i, 0]) and np.isfinite(normal[i, 1])
-                and np.isfinite(normal[i, 2])):
+                and np.isfinite(normal[i, 2])
+                and (not transparent or np.isfinite(transparency[i]))):
             continue
         p = pixels[i]
         k = rcount[p, slot] + 1
         rcount[p, slot] = k
+        if transparent:
+            old = rtransparency[p, slot]
+            rtransparency[p, slot] = f32(old + (transparency[i] - old) / k)
         y_old = 0.0
         y_new = 0.0
         for c in range(3):

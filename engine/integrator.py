@@ -5,7 +5,8 @@ compiled bounce, which runs these stages per ray:
 
     handle_light_hits -> traverse_medium [-> scatter_in_medium: a vertex in a medium]
     -> handle_escaped | choose_closure -> surface_interaction -> handle_emission
-    -> pass_through (transparent, volume boundary) | russian_roulette
+    -> pass_through (transparent, volume boundary) | surface_ends (limit, holdout)
+    -> russian_roulette
     -> sample_light (shadow ray queued) -> sample_bsdf -> spawn
 
 and, where the plan has transparent surfaces, shadow rays take closest hits in turn and
@@ -50,8 +51,9 @@ from .sampling import (BSDF, CLOSURE, DIM_FILTER, DIM_LENS, LIGHT_POINT, LIGHT_S
                        ROULETTE,
                        bounce_dim, hash_combine, pixel_seed, power_heuristic, reverse_bits,
                        sample_1d, sample_2d)
-from .scene import (BOUNDARY, DIFFUSE, GLASS, GLOSSY, METAL, MIRROR, MIX, NONE, PRINCIPLED,
-                    ROUGH_GLASS, ROUGH_METAL, SHEEN, TRANSLUCENT, TRANSPARENT, glass_tints)
+from .scene import (BOUNDARY, DIFFUSE, GLASS, GLOSSY, HOLDOUT, METAL, MIRROR, MIX, NONE,
+                    PRINCIPLED, ROUGH_GLASS, ROUGH_METAL, SHEEN, TRANSLUCENT, TRANSPARENT,
+                    glass_tints)
 
 # Shadow rays crossing transparent surfaces choose among a mix's shaders with the sampler
 # scrambled by this (and the crossing's number), apart from the path's own choices.
@@ -141,10 +143,12 @@ MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "sets_normal")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
-# exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's). A setting,
-# not a feature, so it is read at run time: one kernel serves both.
+# exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's);
+# film_transparent: Blender's Film > Transparent (camera paths that reach the world leave
+# the pixel transparent instead of seeing it). Settings, not features, so they are read at
+# run time: one kernel serves both.
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
-                                    "caustics camera_media exact_fresnel")
+                                    "caustics camera_media exact_fresnel film_transparent")
 # One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
 # current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
 # last BSDF sample (inf: delta or camera), the passes, and, for the weight against light
@@ -159,11 +163,12 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # the volume boundaries it crossed (counted apart, as Cycles does) and whether it crossed
 # a transparent surface since that vertex (Cycles' PATH_RAY_TRANSPARENT); with the Light Path
 # node (HAS_LIGHT_PATH), the flags of the ray that arrives (shading.RAY_*, Cycles'
-# PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3).
+# PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3); and per row the
+# transparency a transparent film keeps (handle_escaped).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
                             "camera_near prev_normal svm media bounce transparent mis_t "
-                            "bounds via_transparent flags kind_bounces")
+                            "bounds via_transparent flags kind_bounces transparency")
 # Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
 # path's transparent crossings plus its own, the sampler bounce of its vertex and the media
 # it is in (traced a segment at a time, media.MEDIA_STACK entries); with the Light Path
@@ -331,8 +336,13 @@ def handle_escaped(i, row, depth, sc, paths, mis):
     """Escaped rays take the world: the environment map, MIS-weighted against its light
     sampling, or a constant colour (found by BSDF sampling only, as in Cycles). A camera
     ray (depth 0: straight from the lens or on through transparent surfaces, which keep it
-    one) sees the map's camera image."""
+    one) sees the map's camera image. With a transparent film a camera ray sees no world:
+    it leaves the pixel transparent by its throughput's average (Cycles'
+    integrate_background; the world still lights the scene)."""
     t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
+    if depth == 0 and sc.film_transparent:
+        paths.transparency[row] += (t0 + t1 + t2) / 3.0
+        return
     if HAS_ENVIRONMENT and sc.emitters.env_entry >= 0:
         env = sc.emitters.environment
         dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
@@ -1380,6 +1390,19 @@ def bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths):
     return shading.RAY_GLOSSY | shading.RAY_SINGULAR | side
 
 
+def surface_ends(i, row, depth, k, max_bounces, paths):
+    """Whether path i ends at a surface of kind k: past the bounce limit (vertex
+    max_bounces + 1 only adds emission), without a BSDF, or held out. A holdout leaves a
+    camera path's pixel (depth 0: straight or through transparent surfaces) transparent by
+    the path's average throughput, the film transparent or not (Cycles'
+    integrate_surface_holdout: camera paths carry PATH_RAY_TRANSPARENT_BACKGROUND whatever
+    the film); to any other path it is a surface without a BSDF."""
+    if k == HOLDOUT and depth == 0:
+        paths.transparency[row] += (paths.throughput[i, 0] + paths.throughput[i, 1]
+                                    + paths.throughput[i, 2]) / 3.0
+    return depth > max_bounces or k == NONE or k == HOLDOUT
+
+
 def count_bounce(i, out, flags, paths):
     """Path i's flags and bounce counters as row `out` after a bounce of `flags`: a
     transmission counts as one, a diffuse or glossy reflection as one of its kind
@@ -1395,9 +1418,12 @@ def count_bounce(i, out, flags, paths):
         paths.kind_bounces[out, 1] += 1
 
 
-def write_passes(row, x, sc, paths):
-    """The Depth and Normal passes from the camera ray's first surface that is not crossed
-    (Cycles: the first one opaque enough)."""
+def write_passes(row, depth, x, k, sc, paths):
+    """The Depth and Normal passes from the camera ray's (depth 0) first surface that is
+    not crossed (Cycles: the first one opaque enough) nor held out."""
+    if depth != 0 or k == HOLDOUT or (HAS_TRANSPARENCY and (k == TRANSPARENT or
+                                                            k == BOUNDARY)):
+        return
     paths.depth[row] = camera.z_depth(x.px, x.py, x.pz, sc.camera)
     paths.normal[row, 0], paths.normal[row, 1], paths.normal[row, 2] = x.sx, x.sy, x.sz
     if DEBUG:
@@ -1532,8 +1558,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
                                          paths.d64[i, 2], mat, sc, paths)
         x = surface_interaction(i, f, mat, t_hit, bu[i], bv[i], sc, paths)
         k = sc.materials.kind[x.mat]
-        if depth == 0 and not (HAS_TRANSPARENCY and (k == TRANSPARENT or k == BOUNDARY)):
-            write_passes(row, x, sc, paths)
+        write_passes(row, depth, x, k, sc, paths)
         if HAS_EMISSION:
             handle_emission(i, row, depth, x, sc, paths, mis, max_bounces)
         if HAS_MIXES:  # after the emission, which is the whole mix's
@@ -1543,7 +1568,7 @@ def shade(step, rev_sample, max_bounces, transparent_max, sc, prim, tfar, bu, bv
             ended, out = cross_surface(i, out, row, x, k, tfar[i], transparent_max, sc, paths)
             if ended:
                 continue
-        if depth > max_bounces or k == NONE:  # (vertex max_bounces + 1 only adds emission)
+        if surface_ends(i, row, depth, k, max_bounces, paths):
             continue
         alive, t0, t1, t2 = russian_roulette(depth, vertex, paths.throughput[i, 0],
                                              paths.throughput[i, 1], paths.throughput[i, 2],
@@ -1673,7 +1698,8 @@ def all_finite(radiance, depth, normal):
 # structures are inlined into `shade` by numba; the entry points are compiled on their own
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
-    ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped, choose_closure,
+    ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped,
+    choose_closure, surface_ends,
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,

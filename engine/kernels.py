@@ -257,7 +257,8 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
     return c_contiguous(SceneData(
         geometry, materials, em, np.asarray(scene.world.colour, np.float64), camera,
         PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
-        camera_media, np.bool_(settings.fresnel == "exact")))
+        camera_media, np.bool_(settings.fresnel == "exact"),
+        np.bool_(settings.film_transparent)))
 
 
 def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:
@@ -356,7 +357,7 @@ class Tracer:
                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
                      np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n),
                      np.zeros(n, np.int64), np.zeros(n, np.bool_), np.zeros(n, np.int64),
-                     np.zeros((n, 3), np.int64))
+                     np.zeros((n, 3), np.int64), np.zeros(n))
 
     @staticmethod
     def shadow_rays(n: int) -> ShadowRays:
@@ -368,9 +369,10 @@ class Tracer:
 
     def trace_pixels(self, pixels: np.ndarray, sample: int, replicate: int = 0):
         """Sample `sample` of replicate `replicate` for each pixel id in `pixels` (n,):
-        radiance (n, 3), depth (n,), normal (n, 3) and, with a DEBUG kernel, the stage that
-        first went non-finite (n,). Replicate 0's first sample goes through the pixels'
-        middles, as Cycles' first sample."""
+        radiance (n, 3), depth (n,), normal (n, 3), with a DEBUG kernel the stage that
+        first went non-finite (n,), and the transparency the film keeps (n,; a transparent
+        film, holdouts). Replicate 0's first sample goes through the pixels' middles, as
+        Cycles' first sample."""
         k, s = self.kernel, self.settings
         n = len(pixels)
         paths = self.new_paths(n)
@@ -397,7 +399,7 @@ class Tracer:
             self._count_shade(time.perf_counter() - t0, profile)
             if count:
                 self.trace_shadow_rays(shadow, count, paths, rev_sample)
-        return paths.radiance, paths.depth, paths.normal, paths.nonfinite
+        return paths.radiance, paths.depth, paths.normal, paths.nonfinite, paths.transparency
 
     def trace_shadow_rays(self, shadow: ShadowRays, count: int, paths: Paths, rev_sample):
         """Add the contributions of the first `count` queued shadow rays that reach their

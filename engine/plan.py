@@ -19,6 +19,7 @@ from .scene import (
     DIFFUSE,
     GLASS,
     GLOSSY,
+    HOLDOUT,
     KIND_NAMES,
     METAL,
     MIRROR,
@@ -97,6 +98,9 @@ class Plan:
     oren_nayar: bool = False
     # Some GGX lobe used is anisotropic (bsdf.anisotropic_layer).
     anisotropy: bool = False
+    # Some material used is (or mixes in) a holdout: the film keeps each pixel's
+    # transparency, as it does for a transparent film.
+    holdout: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -261,7 +265,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
         rough_glass=ROUGH_GLASS in kinds, rough_metal=ROUGH_METAL in kinds,
-        absorber=NONE in kinds,
+        absorber=NONE in kinds, holdout=HOLDOUT in kinds,
         emitters=num_emitters + len(lights) > 0 or environment,
         num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,
         sun_discs=sun_discs, dof=dof, polygon_aperture=dof and cam.blades >= 3,

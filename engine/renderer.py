@@ -54,6 +54,9 @@ class RenderResult(Pass):
     replicate_count: np.ndarray | None = None
     replicate_mean: np.ndarray | None = None
     replicate_m2: np.ndarray | None = None
+    # With a transparent film, each replicate's mean transparency (H, W, m) float32
+    # (film.alpha); None otherwise.
+    replicate_transparency: np.ndarray | None = None
 
 
 class _Gate:
@@ -257,17 +260,18 @@ class _Worker:
         """Pass `index` for each pixel, with messages for samples that came out non-finite
         in any pass they feed (traced again by the DEBUG kernel to name the stage)."""
         _, replicate, sample = self.slot(index)
-        radiance, depth, normal, stage = tracer.trace_pixels(pixels, sample, replicate)
+        radiance, depth, normal, stage, transparency = tracer.trace_pixels(pixels, sample,
+                                                                           replicate)
         if tracer.kernel.all_finite(radiance, depth, normal):
-            return radiance, depth, normal, []
+            return radiance, depth, normal, transparency, []
         if self.debug:
             raise NonFiniteError(tracer.explain_nonfinite(pixels[stage > 0][:1], sample,
                                                           replicate, self.settings.width,
                                                           tracer)[0])
         bad = ~(np.all(np.isfinite(radiance), axis=1) & np.isfinite(depth)
                 & np.all(np.isfinite(normal), axis=1))
-        return radiance, depth, normal, self.kernel.explain_nonfinite(pixels[bad], sample,
-                                                                      replicate)
+        return radiance, depth, normal, transparency, self.kernel.explain_nonfinite(
+            pixels[bad], sample, replicate)
 
     def trace_light(self, light: _LightPass, k: int, first: int, count: int, index: int,
                     tracer) -> None:
@@ -287,7 +291,8 @@ class _Worker:
         timing) and a pass is folded whole or, if the render stopped, not at all."""
         if gate.discard:
             return
-        radiance, depth, normal, rejected = self.trace(self.frame_ids(local), index, tracer)
+        radiance, depth, normal, transparency, rejected = self.trace(self.frame_ids(local),
+                                                                     index, tracer)
         gate.opened.wait()
         if gate.discard:
             return
@@ -296,7 +301,8 @@ class _Worker:
             radiance = radiance + gate.light.for_chunk(int(local[0]), int(local[-1]) + 1)
             if local[0] == 0:  # said once per pass
                 rejected = rejected + gate.light.rejected
-        self.film.add(local, self.slot(index)[0], radiance, depth, normal, rejected)
+        self.film.add(local, self.slot(index)[0], radiance, depth, normal, rejected,
+                      transparency)
         self.timers("film", time.perf_counter() - t1)
 
 
@@ -344,7 +350,11 @@ def _prepare(scene, settings, debug):
     kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
     if debug:
         kernel.use_debug_kernel()
-    return plan, Film(x1 - x0, y1 - y0, settings.replicate_ids), timers, kernel
+    # The film keeps transparency where a pixel can have some: a transparent film or a
+    # holdout (which makes holes with the film opaque too, as in Cycles).
+    film = Film(x1 - x0, y1 - y0, settings.replicate_ids,
+                settings.film_transparent or plan.holdout)
+    return plan, film, timers, kernel
 
 
 # Light paths per job. Fixed, not the chunks' size: the jobs' sums are added in job order,
@@ -474,7 +484,9 @@ def _result(scene, settings, plan, film, timers, kernel, series, sample, elapsed
                         replicate_ids=film.replicates,
                         replicate_count=film.replicate_count.reshape(film.height, film.width, -1),
                         replicate_mean=film.replicate_mean.reshape(film.height, film.width, -1, 3),
-                        replicate_m2=film.replicate_m2.reshape(film.height, film.width, -1, 4))
+                        replicate_m2=film.replicate_m2.reshape(film.height, film.width, -1, 4),
+                        replicate_transparency=film.replicate_transparency.reshape(
+                            film.height, film.width, -1) if film.transparent else None)
 
 
 def warm_up() -> None:

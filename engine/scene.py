@@ -24,11 +24,12 @@ from .shading import VIEW_MAPS, Program, ProgramTable, absent_map_value, map_lab
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
- TRANSPARENT, TRANSLUCENT, SHEEN, BOUNDARY) = range(14)
+ TRANSPARENT, TRANSLUCENT, SHEEN, BOUNDARY, HOLDOUT) = range(15)
 KIND_NAMES = {NONE: "none", DIFFUSE: "diffuse", MIRROR: "mirror", METAL: "metal", GLASS: "glass",
               PRINCIPLED: "principled", GLOSSY: "glossy", ROUGH_GLASS: "rough_glass",
               ROUGH_METAL: "rough_metal", MIX: "mix", TRANSPARENT: "transparent",
-              TRANSLUCENT: "translucent", SHEEN: "sheen", BOUNDARY: "boundary"}
+              TRANSLUCENT: "translucent", SHEEN: "sheen", BOUNDARY: "boundary",
+              HOLDOUT: "holdout"}
 # Cycles treats a microfacet lobe as a perfect delta once alpha^2 = roughness^4 <= 2e-10.
 DELTA_ROUGHNESS = 2e-10 ** 0.25
 # Cycles refracts straight through (a delta) where the IOR is this close to 1, however rough.
@@ -147,6 +148,10 @@ class Material:
           toward the other side of the surface (diffuse light through a leaf or a lamp
           shade). It does not enter a medium inside the mesh (Cycles would).
         - none: no BSDF (a pure Emission shader): paths end here.
+        - holdout: Cycles' Holdout: a camera path (straight or through transparent
+          surfaces) ends here leaving the pixel transparent by its throughput's average,
+          whether or not the film is (integrate_surface_holdout); any other path ends
+          here as on `none`. Its Depth and Normal are not written.
         - transparent: Cycles' Transparent BSDF: light passes straight through, weighted by
           `colour`, as if the surface were not there (no bounce counted, only a transparent
           one); shadow rays cross it the same way (Cycles' transparent shadows). A
@@ -453,6 +458,11 @@ class Material:
     def transparent(cls, name, colour=(1, 1, 1)):
         """Cycles' Transparent BSDF: straight through, tinted by colour."""
         return cls(name, "transparent", tuple(colour))
+
+    @classmethod
+    def holdout(cls, name):
+        """Cycles' Holdout shader (and an object marked Holdout): a hole in the image."""
+        return cls(name, "holdout", (0.0, 0.0, 0.0))
 
     @classmethod
     def emission_only(cls, name, colour=(1, 1, 1), strength=1.0, emission_program=None):
@@ -997,6 +1007,9 @@ class RenderSettings:
         the render of their union (`python -m addon merge`).
     light_tracing : trace light paths for caustics where the plan finds they can occur
         (caustics.py); False leaves path tracing alone.
+    film_transparent : Blender's Film > Transparent: camera rays that reach the world,
+        straight or through transparent surfaces, leave the pixel transparent (alpha) and
+        do not see the world, which still lights the scene (Cycles).
     """
 
     width: int = 480
@@ -1017,6 +1030,7 @@ class RenderSettings:
     replicates: int = DEFAULT_REPLICATES
     replicate_range: tuple | None = None
     light_tracing: bool = True
+    film_transparent: bool = False
 
     @property
     def replicate_ids(self) -> tuple[int, ...]:

@@ -96,3 +96,31 @@ def test_render_json_exr_metadata_and_plot_carry_the_error_series(renders, tmp_p
                "--output", tmp_path / "x.exr")
     assert proc.returncode == 0, proc.stderr
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_merged_alpha_of_a_holdout_under_a_transparent_film_is_the_whole_renders(tmp_path):
+    """A transparent film with a holdout keeps each replicate's transparency as a pass of
+    its own; the merged alpha is the whole render's, to the last bit, and has holes (the
+    sphere held out, through the glass sphere too)."""
+    import bpy
+    bpy.ops.wm.open_mainfile(filepath=CBSPHERES)
+    bpy.data.objects["MirrorSphere"].is_holdout = True
+    bpy.context.scene.render.film_transparent = True
+    held = tmp_path / "held.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(held), copy=True)
+    out = {}
+    for name, replicates, samples in (("a", "0-1/4", 8), ("b", "2-3/4", 8),
+                                      ("whole", "4", 16)):
+        proc = run("render", held, "--resolution", "32x24", "--samples", samples, "--seed", 3,
+                   "--max-bounces", 3, "--replicates", replicates, "--output",
+                   tmp_path / f"{name}.exr")
+        assert proc.returncode == 0, proc.stderr
+        out[name], _ = passes(tmp_path / f"{name}.exr")
+    proc = run("merge", tmp_path / "a.exr", tmp_path / "b.exr", "-o", tmp_path / "m.exr")
+    assert proc.returncode == 0, proc.stderr
+    merged, _ = passes(tmp_path / "m.exr")
+    combined = out["whole"]["ViewLayer.Combined"]
+    np.testing.assert_array_equal(merged["ViewLayer.Combined"], combined)
+    alpha = combined[..., 3]
+    assert alpha.min() == 0.0 and alpha.max() == 1.0 and 0.8 < alpha.mean() < 0.99
+    assert "ViewLayer.Specula Replicate 3 Transparency.X" in merged

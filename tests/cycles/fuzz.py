@@ -415,6 +415,12 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
             n, k = metallic.uniform(0.1, 3.0, 3), metallic.uniform(1.0, 5.0, 3)
             m["metallic_bsdf"] = {"conductor": None if f82 or m.get("colour_texture") else
                                   [[_r(c, 3) for c in n], [_r(c, 3) for c in k]]}
+    # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
+    # Cycles' object holdout), from a stream of their own.
+    held = np.random.default_rng([seed, 0x401d])
+    for o in params["objects"]:
+        if held.random() < 0.1:
+            o["holdout"] = True
     if avoid_known:
         params = without_known(params, ("d", "e"))
     if not params["ceiling_emitter"] and not params["lights"] and \
@@ -464,7 +470,8 @@ def features(params) -> list[str]:
                  + (":ggx" if m.get("ggx") else "")
                  + ((":conductor" if m["metallic_bsdf"]["conductor"] else ":metallic_bsdf")
                     if m.get("metallic_bsdf") else "")
-                 + (":refraction" if m.get("refraction") else ""))
+                 + (":refraction" if m.get("refraction") else "")
+                 + (":holdout" if o.get("holdout") else ""))
     for light in params["lights"]:
         extra = [k for k in ("radius", "angle") if light.get(k)]
         if light.get("scale", [1, 1, 1]) != [1.0, 1.0, 1.0]:
@@ -1032,6 +1039,7 @@ def build(params):
         obj.data.update()
         obj.shadow_terminator_geometry_offset = o.get("terminator_offset", 0.1)
         obj.data.materials.append(_bpy_material(o["id"] + "Mat", o["material"]))
+        obj.is_holdout = bool(o.get("holdout"))
     for light in params["lights"]:
         data = bpy.data.lights.new(light["id"], light["type"])
         data.color = light["colour"]

@@ -162,3 +162,44 @@ def test_a_ray_through_a_transparent_surface_goes_on_by_cycles_transparent_rule(
     paths.via_transparent[0] = via
     paths.transparent[0] = crossed
     assert integrator.continuation_probability(0, depth, 8, paths) == expected
+
+
+def _frame_card(material):
+    """A white world and, before the camera, `material` on a card covering the left half of
+    the frame (x < 0) and nothing on the right."""
+    b = SceneBuilder()
+    m = b.add_material(material)
+    v, t = scenes.quad((-5.0, -5.0, -3.0), (0.0, -5.0, -3.0), (0.0, 5.0, -3.0),
+                       (-5.0, 5.0, -3.0))
+    b.add_mesh("card", v, t, m)
+    return b.build(Camera(), World((1.0, 1.0, 1.0)))
+
+
+@pytest.mark.parametrize("card, alpha_left", [
+    (Material.diffuse("matte", (0.5, 0.5, 0.5)), 1.0),
+    (Material.transparent("tint", (0.2, 0.5, 0.8)), 0.5),
+    (Material.holdout("hole"), 0.0)], ids=["opaque", "tinted", "holdout"])
+@pytest.mark.parametrize("film_transparent", [True, False], ids=["transparent", "opaque"])
+def test_alpha_is_one_minus_the_camera_paths_average_throughput_where_they_escape(
+        card, alpha_left, film_transparent):
+    """Film > Transparent: a camera ray reaching the world, straight or through a tinted
+    Transparent BSDF (throughput (0.2, 0.5, 0.8): alpha 1 - 0.5), leaves the pixel that
+    transparent and sees no world; a holdout leaves it wholly transparent and black, with
+    the film opaque too (Cycles). Far from the card's edge the values are exact."""
+    r = render(_frame_card(card), RenderSettings(width=16, height=8, samples=8,
+                                                 film_transparent=film_transparent))
+    rgba = r.combined
+    left, right = rgba[:, :5], rgba[:, -5:]
+    assert np.all(np.isfinite(rgba))
+    holdout = card.kind == "holdout"
+    want_left = alpha_left if (film_transparent or holdout) else 1.0
+    np.testing.assert_allclose(left[..., 3], want_left, atol=1e-6)
+    np.testing.assert_allclose(right[..., 3], 0.0 if film_transparent else 1.0, atol=1e-6)
+    np.testing.assert_allclose(right[..., :3], 0.0 if film_transparent else 1.0, atol=1e-6)
+    if holdout:
+        np.testing.assert_allclose(left[..., :3], 0.0, atol=1e-6)
+    elif card.kind == "transparent":  # the world through the tint, unless not seen
+        want = 0.0 if film_transparent else np.array([0.2, 0.5, 0.8])
+        np.testing.assert_allclose(left[..., :3], np.broadcast_to(want, left[..., :3].shape),
+                                   atol=1e-6)
+    assert (r.replicate_transparency is None) == (not film_transparent and not holdout)
