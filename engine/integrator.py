@@ -332,6 +332,13 @@ def handle_light_hits(i, row, depth, f, tfar, sc, paths, mis):
                     paths.radiance[row, 2])
 
 
+def leave_transparent(i, row, paths):
+    """Camera path i ends leaving its pixel (row) transparent by the average of its
+    throughput (Cycles' film_write_transparent and film_write_holdout)."""
+    paths.transparency[row] += (paths.throughput[i, 0] + paths.throughput[i, 1]
+                                + paths.throughput[i, 2]) / 3.0
+
+
 def handle_escaped(i, row, depth, sc, paths, mis):
     """Escaped rays take the world: the environment map, MIS-weighted against its light
     sampling, or a constant colour (found by BSDF sampling only, as in Cycles). A camera
@@ -341,7 +348,7 @@ def handle_escaped(i, row, depth, sc, paths, mis):
     integrate_background; the world still lights the scene)."""
     t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
     if depth == 0 and sc.film_transparent:
-        paths.transparency[row] += (t0 + t1 + t2) / 3.0
+        leave_transparent(i, row, paths)
         return
     if HAS_ENVIRONMENT and sc.emitters.env_entry >= 0:
         env = sc.emitters.environment
@@ -1398,8 +1405,7 @@ def surface_ends(i, row, depth, k, max_bounces, paths):
     integrate_surface_holdout: camera paths carry PATH_RAY_TRANSPARENT_BACKGROUND whatever
     the film); to any other path it is a surface without a BSDF."""
     if k == HOLDOUT and depth == 0:
-        paths.transparency[row] += (paths.throughput[i, 0] + paths.throughput[i, 1]
-                                    + paths.throughput[i, 2]) / 3.0
+        leave_transparent(i, row, paths)
     return depth > max_bounces or k == NONE or k == HOLDOUT
 
 
@@ -1698,8 +1704,8 @@ def all_finite(radiance, depth, normal):
 # structures are inlined into `shade` by numba; the entry points are compiled on their own
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
-    ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, handle_escaped,
-    choose_closure, surface_ends,
+    ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, leave_transparent,
+    handle_escaped, choose_closure, surface_ends,
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
