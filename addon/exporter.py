@@ -816,7 +816,9 @@ def render_settings_kwargs(scene, width, height, samples=None):
                 filter_width=float(s.filter_width), replicates=int(s.replicates),
                 replicate_range=replicate_range(s),
                 light_tracing=bool(s.use_light_tracing),
-                film_transparent=bool(scene.render.film_transparent))
+                film_transparent=bool(scene.render.film_transparent),
+                film_transparent_glass=bool(s.film_transparent_glass),
+                film_transparent_roughness=float(s.film_transparent_roughness))
 
 
 def replicate_range(s):

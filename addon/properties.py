@@ -58,6 +58,14 @@ class SpeculaSceneSettings(bpy.types.PropertyGroup):
     filter_width: FloatProperty(
         name="Filter Width", description="Pixel filter width in pixels", default=1.5,
         min=0.01, max=10.0, soft_max=3.0, subtype='PIXEL')
+    film_transparent_glass: BoolProperty(
+        name="Transparent Glass", description="With the film transparent, render the world "
+        "behind glass transparent too (its reflections stay), as Cycles' Film > Transparent "
+        "Glass: for compositing glass over another background", default=False)
+    film_transparent_roughness: FloatProperty(
+        name="Roughness Threshold", description="Glass rougher than this is rendered opaque "
+        "against the transparent world (Cycles' Transparent Glass Roughness Threshold)",
+        default=0.1, min=0.0, max=1.0)
     replicates: IntProperty(
         name="Replicates", description="Independent replicates of the sample sequence: the "
         "estimated error comes from how far they differ (more replicates: more to split "

@@ -24,7 +24,7 @@ TEMP_PREFIX = "specula_cycles_"
 def configure_cycles_unbiased(scene, samples, time_limit, seed, max_bounces):
     """Cycles without its biased defaults, so it can be compared with Specula: CPU, no
     denoising, adaptive sampling or clamping, Filter Glossy 0, light threshold 0, every
-    per-type bounce limit equal to the total, Specula's pixel filter."""
+    per-type bounce limit equal to the total, Specula's pixel filter and Transparent Glass."""
     c = scene.cycles
     s = scene.specula
     c.device = "CPU"
@@ -45,6 +45,8 @@ def configure_cycles_unbiased(scene, samples, time_limit, seed, max_bounces):
     c.transparent_max_bounces = s.transparent_max_bounces
     c.pixel_filter_type = s.filter_type
     c.filter_width = s.filter_width  # Film > Pixel Filter width
+    c.film_transparent_glass = s.film_transparent_glass
+    c.film_transparent_roughness = s.film_transparent_roughness
     for layer in scene.view_layers:
         layer.cycles.use_denoising = False
     return c

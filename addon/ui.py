@@ -90,6 +90,13 @@ class SPECULA_RENDER_PT_film(SpeculaPanel, bpy.types.Panel):
         layout.prop(s, "filter_type")
         layout.prop(s, "filter_width")
         layout.prop(context.scene.render, "film_transparent", text="Transparent")
+        # As Cycles' Film panel: Transparent Glass only matters with the film transparent.
+        sub = layout.column()
+        sub.active = context.scene.render.film_transparent
+        sub.prop(s, "film_transparent_glass")
+        glass = sub.column()
+        glass.active = s.film_transparent_glass
+        glass.prop(s, "film_transparent_roughness")
 
 
 class SPECULA_VIEWLAYER_PT_passes(SpeculaPanel, bpy.types.Panel):

@@ -84,7 +84,7 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
                   "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "HAS_OREN_NAYAR",
-                  "HAS_ANISOTROPY", "PROFILE", "DEBUG")
+                  "HAS_ANISOTROPY", "HAS_TRANSPARENT_GLASS", "PROFILE", "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -104,6 +104,8 @@ HAS_SHEEN = True  # microfiber sheen lobes (the Sheen BSDF, Principled sheen lay
 HAS_LIGHT_PATH = True  # programs read the path's state (the Light Path node): paths keep it
 HAS_OREN_NAYAR = True  # Diffuse BSDFs with roughness (bsdf.oren_nayar_ratio)
 HAS_ANISOTROPY = True  # anisotropic GGX lobes (bsdf.anisotropic_layer)
+# Film > Transparent Glass: camera paths stay camera paths through clear glass (clear_glass)
+HAS_TRANSPARENT_GLASS = True
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -145,10 +147,13 @@ MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
 # exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's);
 # film_transparent: Blender's Film > Transparent (camera paths that reach the world leave
-# the pixel transparent instead of seeing it). Settings, not features, so they are read at
-# run time: one kernel serves both.
+# the pixel transparent instead of seeing it); clear_glass: the largest GGX alpha_x alpha_y
+# of a glass transmission camera paths see that transparency through (Cycles' Transparent
+# Glass; -1: none, RenderSettings.clear_glass_threshold). Settings, not features, so they
+# are read at run time: one kernel serves every value.
 SceneData = namedtuple("SceneData", "geometry materials emitters world camera film_filter "
-                                    "caustics camera_media exact_fresnel film_transparent")
+                                    "caustics camera_media exact_fresnel film_transparent "
+                                    "clear_glass")
 # One batch of paths (rows of the batch): the live rows, each pixel's sequence seed, the
 # current ray in float64 and in embree's float32 buffers, throughput and the pdf of the
 # last BSDF sample (inf: delta or camera), the passes, and, for the weight against light
@@ -163,12 +168,15 @@ SceneData = namedtuple("SceneData", "geometry materials emitters world camera fi
 # the volume boundaries it crossed (counted apart, as Cycles does) and whether it crossed
 # a transparent surface since that vertex (Cycles' PATH_RAY_TRANSPARENT); with the Light Path
 # node (HAS_LIGHT_PATH), the flags of the ray that arrives (shading.RAY_*, Cycles'
-# PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3); and per row the
-# transparency a transparent film keeps (handle_escaped).
+# PATH_RAY_*) and its diffuse, glossy and transmission bounces (n, 3); per row the
+# transparency a transparent film keeps (handle_escaped); with Transparent Glass
+# (HAS_TRANSPARENT_GLASS), whether each path has bounced only through clear glass
+# (clear_glass).
 Paths = namedtuple("Paths", "live pseed o64 d64 origin32 dir32 tmax32 throughput prev_pdf "
                             "radiance depth normal nonfinite caustic_q caustic_eta "
                             "camera_near prev_normal svm media bounce transparent mis_t "
-                            "bounds via_transparent flags kind_bounces transparency")
+                            "bounds via_transparent flags kind_bounces transparency "
+                            "through_glass")
 # Shadow rays (float32 for embree) and what each adds if it arrives; with transparency, its
 # path's transparent crossings plus its own, the sampler bounce of its vertex and the media
 # it is in (traced a segment at a time, media.MEDIA_STACK entries); with the Light Path
@@ -339,15 +347,34 @@ def leave_transparent(i, row, paths):
                                 + paths.throughput[i, 2]) / 3.0
 
 
+def transparent_background(i, depth, paths):
+    """Whether path i is still what Cycles calls PATH_RAY_TRANSPARENT_BACKGROUND: a camera
+    path straight from the lens or on through transparent surfaces (depth 0), or with
+    Transparent Glass one whose every bounce was a clear glass transmission."""
+    return depth == 0 or (HAS_TRANSPARENT_GLASS and paths.through_glass[i])
+
+
+def clear_glass(k, alpha, cos_n, threshold):
+    """Whether a bounce off a surface of kind k (its rough lobe's GGX alpha) toward a
+    direction at cos_n to its normal on the incoming side keeps a camera path seeing the
+    film's transparency (Cycles' LABEL_TRANSMIT_TRANSPARENT, bsdf_sample): a transmission
+    (cos_n < 0) through glass whose alpha_x alpha_y (0 for smooth glass) is at most the
+    Transparent Glass threshold (negative: none is)."""
+    if threshold < 0.0 or cos_n >= 0.0:
+        return False
+    return k == GLASS or (k == ROUGH_GLASS and alpha * alpha <= threshold)
+
+
 def handle_escaped(i, row, depth, sc, paths, mis):
     """Escaped rays take the world: the environment map, MIS-weighted against its light
     sampling, or a constant colour (found by BSDF sampling only, as in Cycles). A camera
     ray (depth 0: straight from the lens or on through transparent surfaces, which keep it
-    one) sees the map's camera image. With a transparent film a camera ray sees no world:
-    it leaves the pixel transparent by its throughput's average (Cycles'
-    integrate_background; the world still lights the scene)."""
+    one) sees the map's camera image. With a transparent film a camera ray (and one
+    through clear glass, transparent_background) sees no world: it leaves the pixel
+    transparent by its throughput's average (Cycles' integrate_background; the world
+    still lights the scene)."""
     t0, t1, t2 = paths.throughput[i, 0], paths.throughput[i, 1], paths.throughput[i, 2]
-    if depth == 0 and sc.film_transparent:
+    if sc.film_transparent and transparent_background(i, depth, paths):
         leave_transparent(i, row, paths)
         return
     if HAS_ENVIRONMENT and sc.emitters.env_entry >= 0:
@@ -1342,6 +1369,7 @@ def spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf,
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
         paths.via_transparent[out] = False
+    paths.through_glass[out] = False  # (a volume scatter ends Transparent Glass)
     paths.o64[out, 0], paths.o64[out, 1], paths.o64[out, 2] = px, py, pz
     paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
     for j in range(3):
@@ -1400,11 +1428,11 @@ def bounce_flags(row, vertex, x, k, lobe, wx, wy, wz, rev_sample, paths):
 def surface_ends(i, row, depth, k, max_bounces, paths):
     """Whether path i ends at a surface of kind k: past the bounce limit (vertex
     max_bounces + 1 only adds emission), without a BSDF, or held out. A holdout leaves a
-    camera path's pixel (depth 0: straight or through transparent surfaces) transparent by
-    the path's average throughput, the film transparent or not (Cycles'
-    integrate_surface_holdout: camera paths carry PATH_RAY_TRANSPARENT_BACKGROUND whatever
-    the film); to any other path it is a surface without a BSDF."""
-    if k == HOLDOUT and depth == 0:
+    camera path's pixel (transparent_background) transparent by the path's average
+    throughput, the film transparent or not (Cycles' integrate_surface_holdout: camera
+    paths carry PATH_RAY_TRANSPARENT_BACKGROUND whatever the film); to any other path it is
+    a surface without a BSDF."""
+    if k == HOLDOUT and transparent_background(i, depth, paths):
         leave_transparent(i, row, paths)
     return depth > max_bounces or k == NONE or k == HOLDOUT
 
@@ -1461,6 +1489,7 @@ def pass_through(i, out, row, x, tfar, boundary, sc, paths):
     # (A boundary leaves the flags as they were: Cycles' volume-only bounce skips
     # path_state_next.)
     paths.via_transparent[out] = paths.via_transparent[i] or not boundary
+    paths.through_glass[out] = paths.through_glass[i]
     paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
     if HAS_LIGHT_PATH:  # the ray goes on as the same kind of ray (a camera ray stays one)
         paths.flags[out] = paths.flags[i]
@@ -1491,7 +1520,11 @@ def spawn(i, out, row, depth, vertex, x, k, lobe, wx, wy, wz, t0, t1, t2, pdf, r
     whose rough lobe is `lobe`) as row `out` of the compacted batch: leave the surface
     toward the side of the new direction, into embree's buffers, with the path's
     light-tracing weight state, media and counters (and, for the Light Path node, the
-    bounce's flags)."""
+    bounce's flags; for Transparent Glass, whether it is still a camera path through clear
+    glass: read before row `out`, which may be i, is written)."""
+    if HAS_TRANSPARENT_GLASS:
+        paths.through_glass[out] = (transparent_background(i, depth, paths) and clear_glass(
+            k, lobe.alpha, wx * x.nx + wy * x.ny + wz * x.nz, sc.clear_glass))
     if HAS_LIGHT_TRACING:
         cq, ce = caustic_state(i, row, depth, x, k, wx, wy, wz, pdf, sc, paths)
         paths.caustic_q[out], paths.caustic_eta[out] = cq, ce
@@ -1705,7 +1738,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, leave_transparent,
-    handle_escaped, choose_closure, surface_ends,
+    transparent_background, handle_escaped, choose_closure, surface_ends,
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
@@ -1725,8 +1758,10 @@ STAGES = {f.__name__: (f, INLINE) for f in (
 # which it shares with sample_light, are compiled once too: with both inlined, the medium's
 # scattering vertex held a second copy of light sampling and compiling the generic kernel
 # grew by a third.
-# under_layers (only emissions under a Principled sheen or coat) likewise.
+# under_layers (only emissions under a Principled sheen or coat) likewise; clear_glass, a
+# formula of scalars (no arrays to count references to), is a call of its own so that a
+# kernel without Transparent Glass is seen to leave it out.
 STAGES.update({f.__name__: (f, JIT) for f in (
-    perturbed_normal, scatter_in_medium, sample_emitter, under_layers,
+    clear_glass, perturbed_normal, scatter_in_medium, sample_emitter, under_layers,
     generate_camera_rays, shade,
     accumulate_unoccluded, cross_transparent, all_finite)})

@@ -258,7 +258,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         geometry, materials, em, np.asarray(scene.world.colour, np.float64), camera,
         PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
         camera_media, np.bool_(settings.fresnel == "exact"),
-        np.bool_(settings.film_transparent)))
+        np.bool_(settings.film_transparent), np.float64(settings.clear_glass_threshold)))
 
 
 def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:
@@ -357,7 +357,7 @@ class Tracer:
                      np.zeros(MAX_REGISTERS), np.full((n, MEDIA_STACK), -1, np.int64),
                      np.zeros(n, np.int64), np.zeros(n, np.int64), np.zeros(n),
                      np.zeros(n, np.int64), np.zeros(n, np.bool_), np.zeros(n, np.int64),
-                     np.zeros((n, 3), np.int64), np.zeros(n))
+                     np.zeros((n, 3), np.int64), np.zeros(n), np.zeros(n, np.bool_))
 
     @staticmethod
     def shadow_rays(n: int) -> ShadowRays:

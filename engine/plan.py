@@ -101,6 +101,9 @@ class Plan:
     # Some material used is (or mixes in) a holdout: the film keeps each pixel's
     # transparency, as it does for a transparent film.
     holdout: bool = False
+    # Film > Transparent Glass with some glass used: camera paths see the film's
+    # transparency through clear glass too (integrator.clear_glass).
+    transparent_glass: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -132,6 +135,8 @@ class Plan:
             s.append("choose one of mixed shaders" + (" (coats)" if self.coats else ""))
         if self.transparency:
             s.append("pass through transparent surfaces")
+        if self.transparent_glass:
+            s.append("see the transparent film through clear glass")
         if self.light_hits or self.sun_discs:
             s.append("handle light hits")
         if self.num_emitters:
@@ -179,7 +184,7 @@ class Plan:
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen, HAS_LIGHT_PATH=self.light_path,
             HAS_OREN_NAYAR=self.oren_nayar, HAS_ANISOTROPY=self.anisotropy,
-            PROFILE=False, DEBUG=False)
+            HAS_TRANSPARENT_GLASS=self.transparent_glass, PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
         return (f"{self.triangles} triangles, {self.num_emitters} emissive, "
@@ -266,6 +271,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
         rough_glass=ROUGH_GLASS in kinds, rough_metal=ROUGH_METAL in kinds,
         absorber=NONE in kinds, holdout=HOLDOUT in kinds,
+        transparent_glass=settings.clear_glass_threshold >= 0 and bool(
+            kinds & {GLASS, ROUGH_GLASS}),
         emitters=num_emitters + len(lights) > 0 or environment,
         num_emitters=num_emitters, light_objects=len(lights), light_hits=light_hits,
         sun_discs=sun_discs, dof=dof, polygon_aperture=dof and cam.blades >= 3,

@@ -1010,6 +1010,11 @@ class RenderSettings:
     film_transparent : Blender's Film > Transparent: camera rays that reach the world,
         straight or through transparent surfaces, leave the pixel transparent (alpha) and
         do not see the world, which still lights the scene (Cycles).
+    film_transparent_glass, film_transparent_roughness : Cycles' Film > Transparent Glass
+        and its Roughness Threshold: with the film transparent, camera rays keep seeing
+        through glass transmissions whose roughness is at most the threshold (GGX
+        alpha_x alpha_y <= threshold^4, Cycles' transparent_roughness_squared_threshold),
+        so the world behind glass is transparent too.
     """
 
     width: int = 480
@@ -1031,6 +1036,17 @@ class RenderSettings:
     replicate_range: tuple | None = None
     light_tracing: bool = True
     film_transparent: bool = False
+    film_transparent_glass: bool = False
+    film_transparent_roughness: float = 0.1
+
+    @property
+    def clear_glass_threshold(self) -> float:
+        """The largest GGX alpha_x alpha_y of a glass transmission a camera ray keeps seeing
+        the film's transparency through (Cycles squares the Roughness Threshold twice), or
+        -1 where none does: Transparent Glass off, or the film opaque."""
+        if self.film_transparent and self.film_transparent_glass:
+            return float(self.film_transparent_roughness) ** 4
+        return -1.0
 
     @property
     def replicate_ids(self) -> tuple[int, ...]:
@@ -1059,6 +1075,9 @@ class RenderSettings:
         if self.filter_type not in FILTER_TYPES:
             raise ValueError(f"filter_type must be one of {FILTER_TYPES}, got {self.filter_type!r}")
         _positive(self.filter_width, "filter_width")
+        if not 0.0 <= self.film_transparent_roughness <= 1.0:
+            raise ValueError(f"film_transparent_roughness must be in [0, 1], got "
+                             f"{self.film_transparent_roughness!r}")
         if self.kernel not in KERNELS:
             raise ValueError(f"kernel must be one of {KERNELS}, got {self.kernel!r}")
         if int(self.replicates) != self.replicates or not 1 <= self.replicates <= MAX_REPLICATES:

@@ -6,10 +6,13 @@ Rendered live (a small scene, four Cycles seeds): an opaque block, a glass spher
 transparent: the world is seen through it, alpha 1), a tinted half-transparent card (a mix
 of a Transparent BSDF of colour (1, 0.3, 0.3) and a diffuse), a Principled sphere of Alpha
 0.3, a card mixing a Holdout (0.4) into a diffuse and a sphere of Alpha 0.5 whose object
-is marked Holdout, under a blue world and a sun; with the film transparent and opaque (holdouts
-make holes in both). Specula's RGB and alpha each agree with Cycles' by the agreement
-test's block statistic. Deliberately wrong renders disagree: the card's tint ignored in
-its transparency, the Holdout left out of its mix.
+is marked Holdout, and a frosted glass pane (roughness 0.15), under a blue world and a sun;
+with the film transparent and opaque (holdouts make holes in both), and transparent with
+Transparent Glass at a roughness threshold of 0.2 (the world behind the glass sphere and
+the pane transparent too). Specula's RGB and alpha each agree with Cycles' by the
+agreement test's block statistic. Deliberately wrong renders disagree: the card's tint
+ignored in its transparency, the Holdout left out of its mix, Transparent Glass ignored,
+its threshold below the pane's roughness.
 """
 
 import math
@@ -27,6 +30,10 @@ SPECULA_SAMPLES = 256
 REPLICATES = 8  # the alpha's variance comes from the replicates' spread
 SEEDS = (1, 2, 3, 4)
 TINT = (1.0, 0.3, 0.3, 1.0)
+FROSTED = 0.15  # the pane's roughness
+THRESHOLD = 0.2  # Transparent Glass' roughness threshold: the pane is clear glass to it
+FILMS = {"transparent": (True, False), "opaque": (False, False),
+         "transparent_glass": (True, True)}  # (film transparent, Transparent Glass)
 
 
 def over_diffuse(name, shader, inputs, colour, fac):
@@ -87,6 +94,9 @@ def build():
                  bs.material("Matte", "ShaderNodeBsdfPrincipled",
                              **{"Base Color": (0.9, 0.9, 0.9, 1.0), "Alpha": 0.5}),
                  coll).is_holdout = True
+    bs.quad("Pane", [(0.9, -0.8, 0.9), (1.9, -0.8, 0.9), (1.9, -0.8, 1.6), (0.9, -0.8, 1.6)],
+            bs.material("Frosted", "ShaderNodeBsdfGlass", IOR=1.45, Roughness=FROSTED), coll)
+    scene.specula.film_transparent_roughness = THRESHOLD
     return scene
 
 
@@ -95,13 +105,20 @@ def node(material, kind):
     return next(n for n in bpy.data.materials[material].node_tree.nodes if n.bl_idname == kind)
 
 
-def render_specula(scene, transparent, tint_ignored=False, holdout_left_out=False):
-    """Specula's RenderResult; `tint_ignored` renders the card's Transparent BSDF white,
-    `holdout_left_out` the Hole's mix without its Holdout (an empty closure: black)."""
+def set_film(scene, film):
+    scene.render.film_transparent, scene.specula.film_transparent_glass = FILMS[film]
+
+
+def render_specula(scene, film, tint_ignored=False, holdout_left_out=False,
+                   threshold=THRESHOLD):
+    """Specula's RenderResult with the `film` of FILMS; `tint_ignored` renders the card's
+    Transparent BSDF white, `holdout_left_out` the Hole's mix without its Holdout (an empty
+    closure: black); `threshold`, Transparent Glass' roughness threshold."""
     s = scene.specula
     s.samples, s.max_bounces, s.seed, s.threads = SPECULA_SAMPLES, 8, 0, renderers.THREADS
     s.replicates, s.time_limit, s.target_error = REPLICATES, 0.0, 0.0
-    scene.render.film_transparent = transparent
+    set_film(scene, film)
+    s.film_transparent_roughness = threshold
     clear = node("Card", "ShaderNodeBsdfTransparent")
     clear.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0) if tint_ignored else TINT
     tree = __import__("bpy").data.materials["Hole"].node_tree
@@ -109,6 +126,7 @@ def render_specula(scene, transparent, tint_ignored=False, holdout_left_out=Fals
     if holdout_left_out:
         tree.links.remove(mix.inputs[1].links[0])
     core_scene, settings, warnings = renderers.shared.export_specula(scene)
+    s.film_transparent_roughness = THRESHOLD
     clear.inputs["Color"].default_value = TINT
     if holdout_left_out:
         tree.links.new(node("Hole", "ShaderNodeHoldout").outputs[0], mix.inputs[1])
@@ -116,12 +134,12 @@ def render_specula(scene, transparent, tint_ignored=False, holdout_left_out=Fals
     return renderers.core().render(core_scene, settings)
 
 
-def render_cycles(scene, transparent):
-    """(K, H, W, 4) RGBA of Cycles at SEEDS."""
+def render_cycles(scene, film):
+    """(K, H, W, 4) RGBA of Cycles at SEEDS with the `film` of FILMS."""
     runs = []
+    set_film(scene, film)
     for seed in SEEDS:
         renderers.configure_cycles(scene, SAMPLES, seed, 8)
-        scene.render.film_transparent = transparent
         rgba, _ = renderers.render_cycles_image(scene)
         runs.append(rgba)
     return np.stack(runs)
@@ -153,13 +171,23 @@ def scene():
 
 @pytest.fixture(scope="module")
 def cycles_transparent(scene):
-    return render_cycles(scene, True)
+    return render_cycles(scene, "transparent")
 
 
-@pytest.mark.parametrize("transparent", [True, False], ids=["transparent", "opaque"])
-def test_film_and_holdouts_agree_with_cycles(scene, cycles_transparent, transparent):
-    runs = cycles_transparent if transparent else render_cycles(scene, False)
-    result = render_specula(scene, transparent)
+@pytest.fixture(scope="module")
+def cycles_transparent_glass(scene):
+    return render_cycles(scene, "transparent_glass")
+
+
+@pytest.mark.parametrize("film", list(FILMS))
+def test_film_and_holdouts_agree_with_cycles(scene, cycles_transparent,
+                                             cycles_transparent_glass, film):
+    runs = {"transparent": cycles_transparent, "transparent_glass": cycles_transparent_glass
+            }.get(film)
+    if runs is None:
+        runs = render_cycles(scene, film)
+    transparent = FILMS[film][0]
+    result = render_specula(scene, film)
     assert np.all(np.isfinite(result.combined))
     alpha = result.combined[..., 3]
     # Holes: the holdouts' pixels, and with the film transparent the world's.
@@ -177,11 +205,27 @@ def test_film_and_holdouts_agree_with_cycles(scene, cycles_transparent, transpar
 
 
 def test_transparency_that_ignores_the_tint_disagrees(scene, cycles_transparent):
-    rgb, a = comparisons(render_specula(scene, True, tint_ignored=True), cycles_transparent)
+    rgb, a = comparisons(render_specula(scene, "transparent", tint_ignored=True),
+                         cycles_transparent)
     assert not a.agree and a.max_z > 2 * a.z_threshold, a.describe()
     assert math.isfinite(rgb.max_z)
 
 
 def test_a_holdout_left_out_disagrees(scene, cycles_transparent):
-    _, a = comparisons(render_specula(scene, True, holdout_left_out=True), cycles_transparent)
+    _, a = comparisons(render_specula(scene, "transparent", holdout_left_out=True),
+                       cycles_transparent)
+    assert not a.agree and a.max_z > 2 * a.z_threshold, a.describe()
+
+
+def test_transparent_glass_ignored_disagrees(scene, cycles_transparent_glass):
+    """The world behind the glass sphere and the pane seen, as without the option."""
+    _, a = comparisons(render_specula(scene, "transparent"), cycles_transparent_glass)
+    assert not a.agree and a.max_z > 2 * a.z_threshold, a.describe()
+
+
+def test_a_threshold_below_the_panes_roughness_disagrees(scene, cycles_transparent_glass):
+    """The frosted pane (roughness 0.15) opaque against the world at a threshold of 0.1:
+    only Cycles' threshold^4 rule on alpha_x alpha_y tells 0.15 from 0.2 and 0.1."""
+    _, a = comparisons(render_specula(scene, "transparent_glass", threshold=0.1),
+                       cycles_transparent_glass)
     assert not a.agree and a.max_z > 2 * a.z_threshold, a.describe()

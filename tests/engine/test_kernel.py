@@ -404,7 +404,8 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_MIXES": "choose_closure",
            "HAS_COATS": "coat_layering", "HAS_TRANSPARENCY": "pass_through",
            "HAS_SHEEN": "sheen_ltc", "HAS_LIGHT_PATH": "set_light_path",
-           "HAS_OREN_NAYAR": "oren_nayar_ratio", "HAS_ANISOTROPY": "anisotropic_alphas"}
+           "HAS_OREN_NAYAR": "oren_nayar_ratio", "HAS_ANISOTROPY": "anisotropic_alphas",
+           "HAS_TRANSPARENT_GLASS": "clear_glass"}
 
 
 def _ir(kernel):

@@ -203,3 +203,75 @@ def test_alpha_is_one_minus_the_camera_paths_average_throughput_where_they_escap
         np.testing.assert_allclose(left[..., :3], np.broadcast_to(want, left[..., :3].shape),
                                    atol=1e-6)
     assert (r.replicate_transparency is None) == (not film_transparent and not holdout)
+
+
+def _glass_before(card, behind=None):
+    """A white world and, before the camera, `card` over the left half of the frame, with
+    `behind` (if any) on a second card behind it."""
+    b = SceneBuilder()
+    v, t = scenes.quad((-5.0, -5.0, -3.0), (0.0, -5.0, -3.0), (0.0, 5.0, -3.0),
+                       (-5.0, 5.0, -3.0))
+    b.add_mesh("glass", v, t, b.add_material(card))
+    if behind is not None:
+        v, t = scenes.quad((-50.0, -50.0, -6.0), (0.0, -50.0, -6.0), (0.0, 50.0, -6.0),
+                           (-50.0, 50.0, -6.0))
+        b.add_mesh("behind", v, t, b.add_material(behind))
+    return b.build(Camera(), World((1.0, 1.0, 1.0)))
+
+
+TINT = (0.2, 0.5, 0.8)  # a Refraction BSDF's throughput, no Fresnel: alpha 1 - 0.5
+
+
+@pytest.mark.parametrize("roughness, threshold, glass_on, alpha_left", [
+    (0.0, 0.1, True, 0.5),    # smooth: through it, the world's transparency
+    (0.0, 0.0, True, 0.5),    # a threshold of 0 still lets smooth glass through
+    (0.0, 0.1, False, 1.0),   # Transparent Glass off: the world is seen through the glass
+    (0.2, 0.1, True, 1.0),    # rougher than the threshold: opaque
+    (0.2, 0.25, True, None),  # within it: transparent by the rough lobe's throughput
+], ids=["smooth", "threshold-0", "off", "too-rough", "rough-within"])
+def test_transparent_glass_lets_camera_paths_see_the_transparent_film_through_clear_glass(
+        roughness, threshold, glass_on, alpha_left):
+    """Cycles' Film > Transparent Glass: a camera path that transmits through glass no
+    rougher than the threshold (GGX alpha_x alpha_y <= threshold^4) stays a camera path
+    for the film's transparency, so the world behind the glass is transparent by the
+    path's throughput there and unseen; rougher glass, or the option off, shows the world
+    through it with alpha 1. A Refraction BSDF card (no Fresnel) makes the smooth values
+    exact."""
+    card = Material.refraction("card", TINT, ior=1.45, roughness=roughness)
+    st = RenderSettings(width=16, height=8, samples=16, film_transparent=True,
+                        film_transparent_glass=glass_on, film_transparent_roughness=threshold)
+    scene = _glass_before(card)
+    assert make_plan(scene, st).transparent_glass == glass_on
+    rgba = render(scene, st).combined
+    left = rgba[:, :5]
+    assert np.all(np.isfinite(rgba))
+    if alpha_left is None:  # 1 - the rough lobe's average weight, the world unseen
+        assert 0.4 < left[..., 3].min() and left[..., 3].max() < 0.8, left[..., 3]
+        np.testing.assert_allclose(left[..., :3], 0.0, atol=1e-6)
+        return
+    np.testing.assert_allclose(left[..., 3], alpha_left, atol=1e-6)
+    if alpha_left == 0.5:
+        np.testing.assert_allclose(left[..., :3], 0.0, atol=1e-6)
+    elif roughness == 0.0:  # the white world through the tint
+        np.testing.assert_allclose(left[..., :3], np.broadcast_to(TINT, left[..., :3].shape),
+                                   atol=1e-6)
+
+
+@pytest.mark.parametrize("film_transparent", [True, False], ids=["transparent", "opaque"])
+def test_a_holdout_behind_clear_glass_holds_out_under_transparent_glass_only(film_transparent):
+    """A holdout seen through clear glass: with Transparent Glass (which needs the film
+    transparent) the camera path is still one, and the holdout leaves the pixel transparent
+    by the throughput through the glass (alpha 0.5); with the film opaque the glass ends
+    the camera path, and the holdout is a surface without a BSDF to it (black, alpha 1)."""
+    scene = _glass_before(Material.refraction("card", TINT, ior=1.45),
+                          Material.holdout("hole"))
+    st = RenderSettings(width=16, height=8, samples=8, film_transparent=film_transparent,
+                        film_transparent_glass=True)
+    rgba = render(scene, st).combined[:, :5]
+    np.testing.assert_allclose(rgba[..., 3], 0.5 if film_transparent else 1.0, atol=1e-6)
+    np.testing.assert_allclose(rgba[..., :3], 0.0, atol=1e-6)
+
+
+def test_the_transparent_glass_threshold_is_checked():
+    with pytest.raises(ValueError, match="film_transparent_roughness"):
+        RenderSettings(film_transparent_roughness=1.5).validate()
