@@ -58,6 +58,9 @@ from .shader_nodes import COLOUR_SPACES, enabled_input, live_link
 DEFAULT_GREY = (0.8, 0.8, 0.8)
 # Cycles treats roughness below this as a perfect delta lobe (alpha = r^2 <= 2e-10 there).
 ROUGHNESS_EPSILON = 1e-5
+# Cycles clamps a BSDF's IOR to at least this (svm_node_closure_bsdf's fmaxf(ior, 1e-5f)):
+# near 0 a glass is a mirror but for rays at normal incidence, not another material.
+MIN_IOR = 1e-5
 GLOSSY_NODES = ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
 # Colour -> float socket conversion: luminance with the Rec.709 coefficients of Blender's
 # default configuration (what Cycles' `linear_rgb_to_gray` uses there).
@@ -1309,9 +1312,10 @@ class _Reader:
         sock = node.inputs.get("IOR")
         if sock is not None and not sock.is_linked and sock.default_value != sock.default_value:
             ior = float("nan")  # Blender's socket accepts NaN; number() would hide it
-        if not ior > 0:  # also NaN
-            self.warn(f"node '{node.name}' IOR {ior:.3g} is not positive; using 1.5")
-            ior = 1.5
+        if not ior >= MIN_IOR:  # also NaN, which fmaxf drops too
+            self.warn(f"node '{node.name}' IOR {ior:.3g} is below {MIN_IOR:g}; using "
+                      f"{MIN_IOR:g} (as Cycles)")
+            ior = MIN_IOR
         return ior
 
     def anisotropy(self, node, socket_name, rotation_name):

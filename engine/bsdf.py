@@ -720,11 +720,20 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
                 tables.e_avg, zero3, zeros, 0.0, zeros)
     principled = kind == PRINCIPLED
     tables = microfacet_tables(alpha, "dielectric" if principled else "none", ior)
-    spread = tables.spread if principled else zeros
+    spread, estimate, layering = (tables.spread if principled else zeros,
+                                  tables.estimate_table, tables.layering_table)
+    if principled and ior < 1.0:
+        # Cycles reads its estimate's table (ggx_gen_schlick_ior_s, made for IORs >= 1) at
+        # z = sqrt(|eta - 1| / (eta + 1)), which is 1 / eta's place: what is below the lobe
+        # is dimmed as under an IOR of 1 / eta, while the lobe itself reflects with
+        # eta's own Fresnel, total internal reflection and all.
+        mirrored = microfacet_tables(alpha, "dielectric", 1.0 / ior)
+        spread, estimate = mirrored.spread, mirrored.estimate_table
+        layering = estimate * tables.layering_table / tables.estimate_table
     if multiscatter:
         return (alpha, layer_fms(tables, principled, colour), tables.missing_table,
-                tables.layering_table, tables.e_avg, zero3, zeros, 0.0, spread)
-    return (alpha, layer_fms(tables, principled, colour), zeros, tables.estimate_table,
+                layering, tables.e_avg, zero3, zeros, 0.0, spread)
+    return (alpha, layer_fms(tables, principled, colour), zeros, estimate,
             tables.e_avg, zero3, zeros, 0.0, spread)
 
 
