@@ -28,6 +28,27 @@ def ensure_registered():
         addon.register()
 
 
+def sky_and_sun_scene(resolution, sun_angle):
+    """A new empty scene for the live tests that build their own: a blue world (0.3, 0.5,
+    0.9), a sun of 3 W/m^2 and `sun_angle` (radians) from above and behind the camera,
+    and the camera at (0, -6, 0.8) looking along +y (lens 40 mm) at `resolution`."""
+    from blend_scenes import build_scenes as bs
+    ensure_registered()
+    scene = bs.new_scene()
+    world = bpy.data.worlds.new("Sky")
+    bg = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.3, 0.5, 0.9, 1.0)
+    bg.inputs["Strength"].default_value = 1.0
+    scene.world = world
+    sun = bpy.data.lights.new("Sun", "SUN")
+    sun.energy, sun.angle = 3.0, sun_angle
+    sun_obj = bpy.data.objects.new("Sun", sun)
+    sun_obj.rotation_euler = (0.6, 0.3, 0.0)
+    scene.collection.objects.link(sun_obj)
+    bs.camera(scene, "Camera", (0.0, -6.0, 0.8), 40.0, resolution)
+    return scene
+
+
 def open_blend_scene(name, resolution):
     """Open blend_scenes/<name>.blend at `resolution` (100 %) with Specula registered;
     shared by the benchmarks."""

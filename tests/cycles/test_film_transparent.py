@@ -57,23 +57,9 @@ def over_diffuse(name, shader, inputs, colour, fac):
 
 
 def build():
-    import bpy
-
     from blend_scenes import build_scenes as bs
-    renderers.ensure_registered()
-    scene = bs.new_scene()
+    scene = renderers.sky_and_sun_scene(RESOLUTION, 0.1)
     coll = scene.collection
-    world = bpy.data.worlds.new("Sky")
-    bg = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    bg.inputs["Color"].default_value = (0.3, 0.5, 0.9, 1.0)
-    bg.inputs["Strength"].default_value = 1.0
-    scene.world = world
-    sun = bpy.data.lights.new("Sun", "SUN")
-    sun.energy, sun.angle = 3.0, 0.1
-    sun_obj = bpy.data.objects.new("Sun", sun)
-    sun_obj.rotation_euler = (0.6, 0.3, 0.0)
-    coll.objects.link(sun_obj)
-    bs.camera(scene, "Camera", (0.0, -6.0, 0.8), 40.0, RESOLUTION)
     bs.quad("Block", [(-2.2, -0.5, -0.6), (-1.2, -0.5, -0.6), (-1.2, -0.5, 0.6),
                       (-2.2, -0.5, 0.6)], bs.diffuse("Clay", (0.8, 0.35, 0.2)), coll)
     bs.uv_sphere("Glass", (-0.2, 0.0, 0.1), 0.7,

@@ -37,22 +37,9 @@ SHADERS = {"Glass": ("ShaderNodeBsdfGlass", {"Roughness": 0.0}),
 
 
 def build():
-    import bpy
-
     from blend_scenes import build_scenes as bs
-    renderers.ensure_registered()
-    scene = bs.new_scene()
+    scene = renderers.sky_and_sun_scene(RESOLUTION, 0.2)
     coll = scene.collection
-    world = bpy.data.worlds.new("Sky")
-    bg = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    bg.inputs["Color"].default_value = (0.3, 0.5, 0.9, 1.0)
-    scene.world = world
-    sun = bpy.data.lights.new("Sun", "SUN")
-    sun.energy, sun.angle = 3.0, 0.2
-    sun_obj = bpy.data.objects.new("Sun", sun)
-    sun_obj.rotation_euler = (0.6, 0.3, 0.0)
-    coll.objects.link(sun_obj)
-    bs.camera(scene, "Camera", (0.0, -6.0, 0.8), 40.0, RESOLUTION)
     bs.quad("Floor", [(-4, -3, -0.7), (4, -3, -0.7), (4, 4, -0.7), (-4, 4, -0.7)],
             bs.diffuse("Clay", (0.8, 0.35, 0.2)), coll)
     for (name, (shader, inputs)), centre, radius in zip(
