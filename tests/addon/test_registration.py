@@ -35,6 +35,57 @@ def test_scene_settings_defaults(fresh):
     assert (s.fresnel, s.filter_type, s.filter_width) == ("EXACT", "BLACKMAN_HARRIS", 1.5)
 
 
+class RecordingLayout:
+    """A stand-in for a panel's UILayout (there is no window in a headless bpy): it records
+    what each prop() names, checking the property exists, and whether it is drawn active
+    (a layout is only as active as the one it is in, as in Blender)."""
+
+    def __init__(self, drawn, parent=None):
+        self.drawn, self.parent = drawn, parent
+        self.active, self.use_property_split = True, False
+
+    def column(self, **_):
+        return RecordingLayout(self.drawn, self)
+
+    row = column
+
+    def effective(self):
+        return self.active and (self.parent is None or self.parent.effective())
+
+    def prop(self, data, name, **_):
+        assert name in data.bl_rna.properties, f"{data!r} has no property {name!r}"
+        self.drawn[name] = self.effective()
+
+    def label(self, **_):
+        pass
+
+
+def draw_panels(scene):
+    """{property: whether it is drawn active} over Specula's panels."""
+    import types
+    drawn = {}
+    context = types.SimpleNamespace(scene=scene, view_layer=scene.view_layers[0])
+    for panel in ui.classes:
+        panel.draw(types.SimpleNamespace(layout=RecordingLayout(drawn)), context)
+    return drawn
+
+
+def test_specula_panels_draw_existing_properties_with_film_options_active_as_in_cycles(fresh):
+    """Every prop a Specula panel draws exists; Transparent Glass is active only with the
+    film transparent, and its threshold only with Transparent Glass on (Cycles' Film
+    panel)."""
+    fresh.render.film_transparent, fresh.specula.film_transparent_glass = False, False
+    drawn = draw_panels(fresh)
+    assert {"samples", "max_bounces", "film_transparent", "film_transparent_glass",
+            "use_pass_error"} <= set(drawn)
+    assert not drawn["film_transparent_glass"] and not drawn["film_transparent_roughness"]
+    fresh.render.film_transparent = True
+    drawn = draw_panels(fresh)
+    assert drawn["film_transparent_glass"] and not drawn["film_transparent_roughness"]
+    fresh.specula.film_transparent_glass = True
+    assert draw_panels(fresh)["film_transparent_roughness"]
+
+
 @pytest.mark.parametrize("name", ["DATA_PT_camera_dof", "DATA_PT_camera_dof_aperture",
                                   "EEVEE_MATERIAL_PT_surface", "EEVEE_WORLD_PT_surface",
                                   "DATA_PT_EEVEE_light", "RENDER_PT_format"])
