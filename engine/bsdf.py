@@ -508,9 +508,9 @@ class MicrofacetTables:
         (bsdf_microfacet_estimate_albedo), which a Principled layer or coat dims what is
         below by: F0 + (1 - F0) s, s the mean over visible normals of the Fresnel's place
         between F0 and 1 where the reflection lies above the surface (0 where not), as
-        its ggx_gen_schlick_ior_s table is made. Not weighted by the masking, so not the
-        albedo itself: the smooth Fresnel for a smooth lobe, less at grazing views as
-        the lobe roughens;
+        its ggx_gen_schlick_ior_s table is made (at 1 / eta below 1, as Cycles reads it).
+        Not weighted by the masking, so not the albedo itself: the smooth Fresnel for a
+        smooth lobe, less at grazing views as the lobe roughens;
     layering_table : the same estimate for the compensated lobe, times Cycles' darkening
         (1 + Fms (1 - E) / E) E (microfacet_ggx_preserve_energy scales the closure's
         weight by it, and the estimate includes the weight);
@@ -529,8 +529,15 @@ class MicrofacetTables:
         e_white = np.zeros(n_mu)
         e_fresnel = np.zeros(n_mu)
         schlick_s = np.zeros(n_mu)
+        # Cycles reads the estimate's table (ggx_gen_schlick_ior_s, made for IORs >= 1) at
+        # z = sqrt(|eta - 1| / (eta + 1)), which below 1 is 1 / eta's place (the same F0):
+        # what lies below the lobe is dimmed as under 1 / eta, while the lobe reflects with
+        # eta's own Fresnel, total internal reflection and all.
+        spread_eta = 1.0 / float(eta) if fresnel_on and eta < 1.0 else float(eta)
         for i, mu in enumerate(self.mu):
             w, wf, s = _lobe_integrands(self.alpha, fresnel_on, float(eta), float(mu), u)
+            if spread_eta != eta:
+                s = _lobe_integrands(self.alpha, True, spread_eta, float(mu), u)[2]
             e_white[i], e_fresnel[i], schlick_s[i] = w.mean(), wf.mean(), s.mean()
         e_white = np.clip(e_white, 1e-6, 1.0)
         self.e_avg = float(2.0 * trapezoid(e_white * self.mu, self.mu))
@@ -720,20 +727,11 @@ def _lobe_row(materials, j, roughness, rough=True) -> tuple:
                 tables.e_avg, zero3, zeros, 0.0, zeros)
     principled = kind == PRINCIPLED
     tables = microfacet_tables(alpha, "dielectric" if principled else "none", ior)
-    spread, estimate, layering = (tables.spread if principled else zeros,
-                                  tables.estimate_table, tables.layering_table)
-    if principled and ior < 1.0:
-        # Cycles reads its estimate's table (ggx_gen_schlick_ior_s, made for IORs >= 1) at
-        # z = sqrt(|eta - 1| / (eta + 1)), which is 1 / eta's place: what is below the lobe
-        # is dimmed as under an IOR of 1 / eta, while the lobe itself reflects with
-        # eta's own Fresnel, total internal reflection and all.
-        mirrored = microfacet_tables(alpha, "dielectric", 1.0 / ior)
-        spread, estimate = mirrored.spread, mirrored.estimate_table
-        layering = estimate * tables.layering_table / tables.estimate_table
+    spread = tables.spread if principled else zeros
     if multiscatter:
         return (alpha, layer_fms(tables, principled, colour), tables.missing_table,
-                layering, tables.e_avg, zero3, zeros, 0.0, spread)
-    return (alpha, layer_fms(tables, principled, colour), zeros, estimate,
+                tables.layering_table, tables.e_avg, zero3, zeros, 0.0, spread)
+    return (alpha, layer_fms(tables, principled, colour), zeros, tables.estimate_table,
             tables.e_avg, zero3, zeros, 0.0, spread)
 
 

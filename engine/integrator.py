@@ -1369,7 +1369,8 @@ def spawn_in_medium(i, out, row, depth, px, py, pz, wx, wy, wz, t0, t1, t2, pdf,
         paths.bounds[out] = paths.bounds[i]
         paths.mis_t[out] = 0.0
         paths.via_transparent[out] = False
-    paths.through_glass[out] = False  # (a volume scatter ends Transparent Glass)
+    if HAS_TRANSPARENT_GLASS:  # (a volume scatter ends it)
+        paths.through_glass[out] = False
     paths.o64[out, 0], paths.o64[out, 1], paths.o64[out, 2] = px, py, pz
     paths.d64[out, 0], paths.d64[out, 1], paths.d64[out, 2] = wx, wy, wz
     for j in range(3):
@@ -1489,7 +1490,8 @@ def pass_through(i, out, row, x, tfar, boundary, sc, paths):
     # (A boundary leaves the flags as they were: Cycles' volume-only bounce skips
     # path_state_next.)
     paths.via_transparent[out] = paths.via_transparent[i] or not boundary
-    paths.through_glass[out] = paths.through_glass[i]
+    if HAS_TRANSPARENT_GLASS:
+        paths.through_glass[out] = paths.through_glass[i]
     paths.caustic_q[out], paths.caustic_eta[out] = paths.caustic_q[i], paths.caustic_eta[i]
     if HAS_LIGHT_PATH:  # the ray goes on as the same kind of ray (a camera ray stays one)
         paths.flags[out] = paths.flags[i]
