@@ -87,10 +87,17 @@ classes = ()
 
 def warm_up_in_background() -> None:
     """Import the core and load its compiled kernels on a daemon thread, so the first
-    Render does not wait for them. Failures are left for that render to report."""
+    Render does not wait for them. Failures are left for that render to report. In the
+    interface the generic kernel is compiled if it never was (a user takes a while to press
+    Render); a background Blender (`blender -b`, the bpy module) renders at once, and only
+    loads it where it is cached (engine.warm_up)."""
+    import bpy
+
+    interactive = not bpy.app.background
+
     def run():
         try:
-            load().warm_up()
+            load().warm_up(compile_cold=interactive)
         except Exception:  # noqa: BLE001 - the render will say what is wrong
             pass
 

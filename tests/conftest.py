@@ -1,3 +1,4 @@
+import collections
 import glob
 import os
 import time
@@ -52,6 +53,16 @@ def pytest_xdist_make_scheduler(config, log):
         def _split_scope(self, nodeid):
             return process_group(nodeid)
 
+        def _assign_work_unit(self, node):
+            # The install tests first (xdist orders groups by test count, which put them
+            # near the end): they spend ~11 min in Blender processes compiling into caches
+            # of their own, while the other process compiles the suite's generic kernel,
+            # which it would otherwise compile too, at the same moment (5 min, measured).
+            # Last, they left one process working alone for their length.
+            if "install" in self.workqueue:
+                self.workqueue.move_to_end("install", last=False)
+            super()._assign_work_unit(node)
+
     return GroupScheduling(config, log)
 
 
@@ -60,9 +71,26 @@ CYCLES_SUMMARIES = os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
                                 "cycles", "summary-*.txt")
 
 
+# Seconds spent per test file (setup, call and teardown), for the summary: CI must stay well
+# under an hour, and most of it is numba compiling kernels cold, which --durations shows
+# only for the test that happened to compile first.
+FILE_SECONDS = collections.Counter()
+
+
+def pytest_runtest_logreport(report):
+    FILE_SECONDS[report.nodeid.partition("::")[0]] += report.duration
+
+
 def pytest_terminal_summary(terminalreporter):
-    """The Cycles comparisons' summary (where the references came from, how each
-    comparison went), as the processes that ran them left it (tests/cycles/conftest.py)."""
+    """Time per test file; then the Cycles comparisons' summary (where the references came
+    from, how each comparison went), as the processes that ran them left it
+    (tests/cycles/conftest.py)."""
+    if FILE_SECONDS:
+        terminalreporter.section("seconds per test file")
+        total = sum(FILE_SECONDS.values())
+        for path, seconds in FILE_SECONDS.most_common(25):
+            terminalreporter.write_line(f"{seconds:8.1f}  {path}")
+        terminalreporter.write_line(f"{total:8.1f}  all files (both processes)")
     lines = []
     for path in sorted(glob.glob(CYCLES_SUMMARIES)):
         if os.path.getmtime(path) >= STARTED:

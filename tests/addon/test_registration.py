@@ -105,3 +105,24 @@ def test_unregister_restores_panels_and_reregisters():
         addon.register()
     assert "SPECULA" in bpy.types.DATA_PT_camera_dof.COMPAT_ENGINES
     assert ui.SPECULA_RENDER_PT_sampling.is_registered
+
+
+def test_background_blender_warms_up_without_compiling_cold(monkeypatch):
+    """The add-on's warm-up asks the core to compile the generic kernel cold only in the
+    interface; the bpy module and `blender -b` are background sessions."""
+    import threading
+
+    from addon import core
+
+    asked = []
+
+    class Core:
+        def warm_up(self, compile_cold=True):
+            asked.append(compile_cold)
+
+    monkeypatch.setattr(core, "load", lambda: Core())
+    core.warm_up_in_background()
+    for thread in threading.enumerate():
+        if thread.name == "specula-warm-up":
+            thread.join(10)
+    assert asked == [not bpy.app.background] == [False]

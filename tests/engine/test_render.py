@@ -190,3 +190,28 @@ def test_regions_stitch_into_the_whole_frame(cbspheres):
 def test_invalid_region_is_refused():
     with pytest.raises(ValueError, match="region"):
         render(scenes.cbspheres(), scenes.settings(width=10, height=10, region=(5, 0, 20, 10)))
+
+
+def test_warm_up_compiles_the_generic_kernel_cold_only_when_asked(monkeypatch):
+    """A background Blender's warm-up (compile_cold=False) loads the generic kernel only
+    where numba's cache has it: on a fresh cache it renders nothing, so the render that
+    follows is not kept waiting for numba's compiler. The interface's warm-up compiles it."""
+    import threading
+
+    from engine import kernels, renderer
+
+    for thread in threading.enumerate():  # the add-on's own warm-up, where it registered
+        if thread.name == "specula-warm-up":
+            thread.join()
+    rendered = []
+    monkeypatch.setattr(renderer, "render", lambda scene, settings: rendered.append(settings))
+    monkeypatch.setattr(renderer, "prune_caches", lambda: [])
+    monkeypatch.setattr(kernels, "ready_kernel", lambda constants: None)
+    monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: False)
+    assert renderer.warm_up(compile_cold=False) is False
+    assert rendered == []
+    assert renderer.warm_up() is True  # the interface: compiled (here, a stand-in render)
+    assert [s.kernel for s in rendered] == ["generic"]
+    monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: True)
+    assert renderer.warm_up(compile_cold=False) is True  # cached: loaded
+    assert len(rendered) == 2

@@ -11,10 +11,12 @@ def users_kernel_choice(monkeypatch):
     """The Blender processes started here choose their kernels as a user's do ("auto": the
     scene's own, compiled where it is not cached) rather than the suite's shared generic
     one (tests/conftest.py). Each of them has its own kernel cache (another Python's numba,
-    or the extension's package name), where the generic kernel, compiled cold, took 5-6 min
-    of the 12-min install tests. Measured on a fresh cache: Blender 3.4's farm test 275 s
-    (378 s on the generic kernel); the bpy 4.2 extension test, three scenes' kernels, 374 s
-    (314 s): a gain for one scene, not for three."""
+    or the extension's package name). A background Blender no longer compiles the generic
+    kernel in its warm-up (engine.warm_up), so on a fresh cache (measured, the install
+    tests alone): Blender 3.4's farm test 91 s (335 s when the warm-up compiled the generic
+    kernel first), the bpy 4.2 extension test, three scenes' kernels, 128 s (383 s); the
+    F12 test, Blender 3.4's first session in the interface, now compiles the generic
+    kernel (319 s); all install tests 669 s (871 s)."""
     monkeypatch.setenv("SPECULA_KERNEL", "auto")
 
 
