@@ -85,20 +85,51 @@ def _load():
 classes = ()
 
 
+# Set when the interface's warm-up found the generic kernel uncached: it compiles after the
+# first render instead (after_render).
+_generic_after_render = False
+
+
+def _interactive() -> bool:
+    import bpy
+    return not bpy.app.background
+
+
 def warm_up_in_background() -> None:
     """Import the core and load its compiled kernels on a daemon thread, so the first
-    Render does not wait for them. Failures are left for that render to report. In the
-    interface the generic kernel is compiled if it never was (a user takes a while to press
-    Render); a background Blender (`blender -b`, the bpy module) renders at once, and only
-    loads it where it is cached (engine.warm_up)."""
-    import bpy
+    Render does not wait for them. Failures are left for that render to report.
 
-    interactive = not bpy.app.background
+    Only a cached generic kernel is loaded here (engine.warm_up). numba compiles one
+    function at a time per process, so a cold compile begun at registration made the first
+    render wait for it (about 5 min) before it could even load its own scene's cached kernel.
+    In the interface the generic kernel compiles after the first render instead, ready for
+    the scenes after it; a background Blender (`blender -b`, the bpy module) never compiles
+    it cold, its renders compile their own plans' kernels."""
+    interactive = _interactive()
+
+    def run():
+        global _generic_after_render
+        try:
+            if not load().warm_up(compile_cold=False) and interactive:
+                _generic_after_render = True
+        except Exception:  # noqa: BLE001 - the render will say what is wrong
+            pass
+
+    threading.Thread(target=run, name="specula-warm-up", daemon=True).start()
+
+
+def after_render() -> None:
+    """When a render has finished: the generic kernel the interface's warm-up left for
+    later compiles now, on a daemon thread."""
+    global _generic_after_render
+    if not _generic_after_render:
+        return
+    _generic_after_render = False
 
     def run():
         try:
-            load().warm_up(compile_cold=interactive)
-        except Exception:  # noqa: BLE001 - the render will say what is wrong
+            load().warm_up()
+        except Exception:  # noqa: BLE001 - a later render reports what is wrong
             pass
 
     threading.Thread(target=run, name="specula-warm-up", daemon=True).start()

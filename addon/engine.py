@@ -2,6 +2,7 @@
 
 import bpy
 
+from . import core
 from .render_session import RenderSession
 
 
@@ -23,7 +24,10 @@ class SpeculaRenderEngine(bpy.types.RenderEngine):
         self.session = RenderSession(self)
 
     def render(self, depsgraph):
-        self.session.render(depsgraph)
+        try:
+            self.session.render(depsgraph)
+        finally:
+            core.after_render()  # the interface's generic kernel, if it was left for now
 
     def update_render_passes(self, scene=None, renderlayer=None):
         self.session.update_render_passes(scene, renderlayer)

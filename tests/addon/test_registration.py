@@ -107,9 +107,8 @@ def test_unregister_restores_panels_and_reregisters():
     assert ui.SPECULA_RENDER_PT_sampling.is_registered
 
 
-def test_background_blender_warms_up_without_compiling_cold(monkeypatch):
-    """The add-on's warm-up asks the core to compile the generic kernel cold only in the
-    interface; the bpy module and `blender -b` are background sessions."""
+def _warm_up_calls(monkeypatch, interactive, cached):
+    """What the add-on asks the core's warm_up at registration and after a render."""
     import threading
 
     from addon import core
@@ -119,10 +118,31 @@ def test_background_blender_warms_up_without_compiling_cold(monkeypatch):
     class Core:
         def warm_up(self, compile_cold=True):
             asked.append(compile_cold)
+            return cached or compile_cold
+
+    def join():
+        for thread in threading.enumerate():
+            if thread.name == "specula-warm-up":
+                thread.join(10)
 
     monkeypatch.setattr(core, "load", lambda: Core())
+    monkeypatch.setattr(core, "_interactive", lambda: interactive)
+    monkeypatch.setattr(core, "_generic_after_render", False)
     core.warm_up_in_background()
-    for thread in threading.enumerate():
-        if thread.name == "specula-warm-up":
-            thread.join(10)
-    assert asked == [not bpy.app.background] == [False]
+    join()
+    core.after_render()
+    join()
+    core.after_render()  # once only
+    join()
+    return asked
+
+
+@pytest.mark.parametrize("interactive, cached, calls", [
+    (False, False, [False]), (False, True, [False]),
+    (True, True, [False]), (True, False, [False, True])])
+def test_generic_kernel_compiles_cold_only_after_a_render_in_the_interface(
+        monkeypatch, interactive, cached, calls):
+    """Registration only loads a cached generic kernel (compile_cold=False), so a first
+    render is not kept waiting on numba's compiler; in the interface an uncached one
+    compiles after the first render, once; a background session never compiles it cold."""
+    assert _warm_up_calls(monkeypatch, interactive, cached) == calls

@@ -11,12 +11,10 @@ def users_kernel_choice(monkeypatch):
     """The Blender processes started here choose their kernels as a user's do ("auto": the
     scene's own, compiled where it is not cached) rather than the suite's shared generic
     one (tests/conftest.py). Each of them has its own kernel cache (another Python's numba,
-    or the extension's package name). A background Blender no longer compiles the generic
-    kernel in its warm-up (engine.warm_up), so on a fresh cache (measured, the install
+    or the extension's package name). The add-on's warm-up no longer compiles the generic
+    kernel before a first render (addon.core), so on a fresh cache (measured, the install
     tests alone): Blender 3.4's farm test 91 s (335 s when the warm-up compiled the generic
-    kernel first), the bpy 4.2 extension test, three scenes' kernels, 128 s (383 s); the
-    F12 test, Blender 3.4's first session in the interface, now compiles the generic
-    kernel (319 s); all install tests 669 s (871 s)."""
+    kernel first), the bpy 4.2 extension test, three scenes' kernels, 128 s (383 s)."""
     monkeypatch.setenv("SPECULA_KERNEL", "auto")
 
 
