@@ -105,32 +105,28 @@ def warm_up_in_background() -> None:
     In the interface the generic kernel compiles after the first render instead, ready for
     the scenes after it; a background Blender (`blender -b`, the bpy module) never compiles
     it cold, its renders compile their own plans' kernels."""
-    interactive = _interactive()
-
-    def run():
-        global _generic_after_render
-        try:
-            if not load().warm_up(compile_cold=False) and interactive:
-                _generic_after_render = True
-        except Exception:  # noqa: BLE001 - the render will say what is wrong
-            pass
-
-    threading.Thread(target=run, name="specula-warm-up", daemon=True).start()
+    _warm_up(compile_cold=False, later=_interactive())
 
 
 def after_render() -> None:
     """When a render has finished: the generic kernel the interface's warm-up left for
-    later compiles now, on a daemon thread."""
+    later compiles now."""
     global _generic_after_render
-    if not _generic_after_render:
-        return
-    _generic_after_render = False
+    if _generic_after_render:
+        _generic_after_render = False
+        _warm_up(compile_cold=True, later=False)
 
+
+def _warm_up(compile_cold: bool, later: bool) -> None:
+    """engine.warm_up on a daemon thread; `later`: if it found nothing to load, compile
+    after the next render."""
     def run():
+        global _generic_after_render
         try:
-            load().warm_up()
-        except Exception:  # noqa: BLE001 - a later render reports what is wrong
-            pass
+            loaded = load().warm_up(compile_cold=compile_cold)
+        except Exception:  # noqa: BLE001 - a render will say what is wrong
+            return
+        _generic_after_render = later and not loaded
 
     threading.Thread(target=run, name="specula-warm-up", daemon=True).start()
 

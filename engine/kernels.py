@@ -137,6 +137,12 @@ def ready_kernel(constants: dict) -> Kernel | None:
         return _ready.get(key_of(constants))
 
 
+def compiled_before(constants: dict) -> bool:
+    """Whether the kernel for these constants is loaded in this process or in numba's
+    cache (it loads in seconds rather than compiling for minutes)."""
+    return ready_kernel(constants) is not None or Kernel(constants).on_disk()
+
+
 def build_now(constants: dict, compile_with) -> Kernel:
     """Load (from numba's cache) or compile the kernel for `constants` now; `compile_with`
     (Kernel) runs it once on real data so every entry point compiles with real types."""

@@ -171,9 +171,8 @@ class Kernels:
             # The plan's kernel now if it only needs loading (or is asked for); else the
             # generic one, loaded, while the plan's compiles, unless neither was ever
             # compiled (then the plan's, which compiles in a third of the time).
-            if kernels.Kernel(self.constants).on_disk() or mode == "specialised" or (
-                    kernels.ready_kernel(generic) is None
-                    and not kernels.Kernel(generic).on_disk()):
+            if kernels.Kernel(self.constants).on_disk() or mode == "specialised" or \
+                    not kernels.compiled_before(generic):
                 own = kernels.build_now(self.constants, self._compile)
         if own is not None and mode != "generic":
             self.tracer = self.tracer_for(own)
@@ -496,14 +495,13 @@ def warm_up(compile_cold: bool = True) -> bool:
     for its scene loads or compiles. Then the cache folders of other core sources are
     pruned (jit.prune_caches).
 
-    compile_cold=False loads it only where numba's cache has it. A command-line render
-    starts at once, and numba compiles one function at a time per process: a cold generic
-    compile begun here made the render wait for it before compiling its own plan's kernel
-    (Blender 3.4's farm render on a fresh cache: 335 s, the plan's kernel alone a third of
-    that). Returns whether the generic kernel is loaded."""
+    compile_cold=False (the add-on's registration) loads it only where numba's cache has
+    it: numba compiles one function at a time per process, so a cold generic compile begun
+    at registration made the first render wait for it before even its own plan's kernel
+    (Blender 3.4's farm render on a fresh cache: 335 s, the plan's kernel alone 91 s).
+    Returns whether the generic kernel is loaded."""
     prune_caches()
-    if not compile_cold and kernels.ready_kernel(kernels.generic_constants()) is None \
-            and not kernels.Kernel(kernels.generic_constants()).on_disk():
+    if not compile_cold and not kernels.compiled_before(kernels.generic_constants()):
         return False
     b = SceneBuilder()
     m = b.add_material(Material.diffuse("warm-up", (0.5, 0.5, 0.5), emission=(1, 1, 1)))
