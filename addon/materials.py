@@ -172,7 +172,8 @@ def _is_medium(medium):
 # with one reads UV maps.
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
                 "roughness_program", "height_program", "tint_program",
-                "diffuse_roughness_program", "anisotropy_program", "tangent_program")
+                "diffuse_roughness_program", "anisotropy_program", "tangent_program",
+                "specular_ior_program")
 # The MaterialSpec keywords of an anisotropic GGX lobe (scene.Material.with_anisotropy).
 ANISOTROPY_KEYS = ("specular_anisotropy", "anisotropic_rotation", "tangent_program",
                    "anisotropy_program")
@@ -1318,27 +1319,47 @@ class _Reader:
             ior = MIN_IOR
         return ior
 
+    def specular_ior(self, node):
+        """A Principled BSDF's IOR and Specular IOR Level for its dielectric layer: (their
+        constants, e.g. their textures' means; the program of both where either varies
+        over the surface, or None)."""
+        def constants():
+            level = 0.5 if enabled_input(node, "Specular IOR Level") is None else \
+                max(self.number(node, "Specular IOR Level", 0.5), 0.0)
+            return self.ior(node), level
+        return self.textured_pair(node, "IOR", "Specular IOR Level", 0.5, constants)
+
+    def textured_pair(self, node, first, second, second_default, constants):
+        """Two value inputs that may vary over the surface, as one program of both (its
+        first two channels) where either does: (their constants, from `constants()`,
+        whose warnings are dropped where the program stands for them; the program, or None,
+        warned where its chain does not compile). A missing second input is
+        `second_default`."""
+        program, why = shader_nodes.compile_pair(
+            enabled_input(node, first), enabled_input(node, second), second_default,
+            self.constants.image_cache)
+        warned = len(self.warnings)
+        a, b = constants()
+        if program is not None:
+            del self.warnings[warned:]  # the constants only stand in; the program is exact
+        elif why:
+            self.warn(f"node '{node.name}' {first} or {second} cannot be evaluated per point "
+                      f"({why} is not supported); rendered with their constants {a:.3g}, "
+                      f"{b:.3g}")
+        return a, b, program
+
     def anisotropy(self, node, socket_name, rotation_name):
         """A GGX node's anisotropy, its rotation and its Tangent as keywords (none where
         the node is isotropic): constants, or a program of both where either varies (the
         constants then stand for their means), and the tangent's program (Cycles' default,
         radial about Z, where the Tangent is unlinked or its chain does not compile,
         warned)."""
-        sock = enabled_input(node, socket_name)
-        if sock is None:
+        if enabled_input(node, socket_name) is None:
             return {}
-        rotation = enabled_input(node, rotation_name)
-        program, why = shader_nodes.compile_anisotropy(sock, rotation,
-                                                       self.constants.image_cache)
-        warned = len(self.warnings)
-        a = self.number(node, socket_name, 0.0)
-        r = self.number(node, rotation_name, 0.0) if rotation is not None else 0.0
-        if program is not None:
-            del self.warnings[warned:]  # the constants only stand in; the program is exact
-        elif why:
-            self.warn(f"node '{node.name}' {socket_name} or {rotation_name} cannot be "
-                      f"evaluated per point ({why} is not supported); rendered with their "
-                      f"constants {a:.3g}, {r:.3g}")
+        a, r, program = self.textured_pair(node, socket_name, rotation_name, 0.0, lambda: (
+            self.number(node, socket_name, 0.0),
+            self.number(node, rotation_name, 0.0)
+            if enabled_input(node, rotation_name) is not None else 0.0))
         if program is None and a == 0.0:
             return {}
         tangent_socket = enabled_input(node, "Tangent")
@@ -1576,8 +1597,7 @@ class _Reader:
         what the lobe's single scattering leaves), its Fresnel under the Specular Tint
         (specular_tint's keywords)."""
         base, program = self.textured_colour(node, "Base Color")
-        level = max(self.number(node, "Specular IOR Level", 0.5), 0.0) \
-            if "Specular IOR Level" in node.inputs else 0.5
+        ior, level, specular_ior = self.specular_ior(node)
         diffuse = {}
         if "Diffuse Roughness" in node.inputs:  # (since 4.3) Oren-Nayar on the base
             sigma, sigma_program = self.textured_unit(node, "Diffuse Roughness", 0.0)
@@ -1585,7 +1605,7 @@ class _Reader:
                        **_with(sigma_program, "diffuse_roughness_program")}
         return MaterialSpec("principled", self.material.name, {
             "base_colour": base, **_with(program), **self.roughness(node),
-            "ior": self.ior(node), "specular_ior_level": level,
+            "ior": ior, "specular_ior_level": level, **_with(specular_ior, "specular_ior_program"),
             "multiscatter": self.multiscatter(node),
             **(specular_tint or {"specular_tint": (1.0, 1.0, 1.0)}), **diffuse})
 

@@ -1403,17 +1403,20 @@ def compile_displacement(socket, texture_cache):
     return _attempt(build)
 
 
-def compile_anisotropy(anisotropy, rotation, texture_cache):
-    """(program or None, why not): where a GGX node's anisotropy or its rotation (sockets;
-    rotation may be None) varies, the program of both (its first two channels)."""
-    if not (varies(anisotropy) or (rotation is not None and varies(rotation))):
+def compile_pair(first, second, second_default, texture_cache):
+    """(program or None, why not): where either of two value inputs varies (sockets; the
+    second may be None, then `second_default`), the program of both (its first two
+    channels): a GGX node's anisotropy and rotation, a Principled BSDF's IOR and Specular
+    IOR Level."""
+    if not (varies(first) or (second is not None and varies(second))):
         return None, ""
 
     def build():
         c = Compiler(texture_cache)
-        a = c.input(anisotropy, "VALUE")
-        r = c.input(rotation, "VALUE") if rotation is not None else c.program.const([0.0])
-        c.program.out = c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=r, c=r)
+        a = c.input(first, "VALUE")
+        b = c.input(second, "VALUE") if second is not None else \
+            c.program.const([second_default])
+        c.program.out = c.program.emit(c.sh.OP_COMBINE, 3, a=a, b=b, c=b)
         return c.program
     return _attempt(build)
 

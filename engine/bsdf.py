@@ -611,6 +611,85 @@ def layer_fms(tables: MicrofacetTables, principled: bool, colour) -> np.ndarray:
 ROUGHNESS_GRID = 33
 ROUGHNESS_WARP = 1.5
 
+# A Principled BSDF whose IOR or Specular IOR Level varies over the surface (a texture on
+# either: the glTF importer's KHR_materials_specular texture drives the level) reads its
+# dielectric layer's spread and Fresnel average at each hit's own relative IOR, from one
+# table for every scene (varying_ior_tables): the spread over roughness (t^ROUGHNESS_WARP,
+# t uniform, as the rows over roughness), z = sqrt(|eta - 1| / (eta + 1)) (uniform) and
+# sqrt(mu) (uniform: the spread turns fastest at grazing views), read trilinearly; z is
+# Cycles' axis for its own table of the spread (ggx_gen_schlick_ior_s), on which eta and
+# 1 / eta meet (what lies below the lobe is dimmed alike, MicrofacetTables). The Fresnel
+# average, on a finer grid over z, for eta >= 1 and for eta < 1 (total internal
+# reflection makes them differ). tests/engine/test_microfacet.py measures both against
+# the exact integrals.
+IOR_TABLE_SHAPE = (17, 25, 33)  # roughness, z, sqrt(mu)
+IOR_FSS_SIZE = 257  # z
+IOR_TABLE_POINTS = 1024  # visible normals per entry (the spread is a mean Fresnel in [0, 1])
+IOR_TABLE_MAX_Z = 0.999  # eta 1000: F0 0.996, where the spread hardly matters any more
+IOR_Z_WARP = 1.5  # rows at z = MAX_Z t^WARP, t uniform: near IOR 1 the spread is steep
+
+
+def eta_of_z(z: float) -> float:
+    """The relative IOR >= 1 whose z = sqrt((eta - 1) / (eta + 1)) is z (in [0, 1))."""
+    return (1.0 + z * z) / (1.0 - z * z)
+
+
+@functools.lru_cache(maxsize=1)
+def varying_ior_tables() -> tuple:
+    """(spread (IOR_TABLE_SHAPE), fss (2, z)): the tables a varying IOR reads (see
+    IOR_TABLE_SHAPE), the same for every scene; made once per process (about 0.5 s)."""
+    nr, nz, nm = IOR_TABLE_SHAPE
+    u = r2_points(IOR_TABLE_POINTS)
+    z = IOR_TABLE_MAX_Z * np.linspace(0.0, 1.0, nz) ** IOR_Z_WARP
+    spread = np.zeros(IOR_TABLE_SHAPE)
+    for i, t in enumerate(np.linspace(0.0, 1.0, nr)):
+        alpha = max(float(t ** ROUGHNESS_WARP) ** 2, MIN_ALPHA)
+        for j in range(nz):  # (z = 0: the limit toward IOR 1, steep at grazing views)
+            eta = eta_of_z(max(float(z[j]), 1e-3))
+            for k, root in enumerate(np.linspace(0.0, 1.0, nm)):
+                spread[i, j, k] = _lobe_integrands(alpha, True, eta, max(root * root, 1e-3),
+                                                   u)[2].mean()
+    m = np.linspace(0.0, 1.0, 2049)
+    etas = [eta_of_z(float(x)) for x in np.linspace(0.0, IOR_TABLE_MAX_Z, IOR_FSS_SIZE)]
+    fss = np.array([[2.0 * trapezoid(_fresnel_curve(m, eta) * m, m) for eta in etas],
+                    [2.0 * trapezoid(_fresnel_curve(m, 1.0 / eta) * m, m) for eta in etas]])
+    return spread, fss
+
+
+@njit(**JIT)
+def ior_spread_at(table, roughness, eta, mu):
+    """The spread (MicrofacetTables.spread) of a dielectric GGX lobe of `roughness` and
+    relative IOR eta at view cosine mu, read trilinearly from varying_ior_tables'; 0 at
+    IOR 1, which reflects nothing (its z = 0 row is the limit toward it)."""
+    if eta == 1.0:
+        return 0.0
+    nr, nz, nm = table.shape
+    a = min(max(roughness, 0.0), 1.0) ** (1.0 / ROUGHNESS_WARP) * (nr - 1)
+    b = min(math.sqrt(abs(eta - 1.0) / (eta + 1.0)) / IOR_TABLE_MAX_Z, 1.0) ** (
+        1.0 / IOR_Z_WARP) * (nz - 1)
+    c = math.sqrt(min(max(mu, 0.0), 1.0)) * (nm - 1)
+    i, j, k = min(int(a), nr - 2), min(int(b), nz - 2), min(int(c), nm - 2)
+    a, b, c = a - i, b - j, c - k
+    out = 0.0
+    for di in range(2):
+        for dj in range(2):
+            for dk in range(2):
+                wt = (a if di else 1.0 - a) * (b if dj else 1.0 - b) * (c if dk else 1.0 - c)
+                out += wt * table[i + di, j + dj, k + dk]
+    return out
+
+
+@njit(**JIT)
+def ior_fss_at(table, eta):
+    """The dielectric Fresnel's hemispherical average at relative IOR eta, read linearly
+    from varying_ior_tables' over z."""
+    nz = table.shape[1]
+    b = min(math.sqrt(abs(eta - 1.0) / (eta + 1.0)) / IOR_TABLE_MAX_Z, 1.0) * (nz - 1)
+    j = min(int(b), nz - 2)
+    row = 1 if eta < 1.0 else 0
+    return table[row, j] + (b - j) * (table[row, j + 1] - table[row, j])
+
+
 # The layered lobes' tables for the kernel. Per material (k rows, zeros for other kinds):
 # base (k, 3) diffuse colour (Principled) or 0 (Glossy); tint (k, 3) specular weight (1 or
 # the Glossy colour); fresnel (k,) bool: dielectric Fresnel (Principled) or none; first and
@@ -623,10 +702,13 @@ ROUGHNESS_WARP = 1.5
 # front side's (entering, IOR), fms_back, missing_back and e_avg_back its back side's
 # (leaving, 1 / IOR). spread (n, m): the Principled rows' mean place of the Fresnel between
 # F0 and 1 over mu, and fss (k,) the Principled materials' Fresnel average: what a Specular
-# Tint's Fresnel needs (tinted_layer_at).
+# Tint's Fresnel needs (tinted_layer_at). varying_ior (k,) bool: a Principled layer whose
+# IOR varies, which reads its spread and Fresnel average at each hit's IOR from ior_spread
+# and ior_fss (varying_ior_tables; one zero entry each where no material needs them).
 LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_guide alpha fms "
                                         "missing albedo e_avg fms_back missing_back "
-                                        "e_avg_back spread fss diffuse_roughness")
+                                        "e_avg_back spread fss diffuse_roughness "
+                                        "varying_ior ior_spread ior_fss")
 
 # One rough vertex's lobe: the diffuse weight dw and specular (reflection) tint (3 each),
 # alpha, eta, fresnel_on, the compensation per channel at mu_o (3), the chance of the
@@ -694,9 +776,14 @@ def layer_tables(materials, used) -> LayerTables:
         (np.array(column, np.float64) for column in zip(*rows))
     diffuse_roughness = materials.diffuse_roughness if materials.diffuse_roughness is not None \
         else np.zeros(k)
+    varying_ior = np.zeros(k, np.bool_)
+    varying_ior[used] = materials.varying_ior()[used] & fresnel[used]
+    ior_spread, ior_fss = varying_ior_tables() if varying_ior.any() else \
+        (np.zeros((2, 2, 2)), np.zeros((2, 2)))
     return LayerTables(base, tint, fresnel, first, count, mu, interp_guide(mu, 256), alpha,
                        fms, missing, albedo, e_avg, fms_back, missing_back, e_avg_back,
-                       spread, fss, np.ascontiguousarray(diffuse_roughness, np.float64))
+                       spread, fss, np.ascontiguousarray(diffuse_roughness, np.float64),
+                       varying_ior, ior_spread, ior_fss)
 
 
 def _lobe_row(materials, j, roughness, rough=True) -> tuple:
@@ -802,10 +889,12 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0):
     from its LayerTables lt; with `textured`, its colour at this point is c (the Principled
     base, or the Glossy tint and, through Fss, its Fms) instead of the table's; roughness
     is the hit's where it is textured (lobe_rows); st (3) the Principled BSDF's Specular
-    Tint here (tinted_layer_at); sigma its Diffuse Roughness here (< 0: the table's)."""
+    Tint here (tinted_layer_at); sigma its Diffuse Roughness here (< 0: the table's); eta
+    the Principled layer's relative IOR here (its own where it varies, tinted_layer_at)."""
     if sigma < 0.0:
         sigma = lt.diffuse_roughness[mat]
-    if lt.fresnel[mat] and (st[0] != 1.0 or st[1] != 1.0 or st[2] != 1.0):
+    if lt.fresnel[mat] and (st[0] != 1.0 or st[1] != 1.0 or st[2] != 1.0
+                            or lt.varying_ior[mat]):
         return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma)
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
@@ -838,13 +927,20 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma
     albedo is F0 st + (1 - F0 st) s(mu), s the real Fresnel's mean place between F0 and 1
     (LayerTables.spread), times the compensation's darkening (1 + Fms (1 - E) / E) E, Fms
     from Fss = F0 st + (1 - F0 st) s_ss (the same place for the hemispherical average);
-    the base keeps 1 - the largest channel of it (Cycles' closure_layering_weight)."""
+    the base keeps 1 - the largest channel of it (Cycles' closure_layering_weight). Where
+    the layer's IOR varies (LayerTables.varying_ior), s and Fss are read at this eta; the
+    energy the lobe misses does not depend on it."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
-    spread = table_at(mu, lt, lt.spread, r0, r1, w)
+    if lt.varying_ior[mat]:
+        spread = ior_spread_at(lt.ior_spread, math.sqrt(alpha), eta, mu)
+        fss = ior_fss_at(lt.ior_fss, eta)
+    else:
+        spread = table_at(mu, lt, lt.spread, r0, r1, w)
+        fss = lt.fss[mat]
     e = lt.e_avg[r0] + w * (lt.e_avg[r1] - lt.e_avg[r0])
     f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
-    s_ss = min(max((lt.fss[mat] - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
+    s_ss = min(max((fss - f0) / (1.0 - f0), 0.0), 1.0) if f0 < 1.0 else 1.0
     b0, b1, b2 = lt.base[mat, 0], lt.base[mat, 1], lt.base[mat, 2]
     if textured:
         b0, b1, b2 = c0, c1, c2

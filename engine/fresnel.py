@@ -70,6 +70,25 @@ def tinted_fresnel(f, eta, tint):
     return t0 + (1.0 - t0) * s
 
 
+# Cycles clamps every BSDF's IOR input at this (svm_closure.h: fmaxf(ior, 1e-5f)).
+MIN_IOR = 1e-5
+
+
+@njit(**JIT)
+def specular_eta(ior, level):
+    """The relative IOR of the Principled BSDF's dielectric layer under its Specular IOR
+    Level, as Cycles makes it: F0 scaled by 2 x level (0.5 keeps the IOR, 0 leaves no
+    reflection), the IOR back from that F0 clamped to [0, 0.99] (Cycles' ior_from_F0), on
+    the IOR's side of 1. Its glass lobe keeps the IOR itself."""
+    ior = max(ior, MIN_IOR)
+    if level == 0.5:
+        return ior
+    f0 = ((ior - 1.0) / (ior + 1.0)) ** 2 * 2.0 * max(level, 0.0)
+    r = math.sqrt(min(max(f0, 0.0), 0.99))
+    eta = (1.0 + r) / (1.0 - r)
+    return 1.0 / eta if ior < 1.0 else eta
+
+
 def fresnel_conductor(cos_i, n, k):
     """Unpolarised Fresnel reflectance of a smooth conductor of complex IOR n + ik seen from
     vacuum (Cycles' fresnel_conductor; Born and Wolf 14.4.1), elementwise over numpy

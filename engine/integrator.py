@@ -44,6 +44,7 @@ import numpy as np
 from . import bsdf, camera, caustics, environment, lights, media, sampling, shading, terminator
 from .bsdf import DELTA_PDF
 from .film import filter_offset
+from .fresnel import specular_eta
 from .jit import INLINE, JIT, cgutils, intrinsic, ir, types
 from .lights import (_COS_ANGLE, _DIRECTION, _HIT_BSDF, _HIT_CAMERA, _POWER, _SUN_BSDF,
                      _SUN_CAMERA, _SUN_RADIANCE)
@@ -755,7 +756,8 @@ def rough_lobe(x, k, c, sc, paths):
         if HAS_OREN_NAYAR and HAS_TEXTURES:
             sigma = shading.diffuse_roughness_at(x.mat, x.f, x.u, x.v, mt.programs,
                                                  sc.geometry.uv, paths.svm, sigma)
-        lobe = bsdf.layer_at(x.mat, mu, mt.ior[x.mat], mt.layers, textured, c[0], c[1], c[2],
+        eta = specular_eta_at(x, sc, paths) if k == PRINCIPLED else mt.ior[x.mat]
+        lobe = bsdf.layer_at(x.mat, mu, eta, mt.layers, textured, c[0], c[1], c[2],
                              roughness, specular_tint_at(x, sc, paths), sigma)
         if HAS_ANISOTROPY and ax > 0.0:
             return bsdf.anisotropic_layer(lobe, ax, ay, tx, ty, tz)
@@ -799,6 +801,18 @@ def anisotropy_at(x, k, roughness, sc, paths):
     if not bsdf.tangent_frame(x.mx, x.my, x.mz, tx, ty, tz)[6]:
         return 0.0, 0.0, 0.0, 0.0, 0.0
     return ax, ay, tx, ty, tz
+
+
+def specular_eta_at(x, sc, paths):
+    """The relative IOR of Principled vertex x's dielectric layer: fresnel.specular_eta of
+    its IOR and Specular IOR Level here where either varies (their program), else its
+    material's constant."""
+    mt = sc.materials
+    if HAS_TEXTURES and mt.programs.specular_ior[x.mat, 0] >= 0:
+        ior, level = shading.specular_ior_at(x.mat, x.f, x.u, x.v, mt.programs,
+                                             sc.geometry.uv, paths.svm, 1.5, 0.5)
+        return specular_eta(ior, level)
+    return mt.ior[x.mat]
 
 
 def specular_tint_at(x, sc, paths):
@@ -1744,7 +1758,8 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
-    surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_tint_at, metal_edge_at,
+    surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_eta_at,
+    specular_tint_at, metal_edge_at,
     handle_emission, caustic_weight,
     continuation_probability, russian_roulette, emitter_pmf,
     lit_side, textured_emitter,

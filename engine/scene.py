@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .fresnel import specular_eta
 from .jit import ALLOCATING, JIT, njit
 from .media import medium_table
 from .shading import VIEW_MAPS, Program, ProgramTable, absent_map_value, map_label, pack
@@ -242,6 +243,10 @@ class Material:
     # (bsdf.oren_nayar_ratio, Lambert at 0), which may vary (a program).
     diffuse_roughness: float = 0.0
     diffuse_roughness_program: Program | None = field(default=None, compare=False)
+    # The Principled BSDF's IOR and Specular IOR Level where either varies: a Program whose
+    # result's first two channels are them at each hit; its dielectric layer's relative IOR
+    # is then fresnel.specular_eta of them (`ior`, the constant, stands for their means).
+    specular_ior_program: Program | None = field(default=None, compare=False)
     # An anisotropic GGX lobe (principled, rough_metal: the Principled BSDF's Anisotropic;
     # glossy: the Glossy BSDF's Anisotropy, each in Cycles' own convention,
     # bsdf.anisotropic_alphas), turned by `anisotropic_rotation` (of a full turn) about the
@@ -386,24 +391,23 @@ class Material:
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
                    emission_program=None, roughness_program=None, multiscatter=True,
                    specular_tint=(1.0, 1.0, 1.0), tint_program=None, diffuse_roughness=0.0,
-                   diffuse_roughness_program=None):
+                   diffuse_roughness_program=None, specular_ior_program=None):
         """Principled BSDF (metallic 0, transmission 0): a Lambert base (Oren-Nayar at a
         Diffuse Roughness > 0, clamped to 1 as Cycles does) under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
-        the Specular Tint scales F0 too (tinted_fresnel)."""
+        the Specular Tint scales F0 too (tinted_fresnel). `specular_ior_program` gives
+        the IOR and the level per point where either varies (Material.specular_ior_program)."""
         ior = float(ior)
-        if ior > 0 and specular_ior_level != 0.5 and ior != 1.0:
-            f0 = ((ior - 1) / (ior + 1)) ** 2 * 2.0 * float(specular_ior_level)
-            f0 = min(max(f0, 0.0), 0.999999)
-            eta = (1 + np.sqrt(f0)) / max(1 - np.sqrt(f0), 1e-12)
-            ior = float(eta if ior >= 1 else 1 / eta)
+        if ior > 0:
+            ior = float(specular_eta(ior, float(specular_ior_level)))
         return cls(name, "principled", tuple(base_colour), ior, emission=tuple(emission),
                    roughness=float(roughness), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
                    multiscatter=bool(multiscatter), specular_tint=tuple(specular_tint),
                    tint_program=tint_program,
                    diffuse_roughness=min(max(float(diffuse_roughness), 0.0), 1.0),
-                   diffuse_roughness_program=diffuse_roughness_program)
+                   diffuse_roughness_program=diffuse_roughness_program,
+                   specular_ior_program=specular_ior_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -639,6 +643,7 @@ class Materials:
     tint_programs: list | None = None  # per row a Specular or Coat Tint Program or None
     diffuse_roughness: np.ndarray | None = None  # (k,), Material.diffuse_roughness
     diffuse_roughness_programs: list | None = None  # per row its Program or None
+    specular_ior_programs: list | None = None  # per row Material.specular_ior_program or None
     # (k,) Material.specular_anisotropy and .anisotropic_rotation, and per row the
     # anisotropy and tangent Programs or None.
     specular_anisotropy: np.ndarray | None = None
@@ -743,11 +748,12 @@ class Materials:
                  [m.height_program for m in materials], [m.tint_program for m in materials],
                  [m.diffuse_roughness_program for m in materials],
                  [m.anisotropy_program for m in materials],
-                 [m.tangent_program for m in materials])
+                 [m.tangent_program for m in materials],
+                 [m.specular_ior_program for m in materials])
         textured = any(p is not None for progs in lists for p in progs)
         (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
          height_programs, tint_programs, diffuse_roughness_programs, anisotropy_programs,
-         tangent_programs) = lists if textured else (None,) * len(lists)
+         tangent_programs, specular_ior_programs) = lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -759,6 +765,7 @@ class Materials:
                    diffuse_roughness_programs=diffuse_roughness_programs,
                    diffuse_roughness=np.array([float(m.diffuse_roughness) for m in materials]),
                    anisotropy_programs=anisotropy_programs, tangent_programs=tangent_programs,
+                   specular_ior_programs=specular_ior_programs,
                    specular_anisotropy=np.array([float(m.specular_anisotropy)
                                                  for m in materials]),
                    anisotropic_rotation=np.array([float(m.anisotropic_rotation)
@@ -783,12 +790,18 @@ class Materials:
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness, height, tint, diffuse roughness, anisotropy, tangent), each a list with
-        one Program or None per row."""
+        roughness, height, tint, diffuse roughness, anisotropy, tangent, specular IOR),
+        each a list with one Program or None per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
                 self.fac_programs, self.roughness_programs, self.height_programs,
                 self.tint_programs, self.diffuse_roughness_programs,
-                self.anisotropy_programs, self.tangent_programs)
+                self.anisotropy_programs, self.tangent_programs, self.specular_ior_programs)
+
+    def varying_ior(self) -> np.ndarray:
+        """(k,) bool: the rows whose dielectric layer's IOR varies over the surface (a
+        Principled BSDF's specular IOR program)."""
+        return np.array([p is not None for p in
+                         (self.specular_ior_programs or [None] * len(self.kind))], bool)
 
     def anisotropic(self) -> np.ndarray:
         """(k,) bool: the rows whose GGX lobe may be anisotropic."""
@@ -1375,6 +1388,9 @@ def _check_varying(m: Material) -> None:
     if m.diffuse_roughness_program is not None and m.kind != "principled":
         raise ValueError(f"material '{m.name}': only a Principled BSDF has a Diffuse "
                          f"Roughness to vary")
+    if m.specular_ior_program is not None and m.kind != "principled":
+        raise ValueError(f"material '{m.name}': only a Principled BSDF's dielectric layer "
+                         f"has an IOR that may vary")
     if (m.specular_anisotropy != 0.0 or m.anisotropy_program is not None) and \
             (m.kind not in ANISOTROPIC_KINDS or m.tangent_program is None):
         raise ValueError(f"material '{m.name}': anisotropy needs a tangent program and "

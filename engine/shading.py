@@ -419,9 +419,10 @@ def radial_tangent(axis: str = "Z") -> Program:
 #   input's program as first instruction (-1: none), end, result register. tint: the
 #   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint; diffuse_roughness:
 #   the Principled BSDF's Diffuse Roughness; anisotropy: a GGX lobe's anisotropy and its
-#   rotation (two registers); tangent: its Tangent input (a vector).
+#   rotation (two registers); tangent: its Tangent input (a vector); specular_ior: the
+#   Principled BSDF's IOR and Specular IOR Level (two registers).
 SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint",
-         "diffuse_roughness", "anisotropy", "tangent")
+         "diffuse_roughness", "anisotropy", "tangent", "specular_ior")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
@@ -431,16 +432,18 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
          tint_programs: list | None = None,
          diffuse_roughness_programs: list | None = None,
          anisotropy_programs: list | None = None,
-         tangent_programs: list | None = None) -> ProgramTable:
+         tangent_programs: list | None = None,
+         specular_ior_programs: list | None = None) -> ProgramTable:
     """Pack the materials' colour, emission, normal-map, mix-factor, roughness, bump
-    height, tint, diffuse roughness, anisotropy and tangent programs (one per material, or
-    None) into a ProgramTable; each program's UV map names become scene-wide map indices
-    through `uv_index(name)`."""
+    height, tint, diffuse roughness, anisotropy, tangent and specular IOR programs (one per
+    material, or None) into a ProgramTable; each program's UV map names become scene-wide
+    map indices through `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
                                        fac_programs, roughness_programs, height_programs,
                                        tint_programs, diffuse_roughness_programs,
-                                       anisotropy_programs, tangent_programs)]
+                                       anisotropy_programs, tangent_programs,
+                                       specular_ior_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -1701,6 +1704,16 @@ def diffuse_roughness_at(mat, f, u, v, pt, uv, reg, r):
     or r where it is constant."""
     x, _, _ = result_at(pt.diffuse_roughness, mat, f, u, v, pt, uv, reg, r, r, r)
     return min(x, 1.0)
+
+
+@njit(**INLINE)
+def specular_ior_at(mat, f, u, v, pt, uv, reg, ior, level):
+    """Material mat's IOR and Specular IOR Level at the hit: its specular IOR program's
+    first two channels, or the constants."""
+    if pt.specular_ior[mat, 0] < 0:
+        return ior, level
+    i, s, _ = raw_result_at(pt.specular_ior, mat, f, u, v, pt, uv, reg)
+    return i, s
 
 
 @njit(**INLINE)

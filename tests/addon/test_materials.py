@@ -202,6 +202,44 @@ def test_anisotropy_reaches_the_metal_and_specular_lobes_with_its_tangent(fresh,
     assert (glossy.specular_anisotropy, glossy.anisotropic_rotation) == pytest.approx((-0.6, 0.1))
 
 
+def test_a_varying_ior_or_specular_ior_level_is_a_program_of_both(fresh, core):
+    """A Principled BSDF's Specular IOR Level or IOR from a texture (the glTF importer's
+    KHR_materials_specular texture drives the level) becomes a program of both, read by
+    its dielectric layer (not its glass lobe), without a warning; constants stay
+    constants; a chain that does not compile is warned, naming the node, and the
+    constants stand in."""
+    mat, node = node_material("Speckled", "ShaderNodeBsdfPrincipled", IOR=1.45,
+                              **{"Specular IOR Level": 0.3})
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    assert warnings == [] and m.specular_ior_program is None
+    assert m.ior == pytest.approx(core.fresnel.specular_eta(1.45, 0.3))
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    mat.node_tree.links.new(checker.outputs["Fac"], node.inputs["Specular IOR Level"])
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    assert warnings == [] and m.kind == "principled" and m.specular_ior_program is not None
+    values = {tuple(np.round(_program_at(m.specular_ior_program, p)[:2], 6))
+              for p in [(0.05, 0.05, 0.05), (0.3, 0.05, 0.05)]}
+    assert values == {(1.45, 1.0), (1.45, 0.0)}
+    mat.node_tree.links.new(checker.outputs["Fac"], node.inputs["IOR"])
+    node.inputs["Transmission Weight"].default_value = 0.5
+    spec, warnings = convert(mat)
+    m = spec.to_core(core)
+    dielectric, glass = m.components
+    assert dielectric.specular_ior_program is not None and glass.kind == "rough_glass"
+    assert len(warnings) == 1 and "'IOR'" in warnings[0]  # the glass lobe: the mean
+    values = {tuple(np.round(_program_at(dielectric.specular_ior_program, p)[:2], 6))
+              for p in [(0.05, 0.05, 0.05), (0.3, 0.05, 0.05)]}
+    assert values == {(1.0, 1.0), (0.0, 0.0)}
+    node.inputs["Transmission Weight"].default_value = 0.0
+    bevel = mat.node_tree.nodes.new("ShaderNodeBevel")  # not evaluated per point
+    mat.node_tree.links.new(bevel.outputs["Normal"], node.inputs["Specular IOR Level"])
+    spec, warnings = convert(mat)
+    assert spec.to_core(core).specular_ior_program is None
+    assert any("Specular IOR Level" in w and node.name in w for w in warnings), warnings
+
+
 @pytest.mark.parametrize("distribution, multiscatter, warned", [
     ("MULTI_GGX", True, False), ("GGX", False, False), ("BECKMANN", False, True)])
 def test_rough_glass_keeps_its_roughness_and_distribution(fresh, core, distribution, multiscatter,

@@ -351,6 +351,14 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if b is not None and displaced.random() < 0.4:
             b["displacement"] = {"space": str(displaced.choice(["WORLD", "OBJECT"])),
                                  "midlevel": _r(displaced.uniform(0.0, 1.0), 3)}
+    # A Principled BSDF's Specular IOR Level from a Checker Texture (the glTF importer links
+    # KHR_materials_specular's texture there), from a stream of its own: 0 (no specular
+    # layer at all) to 1.5.
+    speculars = np.random.default_rng([seed, 0x5bec])
+    for o in params["objects"]:
+        if o["material"]["kind"] == "principled" and speculars.random() < 0.25:
+            o["material"]["specular_checker"] = [_r(speculars.uniform(0.0, 0.5), 3),
+                                                 _r(speculars.uniform(0.5, 1.5), 3)]
     # Some opaque surfaces coloured by a procedural texture (issue 14's nodes), from a
     # stream of their own: a texture of random kind and settings on Generated or Object
     # coordinates, its Fac-like output through a Math or Map Range node or not, into a
@@ -455,6 +463,7 @@ def features(params) -> list[str]:
                  + (f":fac_{m['mix']['factor']['kind']}" if m.get("mix", {}).get("factor")
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
+                 + (":specular_tex" if m.get("specular_checker") else "")
                  + (f":oren_nayar={m['diffuse_roughness']}" if m.get("diffuse_roughness")
                     else "")
                  + (f":anisotropy={m['anisotropy']['value']}" if m.get("anisotropy")
@@ -678,6 +687,9 @@ def _simpler_material(m):
     if m.get("roughness_checker"):
         out.append(("untextured roughness",
                     {k: v for k, v in m.items() if k != "roughness_checker"}))
+    if m.get("specular_checker"):
+        out.append(("untextured Specular IOR Level",
+                    {k: v for k, v in m.items() if k != "specular_checker"}))
     if m.get("coat"):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("bump"):
@@ -859,15 +871,16 @@ def _mix_surface(mat, mix):
     tree.links.new(node.outputs[0], out.inputs["Surface"])
 
 
-def _roughness_checker(mat, low_high):
-    """The surface shader's Roughness from a Checker Texture (Generated coordinates)."""
+def _roughness_checker(mat, low_high, socket="Roughness"):
+    """The surface shader's Roughness (or another input) from a Checker Texture
+    (Generated coordinates)."""
     tree = mat.node_tree
-    shader = next(n for n in tree.nodes if "Roughness" in n.inputs)
+    shader = next(n for n in tree.nodes if socket in n.inputs)
     checker = tree.nodes.new("ShaderNodeTexChecker")
     checker.inputs["Color1"].default_value = (low_high[0],) * 3 + (1.0,)
     checker.inputs["Color2"].default_value = (low_high[1],) * 3 + (1.0,)
     checker.inputs["Scale"].default_value = 3.0
-    tree.links.new(checker.outputs["Color"], shader.inputs["Roughness"])  # grey: exact
+    tree.links.new(checker.outputs["Color"], shader.inputs[socket])  # grey: exact
     return mat
 
 
@@ -875,6 +888,8 @@ def _bpy_surface(name, m):
     mat = _bpy_surface_shader(name, m)
     if m.get("roughness_checker"):
         _roughness_checker(mat, m["roughness_checker"])
+    if m.get("specular_checker"):
+        _roughness_checker(mat, m["specular_checker"], "Specular IOR Level")
     if m.get("colour_texture"):
         _colour_texture(mat, m["colour_texture"])
     if m.get("bump"):

@@ -826,6 +826,23 @@ def _principled_base_lambert(scene, settings):
     return scene, settings
 
 
+def _specular_ior_constant(scene, settings):
+    """A Principled BSDF's varying IOR and Specular IOR Level read as their constants (the
+    textures' means, the old fallback)."""
+    if scene.programs is not None:
+        scene.programs = scene.programs._replace(
+            specular_ior=np.full_like(scene.programs.specular_ior, -1))
+    return scene, settings
+
+
+def _specular_ior_tables_at_mean(scene, settings):
+    """The layer's Fresnel at each hit's IOR, but its spread and Fresnel average (what dims
+    the base, and the compensation) at the material's mean IOR."""
+    m = scene.materials
+    scene.materials = dataclasses.replace(m, specular_ior_programs=[None] * len(m.kind))
+    return scene, settings
+
+
 def _anisotropy_changed(scale=1.0, turn=0.0):
     """Every constant anisotropy times `scale` (0: isotropic, the old fallback, its
     textured anisotropy and tangents dropped too) and every constant rotation `turn` more
@@ -1532,6 +1549,12 @@ INJECTIONS = {
     "oren_nayar_as_lambert": ("oren_nayar", _diffuse_roughness_scaled(0.0), None),
     "oren_nayar_roughness_halved": ("oren_nayar", _diffuse_roughness_scaled(0.5), None),
     "principled_diffuse_roughness_ignored": ("oren_nayar", _principled_base_lambert, None),
+    # A varying IOR and Specular IOR Level: their means (the old fallback); the layer's
+    # tables read at the mean while its Fresnel follows the hit.
+    "specular_ior_as_mean": ("specular_ior_textured", _specular_ior_constant, None),
+    "specular_ior_tables_at_mean": ("specular_ior_textured", _specular_ior_tables_at_mean,
+                                    None),
+    "gltf_specular_texture_as_mean": ("gltf_specular", _specular_ior_constant, None),
     # Anisotropic GGX: rendered isotropic (the old fallback); anisotropy halved; every
     # lobe's tangent a quarter turn off (its axes swapped).
     "anisotropy_ignored": ("anisotropic", _anisotropy_changed(scale=0.0), None),

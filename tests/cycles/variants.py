@@ -2785,6 +2785,53 @@ def principled_ggx():
         _sphere(mat, centre, radius, name)
 
 
+def specular_ior_textured():
+    """A Principled BSDF's IOR and Specular IOR Level varying over the surface (issue 14,
+    point 1: every input linkable; the glTF importer links KHR_materials_specular's texture
+    to the level): a blue ball whose level is a Checker's 0.1 and 1 (F0 0.4 % and 8 %); a
+    grey ball under an orange Specular Tint whose IOR is a Checker's 0.75 and 2.5 (both
+    sides of 1); a white cube whose roughness is a Checker's 0.15 and 0.6 and whose level
+    runs 0 to 2 along x (a Gradient Texture). An emitter in front of the box, above the
+    camera's view, lights them at grazing angles, where the Fresnel turns."""
+    _box()
+    _emitter_quad("Front", (-0.4, -1.6, 1.4), 0.4, 12.0, (-math.pi / 3, 0.0, 0.0))
+
+    def driven(name, inputs, socket, scale, offset, source=None):
+        mat = _principled(name, **inputs)
+        tree = mat.node_tree
+        fac = source(tree) if source else _unit_checker(tree, 4.0)[0]
+        affine = tree.nodes.new("ShaderNodeMath")
+        affine.operation = "MULTIPLY_ADD"
+        tree.links.new(fac, affine.inputs[0])
+        affine.inputs[1].default_value, affine.inputs[2].default_value = scale, offset
+        principled = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+        tree.links.new(affine.outputs[0], principled.inputs[socket])
+        return mat, tree, principled
+
+    blue, _, _ = driven("LevelChecked", {"Base Color": (0.2, 0.35, 0.7, 1.0),
+                                         "Roughness": 0.25}, "Specular IOR Level", 0.9, 0.1)
+    _sphere(blue, (-0.45, 0.2, 0.35), 0.35, "LevelChecked")
+    grey, _, _ = driven("IorChecked", {"Base Color": (0.35, 0.35, 0.35, 1.0), "Roughness": 0.3,
+                                       "Specular Tint": (1.0, 0.6, 0.3, 1.0)}, "IOR", 1.75, 0.75)
+    _sphere(grey, (0.5, 0.3, 0.3), 0.3, "IorChecked")
+
+    def gradient(tree):
+        g = tree.nodes.new("ShaderNodeTexGradient")
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        tree.links.new(coords.outputs["Generated"], g.inputs["Vector"])
+        return g.outputs["Fac"]
+
+    white, tree, principled = driven("LevelRamp", {"Base Color": (0.8, 0.8, 0.8, 1.0)},
+                                     "Specular IOR Level", 2.0, 0.0, gradient)
+    rough = tree.nodes.new("ShaderNodeMath")
+    rough.operation = "MULTIPLY_ADD"
+    tree.links.new(_unit_checker(tree, 3.0)[0], rough.inputs[0])
+    rough.inputs[1].default_value, rough.inputs[2].default_value = 0.45, 0.15
+    tree.links.new(rough.outputs[0], principled.inputs["Roughness"])
+    cube = _cube("LevelRamp", (0.0, -0.4, 0.17), (0.34, 0.34, 0.34), white)
+    cube.rotation_euler = (0.0, 0.0, 0.5)
+
+
 def emission_strength_texture():
     """Emission Strength from textures (issue 14, point 1): an Emission card on the back
     wall whose Strength is a Checker Texture's Fac (0 and 1, times 3 by a Math node), and a
@@ -3477,6 +3524,16 @@ def gltf_sheen_chair():
     _gltf("SheenChair", direction=(0.4, -1.0, 0.6), distance=3.2, ext=".gltf")
 
 
+def gltf_specular():
+    """Khronos SpecularTest (KHR_materials_specular, through the importer): rows of
+    spheres whose specular factor (the Specular IOR Level) and specular colour (the
+    Specular Tint) step from 0 to 1 and above, each row beside one whose value comes from
+    a texture; seen face-on under the grey world alone (the sun's reflection in these
+    smooth spheres is a highlight of about 1e-4 of a pixel, which 512 samples find by
+    chance or not at all)."""
+    _gltf("SpecularTest", direction=(0.0, -1.0, 0.0), distance=2.0, sun=False)
+
+
 def gltf_clear_coat():
     """Khronos ClearCoatTest: each row a base, the base coated and the coat alone; a coat
     weight and a coat roughness from textures, and normal maps on the base, on the coat
@@ -3635,6 +3692,8 @@ _add(Variant("coat_furnace", coat_furnace, max_bounces=8, samples=256, cycles_sa
 _add(Variant("sheen", sheen, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("sheen_bumped", sheen_bumped, max_bounces=8, samples=1024, cycles_samples=2048))
 _add(Variant("emission_strength_texture", emission_strength_texture, max_bounces=8))
+_add(Variant("specular_ior_textured", specular_ior_textured, max_bounces=8, samples=1024,
+             cycles_samples=2048))
 for _setup, _name in ((gltf_box_textured, "BoxTextured"),
                       (gltf_texture_settings, "TextureSettingsTest"),
                       (gltf_texture_coordinates, "TextureCoordinateTest"),
@@ -3650,6 +3709,9 @@ _add(Variant("gltf_transmission", gltf_transmission, max_bounces=8, samples=512,
 _add(Variant("gltf_clear_coat", gltf_clear_coat, resolution=(64, 96), max_bounces=8,
              samples=512, cycles_samples=1024,
              files=(os.path.join(GLTF_DIR, "ClearCoatTest", "ClearCoatTest.glb"),)))
+_add(Variant("gltf_specular", gltf_specular, resolution=(112, 96), max_bounces=8,
+             samples=512, cycles_samples=1024,
+             files=(os.path.join(GLTF_DIR, "SpecularTest", "SpecularTest.glb"),)))
 _add(Variant("gltf_anisotropy_strength", gltf_anisotropy_strength, resolution=(96, 72),
              max_bounces=8, samples=512, cycles_samples=1024,
              files=(os.path.join(GLTF_DIR, "AnisotropyStrengthTest",
