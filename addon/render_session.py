@@ -196,8 +196,12 @@ class RenderSession:
 
         t0 = time.perf_counter()
         try:
+            # Before the first pass: what it waits for (a first render of a kind of scene
+            # compiles its kernel for a minute or more), not a frozen "Exporting scene".
             out = specula.render(core_scene, settings, on_pass=on_pass,
-                                 should_stop=self.should_stop)
+                                 should_stop=self.should_stop,
+                                 on_status=lambda text: engine.update_stats(
+                                     "", f"Specula | {text}"))
         except Exception as exc:  # noqa: BLE001 - keep the partial image, report, no dialog
             traceback.print_exc()
             engine.end_result(result)

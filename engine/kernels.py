@@ -129,6 +129,7 @@ def compile_on(kernel: Kernel, scene, settings, plan, emitters, camera, accel) -
 _lock = threading.Lock()
 _ready: dict[tuple, Kernel] = {}
 _building: dict[tuple, threading.Thread] = {}
+_compiling: set = set()  # keys being compiled (not loaded from numba's cache) right now
 
 
 def ready_kernel(constants: dict) -> Kernel | None:
@@ -143,6 +144,20 @@ def compiled_before(constants: dict) -> bool:
     return ready_kernel(constants) is not None or Kernel(constants).on_disk()
 
 
+def build_status(constants: dict) -> str:
+    """What a render about to wait for the kernel of `constants` tells its user ("" where
+    it is loaded already). numba compiles one function at a time per process, so a compile
+    under way on another thread (the add-on's warm-up, a plan's kernel in the background)
+    delays even a load from the cache: said too."""
+    if ready_kernel(constants) is not None:
+        return ""
+    what = "Loading the render kernel" if Kernel(constants).on_disk() else \
+        "Compiling the render kernel for this kind of scene (once; a minute or more)"
+    with _lock:
+        busy = bool(_compiling - {key_of(constants)})
+    return what + (", after another compiling in the background" if busy else "")
+
+
 def build_now(constants: dict, compile_with) -> Kernel:
     """Load (from numba's cache) or compile the kernel for `constants` now; `compile_with`
     (Kernel) runs it once on real data so every entry point compiles with real types."""
@@ -150,8 +165,17 @@ def build_now(constants: dict, compile_with) -> Kernel:
     if k is not None:
         return k
     k = Kernel(constants)
+    cold = not k.on_disk()
+    if cold:
+        with _lock:
+            _compiling.add(k.key)
     t0 = time.perf_counter()
-    compile_with(k)
+    try:
+        compile_with(k)
+    finally:
+        if cold:
+            with _lock:
+                _compiling.discard(k.key)
     k.compile_seconds = time.perf_counter() - t0
     k.mark_ready()
     with _lock:

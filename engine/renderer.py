@@ -151,7 +151,8 @@ class Kernels:
 
     profile = False  # the benchmark's per-stage profile (PROFILE kernels)
 
-    def __init__(self, scene, settings, plan, accel, emitters, camera, timers):
+    def __init__(self, scene, settings, plan, accel, emitters, camera, timers, on_status=None):
+        self.on_status = on_status
         self.scene, self.settings, self.plan = scene, settings, plan
         self.accel, self.emitters, self.camera, self.timers = accel, emitters, camera, timers
         grid = emitters is not None and hasattr(emitters, "local_pmf")
@@ -173,13 +174,20 @@ class Kernels:
             # compiled (then the plan's, which compiles in a third of the time).
             if kernels.Kernel(self.constants).on_disk() or mode == "specialised" or \
                     not kernels.compiled_before(generic):
-                own = kernels.build_now(self.constants, self._compile)
+                own = self._build(self.constants)
         if own is not None and mode != "generic":
             self.tracer = self.tracer_for(own)
             return
-        self.tracer = self.tracer_for(kernels.build_now(generic, self._compile))
+        self.tracer = self.tracer_for(self._build(generic))
         if mode == "auto":
             self.pending = kernels.build_in_background(self.constants, self._compile)
+
+    def _build(self, constants) -> kernels.Kernel:
+        """kernels.build_now, saying first what the render waits for (on_status)."""
+        status = kernels.build_status(constants)
+        if status and self.on_status is not None:
+            self.on_status(status)
+        return kernels.build_now(constants, self._compile)
 
     def tracer_for(self, kernel) -> kernels.Tracer:
         data = kernels.scene_data(self.scene, self.settings, self.plan, self.emitters,
@@ -337,16 +345,20 @@ def _stop_reason(settings, sample, elapsed, rel, should_stop) -> str:
     return ""
 
 
-def _prepare(scene, settings, debug):
-    """The plan, the film, the stage timers and the kernels of a render."""
+def _prepare(scene, settings, debug, on_status=None):
+    """The plan, the film, the stage timers and the kernels of a render; `on_status(text)`
+    hears what it is doing where that may take a while."""
     plan = make_plan(scene, settings)
     log.info("specula plan: %s", plan.describe())
+    if on_status is not None:
+        on_status(f"Building the ray acceleration structure ({scene.num_triangles:,} "
+                  f"triangles)")
     accel = Accel(scene)
     emitters = LightSampler(scene) if plan.emitters else None
     camera = CameraModel(scene.camera, settings.width, settings.height, scene.origin)
     x0, y0, x1, y1 = settings.window
     timers = StageTimers()
-    kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers)
+    kernel = Kernels(scene, settings, plan, accel, emitters, camera, timers, on_status)
     if debug:
         kernel.use_debug_kernel()
     # The film keeps transparency where a pixel can have some: a transparent film or a
@@ -383,17 +395,20 @@ def _launch(pool, worker, tracer, index, chunks, light_paths):
 
 
 def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=None,
-           debug: bool = False) -> RenderResult:
+           debug: bool = False, on_status=None) -> RenderResult:
     """Render `scene` progressively.
 
     on_pass : optional callable(Pass) run after every pass (for display and progress).
     should_stop : optional callable() -> bool checked between passes; True cancels,
         keeping the passes done.
     debug : render with the DEBUG kernel, which names the stage of a NaN/inf (slower).
+    on_status : optional callable(str) told, before the first pass, what the render is
+        doing where that may take a while (building the BVH, loading or compiling the
+        kernel: kernels.build_status).
     """
     settings.validate()
     t0 = time.perf_counter()
-    plan, film, timers, kernel = _prepare(scene, settings, debug)
+    plan, film, timers, kernel = _prepare(scene, settings, debug, on_status)
     n_pixels = film.width * film.height
 
     worker = _Worker(settings, kernel, film, timers, debug)

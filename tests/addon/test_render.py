@@ -99,6 +99,37 @@ def small_scene(scene):
     scene.world = world
 
 
+def test_the_stats_line_says_what_the_render_waits_for(fresh, tmp_path, monkeypatch, core):
+    """Before the first pass, Blender's stats line names what the render is doing (the
+    BVH with its triangle count; loading or compiling a kernel where one is not loaded:
+    engine.kernels.build_status), not a frozen "Exporting scene"; then the samples."""
+    small_scene(fresh)
+    said = []
+    original = render_session.RenderSession.render
+
+    class Spy:  # the RenderEngine, its stats line recorded
+        def __init__(self, engine):
+            self._engine = engine
+
+        def __getattr__(self, name):
+            return getattr(self._engine, name)
+
+        def update_stats(self, stats, info):
+            said.append(info)
+            self._engine.update_stats(stats, info)
+
+    def render(self, depsgraph):
+        self.engine = Spy(self.engine)
+        return original(self, depsgraph)
+
+    monkeypatch.setattr(render_session.RenderSession, "render", render)
+    render_to_exr(fresh, tmp_path / "stats.exr", samples=2, size=(16, 12))
+    assert said[0] == "Specula | Exporting scene", said
+    assert said[1] == "Specula | Building the ray acceleration structure (24 triangles)", said
+    first_pass = next(i for i, s in enumerate(said) if "1/2" in s)
+    assert all("kernel" in s for s in said[2:first_pass]), said
+
+
 @pytest.mark.slow
 def test_cancel_keeps_the_partial_image(fresh, tmp_path, monkeypatch, spy, core):
     small_scene(fresh)

@@ -215,3 +215,38 @@ def test_warm_up_compiles_the_generic_kernel_cold_only_when_asked(monkeypatch):
     monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: True)
     assert renderer.warm_up(compile_cold=False) is True  # cached: loaded
     assert len(rendered) == 2
+
+
+def test_a_render_says_what_it_waits_for(monkeypatch):
+    """on_status hears the BVH being built, then (kernels.build_status) nothing for a
+    loaded kernel, "Loading" for one in numba's cache, "Compiling" for one never compiled,
+    and that it waits behind another compile under way on another thread (numba compiles
+    one function at a time); build_now marks a cold compile while it runs."""
+    from engine import Camera, Material, RenderSettings, SceneBuilder, World, kernels
+
+    said = []
+    b = SceneBuilder()
+    m = b.add_material(Material.diffuse("lamp", (0.5, 0.5, 0.5), emission=(1, 1, 1)))
+    b.add_mesh("tri", np.array([[-1.0, -1, -2], [1, -1, -2], [0, 1, -2]]),
+               np.array([[0, 1, 2]]), m)
+    render(b.build(Camera(), World((0.1, 0.1, 0.1))),
+           RenderSettings(width=4, height=3, samples=1, threads=1), on_status=said.append)
+    assert said[0] == "Building the ray acceleration structure (1 triangles)", said
+    constants = kernels.generic_constants()
+    monkeypatch.setattr(kernels, "ready_kernel", lambda constants: None)  # not loaded
+    monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: True)
+    assert kernels.build_status(constants) == "Loading the render kernel"
+    monkeypatch.setattr(kernels.Kernel, "on_disk", lambda self: False)
+    assert kernels.build_status(constants).startswith("Compiling the render kernel")
+    seen = []
+
+    def compile_with(kernel):
+        other = {**constants, kernels.PLAN_CONSTANTS[0]: not constants[
+            kernels.PLAN_CONSTANTS[0]]}
+        seen.append(kernels.build_status(other))
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError):
+        kernels.build_now(constants, compile_with)
+    assert seen[0].endswith(", after another compiling in the background"), seen
+    assert kernels._compiling == set()  # unmarked when the compile ends, even failing
