@@ -615,13 +615,15 @@ ROUGHNESS_WARP = 1.5
 # either: the glTF importer's KHR_materials_specular texture drives the level) reads its
 # dielectric layer's spread and Fresnel average at each hit's own relative IOR, from one
 # table for every scene (varying_ior_tables): the spread over roughness (t^ROUGHNESS_WARP,
-# t uniform, as the rows over roughness), z = sqrt(|eta - 1| / (eta + 1)) (uniform) and
-# sqrt(mu) (uniform: the spread turns fastest at grazing views), read trilinearly; z is
-# Cycles' axis for its own table of the spread (ggx_gen_schlick_ior_s), on which eta and
-# 1 / eta meet (what lies below the lobe is dimmed alike, MicrofacetTables). The Fresnel
+# t uniform, as the rows over roughness), z = sqrt(|eta - 1| / (eta + 1)) (denser toward
+# IOR 1, IOR_Z_WARP) and sqrt(mu) (uniform: the spread turns fastest at grazing views),
+# read trilinearly; z is Cycles' axis for its own table of the spread
+# (ggx_gen_schlick_ior_s), on which eta and 1 / eta meet (what lies below the lobe is
+# dimmed alike, MicrofacetTables). The Fresnel
 # average, on a finer grid over z, for eta >= 1 and for eta < 1 (total internal
 # reflection makes them differ). tests/engine/test_microfacet.py measures both against
-# the exact integrals.
+# the exact integrals: Cycles' estimate F0 + (1 - F0) s within 0.010 (7e-4 on average);
+# 17 rows over z, uniform, left it 0.024 off near IOR 1 at grazing views.
 IOR_TABLE_SHAPE = (17, 25, 33)  # roughness, z, sqrt(mu)
 IOR_FSS_SIZE = 257  # z
 IOR_TABLE_POINTS = 1024  # visible normals per entry (the spread is a mean Fresnel in [0, 1])
@@ -637,7 +639,7 @@ def eta_of_z(z: float) -> float:
 @functools.lru_cache(maxsize=1)
 def varying_ior_tables() -> tuple:
     """(spread (IOR_TABLE_SHAPE), fss (2, z)): the tables a varying IOR reads (see
-    IOR_TABLE_SHAPE), the same for every scene; made once per process (about 0.5 s)."""
+    IOR_TABLE_SHAPE), the same for every scene; made once per process (about 1 s)."""
     nr, nz, nm = IOR_TABLE_SHAPE
     u = r2_points(IOR_TABLE_POINTS)
     z = IOR_TABLE_MAX_Z * np.linspace(0.0, 1.0, nz) ** IOR_Z_WARP
