@@ -396,16 +396,11 @@ def _launch(pool, worker, tracer, index, chunks, light_paths):
 
 def render(scene: Scene, settings: RenderSettings, on_pass=None, should_stop=None,
            debug: bool = False, on_status=None) -> RenderResult:
-    """Render `scene` progressively.
-
-    on_pass : optional callable(Pass) run after every pass (for display and progress).
-    should_stop : optional callable() -> bool checked between passes; True cancels,
-        keeping the passes done.
-    debug : render with the DEBUG kernel, which names the stage of a NaN/inf (slower).
-    on_status : optional callable(str) told, before the first pass, what the render is
-        doing where that may take a while (building the BVH, loading or compiling the
-        kernel: kernels.build_status).
-    """
+    """Render `scene` progressively. on_pass : optional callable(Pass) run after every
+    pass (display, progress). should_stop : optional callable() -> bool checked between
+    passes; True cancels, keeping the passes done. debug : the DEBUG kernel, which names
+    the stage of a NaN/inf (slower). on_status : optional callable(str) told, before the
+    first pass, what may take a while (the BVH; loading or compiling the kernel)."""
     settings.validate()
     t0 = time.perf_counter()
     plan, film, timers, kernel = _prepare(scene, settings, debug, on_status)
