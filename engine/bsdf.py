@@ -485,6 +485,20 @@ def _fresnel_curve(m, eta):
     return out
 
 
+def fresnel_average(eta: float) -> float:
+    """Fss, the dielectric Fresnel's hemispherical average 2 int F(mu) mu dmu at relative
+    IOR eta (2049-point trapezoid): what the compensation and the layering read."""
+    m = np.linspace(0.0, 1.0, 2049)
+    return float(2.0 * trapezoid(_fresnel_curve(m, float(eta)) * m, m))
+
+
+@njit(**JIT)
+def ior_z(eta):
+    """z = sqrt(|eta - 1| / (eta + 1)), Cycles' IOR axis (F0 = z^4), the same for eta and
+    1 / eta."""
+    return math.sqrt(abs(eta - 1.0) / (eta + 1.0))
+
+
 def r2_points(n: int) -> np.ndarray:
     """n points (n, 2) of Roberts' R2 sequence in [0, 1)^2. A 32 x 32 grid of visible
     normals left (1 - E) / E up to 0.013 off at normal incidence (its rings alias with the
@@ -542,8 +556,7 @@ class MicrofacetTables:
         e_white = np.clip(e_white, 1e-6, 1.0)
         self.e_avg = float(2.0 * trapezoid(e_white * self.mu, self.mu))
         if fresnel_on:
-            m = np.linspace(0.0, 1.0, 2049)
-            fss = 2.0 * trapezoid(_fresnel_curve(m, float(eta)) * m, m)
+            fss = fresnel_average(eta)
         else:
             fss = 1.0
         self.missing_table = (1.0 - e_white) / e_white
@@ -651,10 +664,9 @@ def varying_ior_tables() -> tuple:
             for k, root in enumerate(np.linspace(0.0, 1.0, nm)):
                 spread[i, j, k] = _lobe_integrands(alpha, True, eta, max(root * root, 1e-3),
                                                    u)[2].mean()
-    m = np.linspace(0.0, 1.0, 2049)
     etas = [eta_of_z(float(x)) for x in np.linspace(0.0, IOR_TABLE_MAX_Z, IOR_FSS_SIZE)]
-    fss = np.array([[2.0 * trapezoid(_fresnel_curve(m, eta) * m, m) for eta in etas],
-                    [2.0 * trapezoid(_fresnel_curve(m, 1.0 / eta) * m, m) for eta in etas]])
+    fss = np.array([[fresnel_average(eta) for eta in etas],
+                    [fresnel_average(1.0 / eta) for eta in etas]])
     return spread, fss
 
 
@@ -667,7 +679,7 @@ def ior_spread_at(table, roughness, eta, mu):
         return 0.0
     nr, nz, nm = table.shape
     a = min(max(roughness, 0.0), 1.0) ** (1.0 / ROUGHNESS_WARP) * (nr - 1)
-    b = min(math.sqrt(abs(eta - 1.0) / (eta + 1.0)) / IOR_TABLE_MAX_Z, 1.0) ** (
+    b = min(ior_z(eta) / IOR_TABLE_MAX_Z, 1.0) ** (
         1.0 / IOR_Z_WARP) * (nz - 1)
     c = math.sqrt(min(max(mu, 0.0), 1.0)) * (nm - 1)
     i, j, k = min(int(a), nr - 2), min(int(b), nz - 2), min(int(c), nm - 2)
@@ -686,7 +698,7 @@ def ior_fss_at(table, eta):
     """The dielectric Fresnel's hemispherical average at relative IOR eta, read linearly
     from varying_ior_tables' over z."""
     nz = table.shape[1]
-    b = min(math.sqrt(abs(eta - 1.0) / (eta + 1.0)) / IOR_TABLE_MAX_Z, 1.0) * (nz - 1)
+    b = min(ior_z(eta) / IOR_TABLE_MAX_Z, 1.0) * (nz - 1)
     j = min(int(b), nz - 2)
     row = 1 if eta < 1.0 else 0
     return table[row, j] + (b - j) * (table[row, j + 1] - table[row, j])
@@ -849,8 +861,7 @@ def glass_fss(reflection_tint, transmission_tint, eta) -> np.ndarray:
     t = np.maximum(np.asarray(transmission_tint, np.float64), 0.0)
     if t.any():
         return t
-    m = np.linspace(0.0, 1.0, 2049)
-    fss = 2.0 * trapezoid(_fresnel_curve(m, float(eta)) * m, m)
+    fss = fresnel_average(eta)
     return fss * np.maximum(np.asarray(reflection_tint, np.float64), 0.0)
 
 
