@@ -27,12 +27,14 @@ Fallbacks:
     transparent white; a Coat Weight > 0 (or textured) lays Cycles' coat over the lobes,
     and a Sheen Weight > 0 (or textured) Cycles' microfiber sheen over that.
     Specular Tint bends the metal's F82 Fresnel and scales the dielectric and glass
-    Fresnel's F0 (Cycles' generalized Schlick). Inputs Specula does not render
-    (Subsurface, Anisotropic, Thin Film) warn when used; Diffuse Roughness makes the base
+    Fresnel's F0 (Cycles' generalized Schlick); Thin Film puts Cycles' thin-film
+    interference on the Fresnel of the dielectric, glass and metal lobes. Inputs Specula
+    does not render (Subsurface) warn when used; Diffuse Roughness makes the base
     Oren-Nayar.
   * Sheen BSDF: Cycles' microfiber sheen (Ashikhmin rendered as microfiber, warned).
-  * Metallic BSDF: the Principled BSDF's F82 metal (Base Color, Edge Tint); a Physical
-    Conductor as Cycles' F82 fit of its IOR and Extinction (warned with its deviation).
+  * Metallic BSDF: the Principled BSDF's F82 metal (Base Color, Edge Tint, Thin Film); a
+    Physical Conductor as Cycles' F82 fit of its IOR and Extinction (warned with its
+    deviation; its Thin Film warned and left out).
   * Mix Shader (Fac constant or textured) and Add Shader: a mix of their two shaders.
   * Refraction BSDF: refraction only, without Fresnel (Beckmann rendered as GGX, warned).
   * any other shader node (Toon, Hair, ...): diffuse of its 'Color' / 'Base Color'
@@ -72,7 +74,6 @@ MEAN_SIDE = 512
 # no effect, what is rendered instead). Used (linked, or unlinked at another value) -> warning.
 PRINCIPLED_IGNORED = (
     ("Subsurface Weight", 0.0, "rendered without subsurface scattering"),
-    ("Thin Film Thickness", 0.0, "rendered without thin film"),
 )
 # Material Output inputs beside Surface that Specula ignores, with what that means.
 OUTPUT_IGNORED = (("Thickness", "thickness is not used"),)
@@ -1393,7 +1394,6 @@ class _Reader:
         anisotropy and normal; a Physical Conductor (IOR and Extinction, constants) as the
         F82 metal fitted to it (bsdf.conductor_as_f82), warned with the fit's deviation."""
         self.normal(node)
-        self.ignored(node, "Thin Film Thickness", 0.0, "rendered without thin film")
         kwargs = {**self.roughness(node), "multiscatter": self.multiscatter(node),
                   **self.anisotropy(node, "Anisotropy", "Rotation")}
         if getattr(node, "fresnel_type", "F82") == "F82":
@@ -1401,7 +1401,9 @@ class _Reader:
             tint, tint_program = self.textured_colour(node, "Edge Tint", (1.0, 1.0, 1.0))
             return MaterialSpec("metal", self.material.name, {
                 "base_colour": base, **_with(program), "specular_tint": tint,
-                **_with(tint_program, "tint_program"), **kwargs})
+                **_with(tint_program, "tint_program"), **kwargs, **self.thin_film(node)})
+        # (Cycles puts a film on the exact conductor, not on its F82 fit rendered here.)
+        self.ignored(node, "Thin Film Thickness", 0.0, "rendered without thin film")
         n, k = (np.array(self.colour(node, name, default))  # (negative or NaN: 0)
                 for name, default in (("IOR", (1.5,) * 3), ("Extinction", (0.0,) * 3)))
         f0, tint, deviation = core.load().bsdf.conductor_as_f82(n, k)
@@ -1412,6 +1414,26 @@ class _Reader:
         return MaterialSpec("metal", self.material.name, {
             "base_colour": tuple(float(x) for x in f0),
             "specular_tint": tuple(float(x) for x in tint), **kwargs})
+
+    def thin_film(self, node):
+        """A Principled or Metallic BSDF's Thin Film as keywords of its lobes: thickness
+        (nm) and IOR, constants (the means where they vary, warned); none at thickness 0."""
+        if "Thin Film Thickness" not in node.inputs:
+            return {}
+        film = []
+        for name, default in (("Thin Film Thickness", 0.0), ("Thin Film IOR", 1.33)):
+            value, program = self.textured_colour(node, name, (default,) * 3)
+            if program is not None:
+                self.warn(f"node '{node.name}' input '{name}' varies over the surface, which "
+                          f"Specula does not support; rendered with its mean {value[0]:.4g}")
+            film.append(float(value[0]))
+        if film[0] <= 0.0:
+            return {}
+        rec709 = core.load().spectrum.XYZ_TO_REC709
+        if not np.allclose(shader_nodes.xyz_to_scene_linear(), rec709.ravel(), atol=1e-3):
+            self.warn(f"node '{node.name}' Thin Film: its colours are computed for linear "
+                      f"Rec.709, not this file's working space")
+        return {"thin_film": tuple(film)}
 
     def principled_ignored(self, node):
         self.normal(node)
@@ -1452,7 +1474,7 @@ class _Reader:
         if kwargs and program is not None:
             kwargs["emission_program"] = program
         multiscatter = self.multiscatter(node)
-        tint = self.specular_tint(node)
+        tint = {**self.specular_tint(node), **self.thin_film(node)}
 
         def metal():
             base, program = self.textured_colour(node, "Base Color")

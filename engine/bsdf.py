@@ -23,7 +23,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from .fresnel import fresnel_conductor, fresnel_dielectric, glass_fresnel, tinted_fresnel
+from .fresnel import (f82_tint_b, film_tinted, fresnel_conductor,  # noqa: F401
+                      fresnel_dielectric, fresnel_f82, glass_fresnel, thin_film_dielectric,
+                      thin_film_f82, tinted_fresnel)
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .sampling import (build_frame, concentric_disk, cosine_hemisphere, guided_interp,
                        interp_guide)
@@ -34,29 +36,6 @@ DELTA_PDF = np.inf
 
 
 # ----------------------------------------------------------------- Fresnel
-@njit(**JIT)
-def fresnel_f82(cos_theta, f0, b):
-    """The Principled BSDF's metallic Fresnel, one channel (Cycles' fresnel_f82; Hoffman's
-    F82 model): Schlick's F0 + (1 - F0)(1 - cos)^5 less b cos (1 - cos)^6, in [0, 1]. b
-    (f82_tint_b) bends the curve toward the Specular Tint near grazing; b = 0 is Schlick."""
-    mu = min(max(abs(cos_theta), 0.0), 1.0)
-    s = 1.0 - mu
-    s5 = s ** 5
-    g = min(max(f0, 0.0), 1.0)
-    return min(max(g + (1.0 - g) * s5 - b * mu * s5 * s, 0.0), 1.0)
-
-
-@njit(**JIT)
-def f82_tint_b(f0, tint):
-    """The F82 model's b for one channel of base colour F0 and Specular Tint (at most 1):
-    the curve at cos = 1/7 (about 82 degrees) is Schlick's there times the tint (Cycles'
-    fresnel_f82tint_B)."""
-    f = 6.0 / 7.0
-    f5 = f ** 5
-    g = min(max(f0, 0.0), 1.0)
-    return (g + (1.0 - g) * f5) * (7.0 / (f5 * f)) * (1.0 - min(max(tint, 0.0), 1.0))
-
-
 def conductor_as_f82(n, k) -> tuple:
     """The F82 metal (fresnel_f82) standing for a conductor of complex IOR n + ik (3,):
     exact at normal incidence and at cos = 1/7, Cycles' own fit of it for its energy
@@ -207,7 +186,7 @@ def reflect(wox, woy, woz, nx, ny, nz):
 
 @njit(**JIT)
 def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact,
-                      fresnel_on):
+                      fresnel_on, film_d=0.0, film_n=1.0):
     """Smooth dielectric (Cycles' Glass BSDF and Principled transmission at roughness 0;
     without fresnel_on, the Refraction BSDF: glass_fresnel).
 
@@ -216,12 +195,16 @@ def sample_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exa
     (fresnel.tinted_fresnel: F per channel; white leaves F as it is). Reflection
     R = F x r_tint, transmission T = (1 - F) x t_tint; reflection is chosen with
     probability avg(R) / avg(R + T) and the weight is R / p or T / (1 - p), as in Cycles.
-    Returns (w, weight (3 values), ok).
+    film_d > 0: under a thin film of that thickness and IOR film_n relative to wo's side
+    (filmed_fresnel; the exact Fresnel). Returns (w, weight (3 values), ok).
     """
     wx, wy, wz, cos_o = reflect(wox, woy, woz, nx, ny, nz)
-    fr, cos_t = glass_fresnel(cos_o, eta, exact, fresnel_on)
-    f0, f1, f2 = (tinted_fresnel(fr, eta, st[0]), tinted_fresnel(fr, eta, st[1]),
-                  tinted_fresnel(fr, eta, st[2]))
+    fr, cos_t = glass_fresnel(cos_o, eta, exact or film_d > 0.0, fresnel_on)
+    if film_d > 0.0:
+        f0, f1, f2 = filmed_fresnel(cos_o, eta, film_d, film_n, st[0], st[1], st[2])
+    else:
+        f0, f1, f2 = (tinted_fresnel(fr, eta, st[0]), tinted_fresnel(fr, eta, st[1]),
+                      tinted_fresnel(fr, eta, st[2]))
     r0, r1, r2 = f0 * r_tint[0], f1 * r_tint[1], f2 * r_tint[2]
     q0, q1, q2 = (1.0 - f0) * t_tint[0], (1.0 - f1) * t_tint[1], (1.0 - f2) * t_tint[2]
     r_avg = (r0 + r1 + r2) / 3.0
@@ -730,11 +713,12 @@ LayerTables = namedtuple("LayerTables", "base tint fresnel first count mu mu_gui
 # (3; rough metal, fresnel_f82, else 0) and the Principled BSDF's Specular Tint on a
 # dielectric Fresnel (3; fresnel.tinted_fresnel; 1 elsewhere); the Principled base's
 # Oren-Nayar roughness (0: Lambert) and colour, its albedo (3); an anisotropic lobe's
-# alpha_x, alpha_y (ax 0: isotropic, alpha) and tangent t (3; anisotropic_layer).
+# alpha_x, alpha_y (ax 0: isotropic, alpha) and tangent t (3; anisotropic_layer); a thin
+# film's thickness (nm; 0: none) and IOR relative to the side of wo (filmed_layer).
 Layer = namedtuple("Layer", "dw0 dw1 dw2 tint0 tint1 tint2 alpha eta fresnel_on "
                             "comp0 comp1 comp2 p_spec tt0 tt1 tt2 b0 b1 b2 st0 st1 st2 "
-                            "sigma base0 base1 base2 ax ay tx ty tz",
-                  defaults=(0.0,) * 9)
+                            "sigma base0 base1 base2 ax ay tx ty tz film_d film_n",
+                  defaults=(0.0,) * 10 + (1.0,))
 
 
 @njit(**INLINE)
@@ -742,7 +726,7 @@ def no_layer():
     """The Layer of a vertex without a rough lobe."""
     return Layer(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
                  0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0)
+                 0.0, 0.0, 1.0)
 
 
 @njit(**INLINE)
@@ -752,7 +736,29 @@ def anisotropic_layer(lobe, ax, ay, tx, ty, tz):
     return Layer(lobe.dw0, lobe.dw1, lobe.dw2, lobe.tint0, lobe.tint1, lobe.tint2, lobe.alpha,
                  lobe.eta, lobe.fresnel_on, lobe.comp0, lobe.comp1, lobe.comp2, lobe.p_spec,
                  lobe.tt0, lobe.tt1, lobe.tt2, lobe.b0, lobe.b1, lobe.b2, lobe.st0, lobe.st1,
-                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, ax, ay, tx, ty, tz)
+                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, ax, ay, tx, ty, tz,
+                 lobe.film_d, lobe.film_n)
+
+
+@njit(**INLINE)
+def filmed_layer(lobe, thickness, film_ior):
+    """`lobe` under a thin film of `thickness` (nm) and IOR `film_ior` relative to the side
+    of wo: its Fresnel of a single scattering becomes the film's (filmed_fresnel); its
+    compensation and its share of the layering keep their film-free values, as Cycles'."""
+    return Layer(lobe.dw0, lobe.dw1, lobe.dw2, lobe.tint0, lobe.tint1, lobe.tint2, lobe.alpha,
+                 lobe.eta, lobe.fresnel_on, lobe.comp0, lobe.comp1, lobe.comp2, lobe.p_spec,
+                 lobe.tt0, lobe.tt1, lobe.tt2, lobe.b0, lobe.b1, lobe.b2, lobe.st0, lobe.st1,
+                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, lobe.ax, lobe.ay,
+                 lobe.tx, lobe.ty, lobe.tz, thickness, film_ior)
+
+
+@njit(**JIT)
+def filmed_fresnel(cos_i, eta, film_d, film_n, st0, st1, st2):
+    """A Principled dielectric's Fresnel per channel under its film (fresnel.
+    thin_film_dielectric: eta and film_n relative to the incident side) and Specular Tint
+    st (fresnel.film_tinted)."""
+    f0, f1, f2 = thin_film_dielectric(cos_i, eta, film_n, film_d)
+    return film_tinted(f0, eta, st0), film_tinted(f1, eta, st1), film_tinted(f2, eta, st2)
 
 
 def layer_tables(materials, used) -> LayerTables:
@@ -897,18 +903,21 @@ def fms_at(fms, r0, r1, w):
 
 
 @njit(**INLINE)
-def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0):
+def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0, film_d=0.0,
+             film_n=1.0):
     """The layered lobe of rough material `mat` at view cosine mu (to its specular normal)
     from its LayerTables lt; with `textured`, its colour at this point is c (the Principled
     base, or the Glossy tint and, through Fss, its Fms) instead of the table's; roughness
     is the hit's where it is textured (lobe_rows); st (3) the Principled BSDF's Specular
     Tint here (tinted_layer_at); sigma its Diffuse Roughness here (< 0: the table's); eta
-    the Principled layer's relative IOR here (its own where it varies, tinted_layer_at)."""
+    the Principled layer's relative IOR here (its own where it varies, tinted_layer_at);
+    film_d > 0: under a thin film of that thickness (nm) and IOR film_n (tinted_layer_at)."""
     if sigma < 0.0:
         sigma = lt.diffuse_roughness[mat]
     if lt.fresnel[mat] and (st[0] != 1.0 or st[1] != 1.0 or st[2] != 1.0
-                            or lt.varying_ior[mat]):
-        return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma)
+                            or lt.varying_ior[mat] or film_d > 0.0):
+        return tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma,
+                               film_d, film_n)
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
     albedo = table_at(mu, lt, lt.albedo, r0, r1, w)
@@ -930,11 +939,12 @@ def layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma=-1.0):
     return Layer(dw0, dw1, dw2, tint0, tint1, tint2, alpha, eta, lt.fresnel[mat],
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, p_spec,
                  0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, sigma, b0, b1, b2,
-                 0.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
 @njit(**JIT)
-def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma):
+def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma, film_d,
+                    film_n):
     """layer_at for a Principled layer under a Specular Tint st (3): Cycles' generalized
     Schlick Fresnel from F0 x st to 1 (fresnel.tinted_fresnel). Per channel, its estimated
     albedo is F0 st + (1 - F0 st) s(mu), s the real Fresnel's mean place between F0 and 1
@@ -942,7 +952,9 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma
     from Fss = F0 st + (1 - F0 st) s_ss (the same place for the hemispherical average);
     the base keeps 1 - the largest channel of it (Cycles' closure_layering_weight). Where
     the layer's IOR varies (LayerTables.varying_ior), s and Fss are read at this eta; the
-    energy the lobe misses does not depend on it."""
+    energy the lobe misses does not depend on it. Under a thin film (film_d > 0) the
+    estimate is the film's Fresnel at mu instead (Cycles: no tables for films), the
+    compensation the film-free one."""
     r0, r1, w, alpha = lobe_rows(mat, lt, roughness)
     missing = table_at(mu, lt, lt.missing, r0, r1, w)
     if lt.varying_ior[mat]:
@@ -960,6 +972,10 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma
     c0, a0 = _tinted_channel(f0, st[0], s_ss, spread, e, missing)
     c1, a1 = _tinted_channel(f0, st[1], s_ss, spread, e, missing)
     c2, a2 = _tinted_channel(f0, st[2], s_ss, spread, e, missing)
+    if film_d > 0.0:
+        g0, g1, g2 = filmed_fresnel(mu, eta, film_d, film_n, st[0], st[1], st[2])
+        a0, a1, a2 = (g0 * c0 / (1.0 + missing), g1 * c1 / (1.0 + missing),
+                      g2 * c2 / (1.0 + missing))
     kept = 1.0 - min(max(a0, max(a1, a2)), 1.0)
     dw0, dw1, dw2 = b0 * kept, b1 * kept, b2 * kept
     sp = (a0 + a1 + a2) / 3.0
@@ -967,7 +983,7 @@ def tinted_layer_at(mat, mu, eta, lt, textured, c0, c1, c2, roughness, st, sigma
     p_spec = sp / max(sp + sd, 1e-300) if sp + sd > 0 else 1.0
     return Layer(dw0, dw1, dw2, 1.0, 1.0, 1.0, alpha, eta, True, c0, c1, c2, p_spec,
                  0.0, 0.0, 0.0, 0.0, 0.0, 0.0, st[0], st[1], st[2], sigma, b0, b1, b2,
-                 0.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, film_d, film_n)
 
 
 @njit(**INLINE)
@@ -1014,7 +1030,7 @@ def metal_layer_at(mat, mu, lt, textured, c0, c1, c2, roughness, edge):
     return Layer(0.0, 0.0, 0.0, tint0, tint1, tint2, alpha, 1.0, False,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  0.0, 0.0, 0.0, b0, b1, b2, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
 @njit(**INLINE)
@@ -1044,7 +1060,7 @@ def glass_layer_at(mat, mu, front, ior, lt, r_tint, t_tint, roughness, fresnel_o
     return Layer(0.0, 0.0, 0.0, r_tint[0], r_tint[1], r_tint[2], alpha, eta, fresnel_on,
                  1.0 + f0 * missing, 1.0 + f1 * missing, 1.0 + f2 * missing, 1.0,
                  t_tint[0], t_tint[1], t_tint[2], 0.0, 0.0, 0.0, st[0], st[1], st[2], 0.0,
-                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
 
 
 @njit(**INLINE)
@@ -1108,11 +1124,16 @@ def eval_layered(wox, woy, woz, wix, wiy, wiz, sx, sy, sz, mx, my, mz, nx, ny, n
     hl = max(math.sqrt(hx * hx + hy * hy + hz * hz), 1e-300)
     hx, hy, hz = hx / hl, hy / hl, hz / hl
     cos_hv = hx * wox + hy * woy + hz * woz
-    tinted = lobe.fresnel_on and (lobe.st0 != 1.0 or lobe.st1 != 1.0 or lobe.st2 != 1.0)
+    tinted = lobe.fresnel_on and (lobe.st0 != 1.0 or lobe.st1 != 1.0 or lobe.st2 != 1.0
+                                  or lobe.film_d > 0.0)
     spec, pdf_s = eval_lobe_ggx(wox, woy, woz, wix, wiy, wiz, hx, hy, hz, mx, my, mz, lobe,
                                 lobe.eta, lobe.fresnel_on and not tinted)
     spec0 = spec1 = spec2 = spec
-    if tinted:  # the Specular Tint's Fresnel per channel
+    if tinted and lobe.film_d > 0.0:
+        f0, f1, f2 = filmed_fresnel(cos_hv, lobe.eta, lobe.film_d, lobe.film_n, lobe.st0,
+                                    lobe.st1, lobe.st2)
+        spec0, spec1, spec2 = spec * f0, spec * f1, spec * f2
+    elif tinted:  # the Specular Tint's Fresnel per channel
         f = fresnel_dielectric(cos_hv, lobe.eta, True)[0]
         spec0 = spec * tinted_fresnel(f, lobe.eta, lobe.st0)
         spec1 = spec * tinted_fresnel(f, lobe.eta, lobe.st1)
@@ -1194,8 +1215,12 @@ def eval_rough_dielectric(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
     hx, hy, hz = hx / length, hy / length, hz / length
     cos_ho = hx * wox + hy * woy + hz * woz
     fr = glass_fresnel(cos_ho, eta, True, lobe.fresnel_on)[0]
-    f0, f1, f2 = (tinted_fresnel(fr, eta, lobe.st0), tinted_fresnel(fr, eta, lobe.st1),
-                  tinted_fresnel(fr, eta, lobe.st2))
+    if lobe.film_d > 0.0:
+        f0, f1, f2 = filmed_fresnel(cos_ho, eta, lobe.film_d, lobe.film_n, lobe.st0, lobe.st1,
+                                    lobe.st2)
+    else:
+        f0, f1, f2 = (tinted_fresnel(fr, eta, lobe.st0), tinted_fresnel(fr, eta, lobe.st1),
+                      tinted_fresnel(fr, eta, lobe.st2))
     r0, r1, r2 = f0 * lobe.tint0, f1 * lobe.tint1, f2 * lobe.tint2
     t0, t1, t2 = (1.0 - f0) * lobe.tt0, (1.0 - f1) * lobe.tt1, (1.0 - f2) * lobe.tt2
     total = r0 + r1 + r2 + t0 + t1 + t2
@@ -1224,8 +1249,13 @@ def sample_rough_dielectric(wox, woy, woz, mx, my, mz, nx, ny, nz, lobe, u_lobe,
     hwx, hwy, hwz = sample_visible_normal(wox, woy, woz, mx, my, mz, lobe.alpha, ua, ub)
     cos_ho = hwx * wox + hwy * woy + hwz * woz
     fr, cos_t = glass_fresnel(cos_ho, lobe.eta, True, lobe.fresnel_on)
-    f0, f1, f2 = (tinted_fresnel(fr, lobe.eta, lobe.st0), tinted_fresnel(fr, lobe.eta, lobe.st1),
-                  tinted_fresnel(fr, lobe.eta, lobe.st2))
+    if lobe.film_d > 0.0:
+        f0, f1, f2 = filmed_fresnel(cos_ho, lobe.eta, lobe.film_d, lobe.film_n, lobe.st0,
+                                    lobe.st1, lobe.st2)
+    else:
+        f0, f1, f2 = (tinted_fresnel(fr, lobe.eta, lobe.st0),
+                      tinted_fresnel(fr, lobe.eta, lobe.st1),
+                      tinted_fresnel(fr, lobe.eta, lobe.st2))
     if f0 == fr and f1 == fr and f2 == fr:
         r = fr * (lobe.tint0 + lobe.tint1 + lobe.tint2)
         q = (1.0 - fr) * (lobe.tt0 + lobe.tt1 + lobe.tt2)
@@ -1271,6 +1301,13 @@ def eval_rough_conductor(wox, woy, woz, wix, wiy, wiz, mx, my, mz, nx, ny, nz, l
                               False)
     if not wix * nx + wiy * ny + wiz * nz > 0.0:
         return 0.0, 0.0, 0.0, 0.0
+    if lobe.film_d > 0.0:
+        return (spec * thin_film_f82(cos_hv, lobe.tint0, lobe.b0, lobe.film_n, lobe.film_d, 0)
+                * lobe.comp0,
+                spec * thin_film_f82(cos_hv, lobe.tint1, lobe.b1, lobe.film_n, lobe.film_d, 1)
+                * lobe.comp1,
+                spec * thin_film_f82(cos_hv, lobe.tint2, lobe.b2, lobe.film_n, lobe.film_d, 2)
+                * lobe.comp2, pdf)
     return (spec * fresnel_f82(cos_hv, lobe.tint0, lobe.b0) * lobe.comp0,
             spec * fresnel_f82(cos_hv, lobe.tint1, lobe.b1) * lobe.comp1,
             spec * fresnel_f82(cos_hv, lobe.tint2, lobe.b2) * lobe.comp2, pdf)

@@ -41,7 +41,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from . import bsdf, camera, caustics, environment, lights, media, sampling, shading, terminator
+from . import (bsdf, camera, caustics, environment, fresnel, lights, media, sampling, shading,
+               terminator)
 from .bsdf import DELTA_PDF
 from .film import filter_offset
 from .fresnel import specular_eta
@@ -85,7 +86,8 @@ PLAN_CONSTANTS = ("HAS_DIFFUSE", "HAS_MIRROR", "HAS_METAL", "HAS_GLASS", "HAS_RO
                   "HAS_LIGHT_IMPORTANCE", "HAS_LIGHT_TRACING", "HAS_TEXTURES", "HAS_NORMAL_MAPS",
                   "HAS_VOLUMES", "HAS_SCATTERING", "HAS_MIXES", "HAS_COATS", "HAS_TRANSPARENCY",
                   "HAS_TRANSLUCENT", "HAS_SHEEN", "HAS_LIGHT_PATH", "HAS_OREN_NAYAR",
-                  "HAS_ANISOTROPY", "HAS_TRANSPARENT_GLASS", "PROFILE", "DEBUG")
+                  "HAS_ANISOTROPY", "HAS_TRANSPARENT_GLASS", "HAS_THIN_FILM", "PROFILE",
+                  "DEBUG")
 HAS_DIFFUSE = HAS_MIRROR = HAS_METAL = HAS_GLASS = HAS_ROUGH = HAS_ROUGH_GLASS = True
 HAS_ROUGH_METAL = True
 HAS_DOF = HAS_POLYGON_APERTURE = HAS_SHADING_NORMALS = HAS_EMISSION = True
@@ -107,6 +109,7 @@ HAS_OREN_NAYAR = True  # Diffuse BSDFs with roughness (bsdf.oren_nayar_ratio)
 HAS_ANISOTROPY = True  # anisotropic GGX lobes (bsdf.anisotropic_layer)
 # Film > Transparent Glass: camera paths stay camera paths through clear glass (clear_glass)
 HAS_TRANSPARENT_GLASS = True
+HAS_THIN_FILM = True  # Principled Thin Film (fresnel.thin_film_dielectric, thin_film_f82)
 PROFILE = DEBUG = False  # cycle counts per stage; naming the stage of a NaN
 
 # The stage DEBUG kernels name when a value goes non-finite (Tracer.explain_nonfinite).
@@ -135,7 +138,8 @@ Geometry = namedtuple("Geometry", "vertices tri_normal tri_scale material_index 
 # (k, 3) (scene.Materials.emission_root, emission_share); with anisotropy, each row's
 # anisotropy and rotation (k,) (scene.Materials.specular_anisotropy, anisotropic_rotation);
 # with normal maps, whether a row's bump is its displacement's (k,) bool
-# (scene.Materials.sets_normal).
+# (scene.Materials.sets_normal); with thin films, each row's film (thickness in nm, IOR)
+# (k, 2) (scene.Materials.thin_film).
 MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "transmission_tint emission layers programs "
                                             "normal_strength medium mix_components "
@@ -143,7 +147,7 @@ MaterialTable = namedtuple("MaterialTable", "kind colour ior reflection_tint "
                                             "glass_tints roughness sheen_layer sheen_parent "
                                             "sheen_ltc specular_tint emission_root "
                                             "emission_share anisotropy rotation "
-                                            "sets_normal")
+                                            "sets_normal thin_film")
 # caustics: caustics.CausticData (n_light 0 without light tracing); camera_media: the
 # volume stack camera paths start with (media.MEDIA_STACK material rows, -1 empty);
 # exact_fresnel: the render's Fresnel model for smooth glass (False: Schlick's);
@@ -734,8 +738,30 @@ def surface_colour(x, sc, paths):
 def rough_lobe(x, k, c, sc, paths):
     """The rough lobe (bsdf.Layer) of vertex x of kind k with surface colour c: the
     Principled or Glossy layer, rough metal, or rough glass on the side wo sees, at the
-    roughness its program gives here where it has one (anisotropic where it is); empty for
-    others."""
+    roughness its program gives here where it has one (anisotropic where it is), under its
+    thin film where it has one; empty for others."""
+    film_d = film_n = 0.0
+    if HAS_THIN_FILM and sc.materials.thin_film[x.mat, 0] > 0.0:
+        film_d, film_n = sc.materials.thin_film[x.mat, 0], film_ior_at(x, k, sc)
+    lobe = lobe_at(x, k, c, sc, paths, film_d, film_n)
+    if film_d > 0.0 and k != PRINCIPLED:  # (the Principled layer's estimate reads its film)
+        return bsdf.filmed_layer(lobe, film_d, film_n)
+    return lobe
+
+
+def film_ior_at(x, k, sc):
+    """The IOR of vertex x's thin film relative to the side wo sees: its own, or on a
+    glass's back face over the glass's IOR (Cycles' adjust_thin_film_ior_at_backface: the
+    stack glass | film | air reflects as air | film / glass | 1 / glass does)."""
+    mt = sc.materials
+    n = mt.thin_film[x.mat, 1]
+    if (k == GLASS or k == ROUGH_GLASS) and not x.front:
+        return n / mt.ior[x.mat]
+    return n
+
+
+def lobe_at(x, k, c, sc, paths, film_d, film_n):
+    """rough_lobe; a Principled layer under the film given (film_d > 0: its thickness)."""
     mt = sc.materials
     mu = min(max(x.mx * x.wox + x.my * x.woy + x.mz * x.woz, 0.0), 1.0)
     textured = tinted = False
@@ -758,7 +784,7 @@ def rough_lobe(x, k, c, sc, paths):
                                                  sc.geometry.uv, paths.svm, sigma)
         eta = specular_eta_at(x, sc, paths) if k == PRINCIPLED else mt.ior[x.mat]
         lobe = bsdf.layer_at(x.mat, mu, eta, mt.layers, textured, c[0], c[1], c[2],
-                             roughness, specular_tint_at(x, sc, paths), sigma)
+                             roughness, specular_tint_at(x, sc, paths), sigma, film_d, film_n)
         if HAS_ANISOTROPY and ax > 0.0:
             return bsdf.anisotropic_layer(lobe, ax, ay, tx, ty, tz)
         return lobe
@@ -1189,9 +1215,13 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         eta = mt.ior[x.mat] if x.front else 1.0 / mt.ior[x.mat]
         u = sample_1d(ps, rev_sample, bounce_dim(depth, LOBE))
         tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
+        film_d = film_n = 0.0
+        if HAS_THIN_FILM:
+            film_d, film_n = mt.thin_film[x.mat, 0], film_ior_at(x, k, sc)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:],
-            specular_tint_at(x, sc, paths), u, sc.exact_fresnel, mt.fresnel[x.mat])
+            specular_tint_at(x, sc, paths), u, sc.exact_fresnel, mt.fresnel[x.mat], film_d,
+            film_n)
         # A tilted normal (smooth, mapped or bumped) can refract a direction back above the
         # geometric surface: Cycles' bsdf_microfacet_sample drops it (as the rough lobe).
         below_m = wx * x.mx + wy * x.my + wz * x.mz < 0.0
@@ -1200,6 +1230,13 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:  # the reflection tint is its Specular Tint (F82)
         edge = metal_edge_at(x, sc, paths)
+        if HAS_THIN_FILM and mt.thin_film[x.mat, 0] > 0.0:
+            d, n = mt.thin_film[x.mat, 0], mt.thin_film[x.mat, 1]
+            return (wx, wy, wz,
+                    fresnel.thin_film_f82(cos_o, c[0], bsdf.f82_tint_b(c[0], edge[0]), n, d, 0),
+                    fresnel.thin_film_f82(cos_o, c[1], bsdf.f82_tint_b(c[1], edge[1]), n, d, 1),
+                    fresnel.thin_film_f82(cos_o, c[2], bsdf.f82_tint_b(c[2], edge[2]), n, d, 2),
+                    DELTA_PDF, True)
         return (wx, wy, wz, bsdf.fresnel_f82(cos_o, c[0], bsdf.f82_tint_b(c[0], edge[0])),
                 bsdf.fresnel_f82(cos_o, c[1], bsdf.f82_tint_b(c[1], edge[1])),
                 bsdf.fresnel_f82(cos_o, c[2], bsdf.f82_tint_b(c[2], edge[2])), DELTA_PDF, True)
@@ -1759,7 +1796,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_eta_at,
-    specular_tint_at, metal_edge_at,
+    specular_tint_at, metal_edge_at, lobe_at, film_ior_at,
     handle_emission, caustic_weight,
     continuation_probability, russian_roulette, emitter_pmf,
     lit_side, textured_emitter,

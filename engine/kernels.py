@@ -245,30 +245,7 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         tangents = np.zeros((1, 3, 4), F32)
     geometry = Geometry(v, tri_normal, tri_scale, scene.material_index.astype(np.int64),
                         normals, smooth, obj, offset, uv, tangents)
-    m = scene.materials
-    rough = plan.principled or plan.glossy or plan.rough_glass or plan.rough_metal
-    used = m.reachable(np.unique(scene.material_index))
-    layers = layer_tables(m, used) if (rough or generic) else None
-    strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
-    # Materials.from_list always fills the media and mix arrays; a kernel without media or
-    # mixes is not passed them.
-    needs_mixes = plan.mixes or generic
-    materials = MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
-                              m.transmission_tint, m.emission, layers, programs,
-                              np.asarray(strength, np.float64),
-                              m.medium if plan.volumes or generic else None,
-                              m.mix_components if needs_mixes else None,
-                              m.mix_fac if needs_mixes else None,
-                              m.mix_scale if needs_mixes else None,
-                              m.coat_ior if plan.coats or generic else None,
-                              m.coat_tint if plan.coats or generic else None,
-                              m.fresnel, m.glass_tints, m.roughness,
-                              m.sheen_layer if plan.sheen or generic else None,
-                              m.sheen_parent if plan.sheen or generic else None,
-                              sheen_table() if plan.sheen or generic else None,
-                              m.specular_tint, m.emission_root, m.emission_share,
-                              *_anisotropy_columns(m, plan.anisotropy or generic),
-                              _sets_normal(m) if plan.normal_maps or generic else None)
+    materials = material_table(scene, plan, programs, generic)
     em = emitters.data() if emitters is not None else None
     if generic:
         em = _generic_emitters(em, t)
@@ -289,6 +266,43 @@ def scene_data(scene, settings, plan, emitters, cam: CameraModel, generic: bool)
         PixelFilter(settings.filter_type, settings.filter_width).table(), caustics,
         camera_media, np.bool_(settings.fresnel == "exact"),
         np.bool_(settings.film_transparent), np.float64(settings.clear_glass_threshold)))
+
+
+def material_table(scene, plan, programs, generic: bool) -> MaterialTable:
+    """The materials as a kernel reads them (integrator.MaterialTable): as scene_data, None
+    for the parts the plan does not use."""
+    m = scene.materials
+    rough = plan.principled or plan.glossy or plan.rough_glass or plan.rough_metal
+    used = m.reachable(np.unique(scene.material_index))
+    layers = layer_tables(m, used) if (rough or generic) else None
+    strength = m.normal_strength if m.normal_strength is not None else np.ones(len(m.kind))
+    # Materials.from_list always fills the media and mix arrays; a kernel without media or
+    # mixes is not passed them.
+    needs_mixes = plan.mixes or generic
+    return MaterialTable(m.kind.astype(np.int64), m.colour, m.ior, m.reflection_tint,
+                         m.transmission_tint, m.emission, layers, programs,
+                         np.asarray(strength, np.float64),
+                         m.medium if plan.volumes or generic else None,
+                         m.mix_components if needs_mixes else None,
+                         m.mix_fac if needs_mixes else None,
+                         m.mix_scale if needs_mixes else None,
+                         m.coat_ior if plan.coats or generic else None,
+                         m.coat_tint if plan.coats or generic else None,
+                         m.fresnel, m.glass_tints, m.roughness,
+                         m.sheen_layer if plan.sheen or generic else None,
+                         m.sheen_parent if plan.sheen or generic else None,
+                         sheen_table() if plan.sheen or generic else None,
+                         m.specular_tint, m.emission_root, m.emission_share,
+                         *_anisotropy_columns(m, plan.anisotropy or generic),
+                         _sets_normal(m) if plan.normal_maps or generic else None,
+                         _thin_film(m) if plan.thin_film or generic else None)
+
+
+def _thin_film(m) -> np.ndarray:
+    """Each row's thin film (k, 2) (scene.Materials.thin_film; none where not given)."""
+    if m.thin_film is None:
+        return np.tile([0.0, 1.0], (len(m.kind), 1))
+    return np.asarray(m.thin_film, np.float64)
 
 
 def fill_view_maps(scene, cam: CameraModel, tri_normal) -> None:

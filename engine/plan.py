@@ -104,6 +104,8 @@ class Plan:
     # Film > Transparent Glass with some glass used: camera paths see the film's
     # transparency through clear glass too (integrator.clear_glass).
     transparent_glass: bool = False
+    # Some material used has a Principled Thin Film (fresnel.thin_film_dielectric).
+    thin_film: bool = False
 
     @property
     def light_sampling(self) -> bool:
@@ -152,7 +154,8 @@ class Plan:
                                 ("rough glass", self.rough_glass),
                                 ("rough metal", self.rough_metal),
                                 ("translucent", self.translucent),
-                                ("sheen", self.sheen), ("anisotropic GGX", self.anisotropy))
+                                ("sheen", self.sheen), ("anisotropic GGX", self.anisotropy),
+                                ("thin film", self.thin_film))
                  if f]
         if kinds:
             s.append("sample BSDF (%s)" % ", ".join(kinds))
@@ -184,7 +187,8 @@ class Plan:
             HAS_TRANSPARENCY=self.transparency, HAS_TRANSLUCENT=self.translucent,
             HAS_SHEEN=self.sheen, HAS_LIGHT_PATH=self.light_path,
             HAS_OREN_NAYAR=self.oren_nayar, HAS_ANISOTROPY=self.anisotropy,
-            HAS_TRANSPARENT_GLASS=self.transparent_glass, PROFILE=False, DEBUG=False)
+            HAS_TRANSPARENT_GLASS=self.transparent_glass, HAS_THIN_FILM=self.thin_film,
+            PROFILE=False, DEBUG=False)
 
     def describe(self) -> str:
         return (f"{self.triangles} triangles, {self.num_emitters} emissive, "
@@ -266,6 +270,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
     light_path, oren_nayar = _light_path(scene, used), _oren_nayar(scene, used)
+    thin_film = m.thin_film is not None and bool(np.any(m.thin_film[used, 0] > 0))
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,
@@ -289,6 +294,7 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         coats=m.coat_ior is not None and bool(np.any(m.coat_ior[used] > 0)),
         translucent=TRANSLUCENT in kinds, sheen=SHEEN in kinds, light_path=light_path,
         oren_nayar=oren_nayar, anisotropy=bool(np.any(m.anisotropic()[used])),
+        thin_film=thin_film,
         # Caustic paths need an emissive triangle or an area light BSDF rays can hit
         # (lights.traces_light_paths), a specular surface to reach a Lambertian
         # one and a perspective camera to see it; the light tracer's specular chains must
@@ -297,13 +303,15 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
         # are paths through media (light paths carry no volume stack), mixed shaders
         # (light paths do not choose among them), transparent and translucent surfaces
         # (nor cross them), programs reading the path's state (light paths have none) or
-        # Oren-Nayar diffuse (light paths connect to the camera from Lambertian vertices).
+        # Oren-Nayar diffuse (light paths connect to the camera from Lambertian vertices),
+        # nor thin films (not written for light paths, whose refractions through a film
+        # would need Cycles' back-face film read backwards).
         light_tracing=bool(settings.light_tracing and specular
                            and (num_emitters > 0 or any(traces_light_paths(light)
                                                         for light in lights))
                            and DIFFUSE in kinds and cam.type != "ORTHO" and not normal_maps
                            and not volumes and not mixes and not transparency
                            and TRANSLUCENT not in kinds and SHEEN not in kinds
-                           and not light_path and not oren_nayar
+                           and not light_path and not oren_nayar and not thin_film
                            and settings.fresnel == "exact" and settings.max_bounces >= 1))
     return plan

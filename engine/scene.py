@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fresnel import specular_eta
+from .fresnel import MIN_IOR, THIN_FILM_MIN, specular_eta
 from .jit import ALLOCATING, JIT, njit
 from .media import medium_table
 from .shading import VIEW_MAPS, Program, ProgramTable, absent_map_value, map_label, pack
@@ -89,6 +89,17 @@ def _colour(value, what: str) -> np.ndarray:
     if np.any(c < 0):
         raise ValueError(f"{what} must not be negative, got {tuple(c)}")
     return c
+
+
+def _thin_film(name, film) -> tuple:
+    """A Thin Film (thickness in nm, IOR) checked: thickness finite and not negative, 0
+    below fresnel.THIN_FILM_MIN (no film, as Cycles); the IOR finite, at least
+    fresnel.MIN_IOR (Cycles' clamp)."""
+    thickness, ior = (float(v) for v in film)
+    if not (math.isfinite(thickness) and thickness >= 0.0 and math.isfinite(ior)):
+        raise ValueError(f"material '{name}': a thin film needs a finite thickness >= 0 nm and "
+                         f"a finite IOR, got {tuple(film)!r}")
+    return (thickness if thickness > THIN_FILM_MIN else 0.0, max(ior, MIN_IOR))
 
 
 def _specular_tint(m) -> np.ndarray:
@@ -267,6 +278,10 @@ class Material:
     # The Principled BSDF's Specular Tint on its dielectric and glass Fresnel (Cycles: F0 x
     # tint rising to 1 as the real Fresnel does; fresnel.tinted_fresnel); white elsewhere.
     specular_tint: tuple = (1.0, 1.0, 1.0)
+    # The Principled BSDF's Thin Film on its dielectric, glass and metal lobes (principled,
+    # glass and metal kinds): (thickness in nm, the film's IOR); no film below
+    # fresnel.THIN_FILM_MIN nm (fresnel.thin_film_dielectric, thin_film_f82).
+    thin_film: tuple = (0.0, 1.33)
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -337,7 +352,7 @@ class Material:
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
               emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None,
-              specular_tint=(1.0, 1.0, 1.0), tint_program=None):
+              specular_tint=(1.0, 1.0, 1.0), tint_program=None, thin_film=(0.0, 1.33)):
         """Principled metallic: smooth at Cycles' delta roughness, else rough; its Specular
         Tint (or its program's result) above 1 is 1, as Cycles takes it."""
         rough = roughness > DELTA_ROUGHNESS or roughness_program is not None
@@ -346,7 +361,7 @@ class Material:
                    reflection_tint=edge, emission=tuple(emission), roughness=float(roughness),
                    multiscatter=bool(multiscatter), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
-                   tint_program=tint_program)
+                   tint_program=tint_program, thin_film=_thin_film(name, thin_film))
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
@@ -378,20 +393,23 @@ class Material:
     def principled_glass(cls, name, base_colour=(1, 1, 1), ior=1.5, emission=(0, 0, 0),
                          emission_program=None, roughness=0.0, multiscatter=True,
                          roughness_program=None, colour_program=None,
-                         specular_tint=(1.0, 1.0, 1.0), tint_program=None):
+                         specular_tint=(1.0, 1.0, 1.0), tint_program=None,
+                         thin_film=(0.0, 1.33)):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission,
-        its Fresnel under the Specular Tint."""
+        its Fresnel under the Specular Tint and its Thin Film."""
         return cls._glass(name, "principled", base_colour, ior, roughness, roughness_program,
                           emission=tuple(emission), emission_program=emission_program,
                           multiscatter=bool(multiscatter), colour_program=colour_program,
-                          specular_tint=tuple(specular_tint), tint_program=tint_program)
+                          specular_tint=tuple(specular_tint), tint_program=tint_program,
+                          thin_film=_thin_film(name, thin_film))
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
                    specular_ior_level=0.5, emission=(0, 0, 0), colour_program=None,
                    emission_program=None, roughness_program=None, multiscatter=True,
                    specular_tint=(1.0, 1.0, 1.0), tint_program=None, diffuse_roughness=0.0,
-                   diffuse_roughness_program=None, specular_ior_program=None):
+                   diffuse_roughness_program=None, specular_ior_program=None,
+                   thin_film=(0.0, 1.33)):
         """Principled BSDF (metallic 0, transmission 0): a Lambert base (Oren-Nayar at a
         Diffuse Roughness > 0, clamped to 1 as Cycles does) under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
@@ -407,7 +425,8 @@ class Material:
                    tint_program=tint_program,
                    diffuse_roughness=min(max(float(diffuse_roughness), 0.0), 1.0),
                    diffuse_roughness_program=diffuse_roughness_program,
-                   specular_ior_program=specular_ior_program)
+                   specular_ior_program=specular_ior_program,
+                   thin_film=_thin_film(name, thin_film))
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -637,6 +656,7 @@ class Materials:
     sets_normal: np.ndarray | None = None  # (k,) bool, Material.sets_normal
     glass_tints: np.ndarray | None = None  # (k,) int, GLASS_TINTS.index(Material.glass_tints)
     specular_tint: np.ndarray | None = None  # (k, 3), Material.specular_tint
+    thin_film: np.ndarray | None = None  # (k, 2), Material.thin_film
     fac_programs: list | None = None  # per row a mix's factor Program or None (textures)
     roughness_programs: list | None = None  # per row a GGX lobe's roughness Program or None
     height_programs: list | None = None  # per row a Bump node's height Program or None
@@ -774,7 +794,8 @@ class Materials:
                    sets_normal=np.array([bool(m.sets_normal) for m in materials]),
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
-                   specular_tint=np.array([_specular_tint(m) for m in materials]))
+                   specular_tint=np.array([_specular_tint(m) for m in materials]),
+                   thin_film=np.array([m.thin_film for m in materials], np.float64))
 
     @property
     def medium(self) -> np.ndarray | None:

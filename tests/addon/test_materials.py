@@ -240,6 +240,35 @@ def test_a_varying_ior_or_specular_ior_level_is_a_program_of_both(fresh, core):
     assert any("Specular IOR Level" in w and node.name in w for w in warnings), warnings
 
 
+def test_a_thin_film_reaches_the_dielectric_glass_and_metal_lobes(fresh, core):
+    """The Principled BSDF's Thin Film (thickness, IOR) goes on its dielectric, glass and
+    metal lobes (not its coat or sheen), without a warning; a thickness of 0 is no film;
+    a textured thickness is its mean, warned with the node's name."""
+    mat, node = node_material("Soap", "ShaderNodeBsdfPrincipled", Metallic=0.5,
+                              **{"Transmission Weight": 0.5, "Thin Film Thickness": 350.0,
+                                 "Thin Film IOR": 1.4, "Coat Weight": 0.5})
+    spec, warnings = convert(mat)
+    assert warnings == []
+    films = {leaf.ctor: leaf.kwargs.get("thin_film") for leaf in spec.leaves()}
+    assert films == {"metal": (350.0, pytest.approx(1.4)),
+                     "principled": (350.0, pytest.approx(1.4)),
+                     "principled_glass": (350.0, pytest.approx(1.4)), "coat_lobe": None}
+    flat = core.Materials.from_list([spec.to_core(core)])
+    rows = [tuple(r) for r in np.round(flat.thin_film, 4)]
+    assert rows.count((350.0, 1.4)) == 3 and set(rows) == {(350.0, 1.4), (0.0, 1.33)}
+    node.inputs["Thin Film Thickness"].default_value = 0.0
+    assert all("thin_film" not in leaf.kwargs for leaf in convert(mat)[0].leaves())
+    checker = mat.node_tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Color1"].default_value = (400.0, 400.0, 400.0, 1.0)
+    checker.inputs["Color2"].default_value = (200.0, 200.0, 200.0, 1.0)
+    mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Thin Film Thickness"])
+    spec, warnings = convert(mat)
+    assert len(warnings) == 1 and f"node '{node.name}'" in warnings[0] and \
+        "'Thin Film Thickness'" in warnings[0] and "mean 300" in warnings[0], warnings
+    assert [round(leaf.kwargs["thin_film"][0], 4) for leaf in spec.leaves()
+            if "thin_film" in leaf.kwargs] == [300.0] * 3
+
+
 @pytest.mark.parametrize("distribution, multiscatter, warned", [
     ("MULTI_GGX", True, False), ("GGX", False, False), ("BECKMANN", False, True)])
 def test_rough_glass_keeps_its_roughness_and_distribution(fresh, core, distribution, multiscatter,
@@ -1194,7 +1223,7 @@ def link_value(mat, node, socket):
 
 
 @pytest.mark.parametrize("socket, value", [
-    ("Normal", "link"), ("Subsurface Weight", 0.2), ("Thin Film Thickness", 300.0),
+    ("Normal", "link"), ("Subsurface Weight", 0.2),
 ])
 def test_ignored_principled_inputs_warn(fresh, socket, value):
     mat, node = node_material("Ignored", "ShaderNodeBsdfPrincipled")
@@ -1438,9 +1467,11 @@ def test_the_metallic_bsdf_is_the_principled_metal(fresh, core):
     node.distribution = "GGX"
     spec, warnings = convert(mat)
     assert spec.to_core(core).kind == "metal" and not spec.kwargs["multiscatter"]
-    assert len(warnings) == 1 and "Thin Film Thickness" in warnings[0]
+    assert warnings == [] and spec.to_core(core).thin_film == pytest.approx((200.0, 1.33))
+    node.fresnel_type = "PHYSICAL_CONDUCTOR"  # (Cycles films the exact conductor: warned)
+    spec, warnings = convert(mat)
+    assert any("Thin Film Thickness" in w for w in warnings), warnings
     node.inputs["Thin Film Thickness"].default_value = 0.0
-    node.fresnel_type = "PHYSICAL_CONDUCTOR"
     n, k = (0.2, 0.9, 1.1), (3.9, 2.5, 2.1)
     node.inputs["IOR"].default_value, node.inputs["Extinction"].default_value = n, k
     spec, warnings = convert(mat)

@@ -423,6 +423,14 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
             n, k = metallic.uniform(0.1, 3.0, 3), metallic.uniform(1.0, 5.0, 3)
             m["metallic_bsdf"] = {"conductor": None if f82 or m.get("colour_texture") else
                                   [[_r(c, 3) for c in n], [_r(c, 3) for c in k]]}
+    # Some Principled BSDFs (dielectric, metal, glass) under a Thin Film, from a stream of
+    # their own: 50 to 1200 nm of IOR 1.1 to 2.2 (fresnel.thin_film_dielectric).
+    films = np.random.default_rng([seed, 0x7f11])
+    for o in params["objects"]:
+        m = o["material"]
+        if m["kind"] in ("principled", "metal", "principled_glass") and \
+                not m.get("metallic_bsdf") and films.random() < 0.2:
+            m["thin_film"] = [_r(films.uniform(50.0, 1200.0), 1), _r(films.uniform(1.1, 2.2), 3)]
     # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
     # Cycles' object holdout), from a stream of their own.
     held = np.random.default_rng([seed, 0x401d])
@@ -464,6 +472,7 @@ def features(params) -> list[str]:
                     else "")
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":specular_tex" if m.get("specular_checker") else "")
+                 + (f":film={m['thin_film'][0]}" if m.get("thin_film") else "")
                  + (f":oren_nayar={m['diffuse_roughness']}" if m.get("diffuse_roughness")
                     else "")
                  + (f":anisotropy={m['anisotropy']['value']}" if m.get("anisotropy")
@@ -690,6 +699,8 @@ def _simpler_material(m):
     if m.get("specular_checker"):
         out.append(("untextured Specular IOR Level",
                     {k: v for k, v in m.items() if k != "specular_checker"}))
+    if m.get("thin_film"):
+        out.append(("no thin film", {k: v for k, v in m.items() if k != "thin_film"}))
     if m.get("coat"):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("bump"):
@@ -942,6 +953,9 @@ def _bpy_surface_shader(name, m):
         inputs.update({"IOR": m["ior"], "Transmission Weight": 1.0})
     if m.get("alpha"):
         inputs["Alpha"] = m["alpha"]
+    if m.get("thin_film"):
+        inputs.update({"Thin Film Thickness": m["thin_film"][0],
+                       "Thin Film IOR": m["thin_film"][1]})
     if m.get("coat"):
         c = m["coat"]
         inputs.update({"Coat Weight": c["weight"], "Coat Roughness": c["roughness"],

@@ -65,6 +65,30 @@ def save_diagnostics(stem, result, runs, c, directory=DIAGNOSTICS):
                         variance=result.variance, cycles=runs)
 
 
+def cycles_runs(scene, samples, seeds, max_bounces=8):
+    """Cycles renders (seeds, H, W, 3) of a scene a test built itself (the live tests)."""
+    runs = []
+    for seed in seeds:
+        renderers.configure_cycles(scene, samples, seed, max_bounces)
+        runs.append(renderers.render_cycles_image(scene)[0][..., :3])
+    return np.stack(runs)
+
+
+def specula_live(scene, samples, max_bounces=8, replicates=8):
+    """Specula's RenderResult of a scene a test built itself, and the exporter's warnings."""
+    s = scene.specula
+    s.samples, s.max_bounces, s.seed, s.threads = samples, max_bounces, 0, renderers.THREADS
+    s.replicates, s.time_limit, s.target_error = replicates, 0.0, 0.0
+    core_scene, settings, warnings = renderers.shared.export_specula(scene)
+    return renderers.core().render(core_scene, settings), warnings
+
+
+def compare_live(result, runs) -> compare.Comparison:
+    """A live test's Specula render against its Cycles runs."""
+    return compare.compare(result.combined[..., :3], result.variance, runs,
+                           specula_dof=result.dof)
+
+
 def agreement(name) -> compare.Comparison:
     """The correct render's comparison (made once per session)."""
     if name not in _AGREEMENT:

@@ -78,6 +78,7 @@ def _all_features(seeds, avoid_known=False):
                      if o["material"].get("roughness_checker"))
         found.update("textured specular" for o in p["objects"]
                      if o["material"].get("specular_checker"))
+        found.update("thin film" for o in p["objects"] if o["material"].get("thin_film"))
         found.update(f"factor:{o['material']['mix']['factor']['kind']}" for o in p["objects"]
                      if o["material"].get("mix", {}).get("factor"))
         found.update("vector transform" for o in p["objects"]
@@ -97,7 +98,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
-              "textured specular",
+              "textured specular", "thin film",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
               "coat", "refraction", "bump", "specular tint", "sheen", "vector transform",
               "displacement",

@@ -20,7 +20,7 @@ reflection), 1.5 for 0.
 import numpy as np
 import pytest
 
-from . import compare, renderers
+from . import harness, renderers
 
 pytestmark = pytest.mark.slow
 
@@ -59,26 +59,16 @@ def set_ior(ior):
 
 def render_cycles(scene, ior):
     set_ior(ior)
-    runs = []
-    for seed in SEEDS:
-        renderers.configure_cycles(scene, SAMPLES, seed, 8)
-        runs.append(renderers.render_cycles_image(scene)[0][..., :3])
-    return np.stack(runs)
+    return harness.cycles_runs(scene, SAMPLES, SEEDS)
 
 
 def render_specula(scene, ior):
     """Specula's RenderResult and the exporter's warnings."""
     set_ior(ior)
-    s = scene.specula
-    s.samples, s.max_bounces, s.seed, s.threads = SPECULA_SAMPLES, 8, 0, renderers.THREADS
-    s.replicates, s.time_limit, s.target_error = 8, 0.0, 0.0
-    core_scene, settings, warnings = renderers.shared.export_specula(scene)
-    return renderers.core().render(core_scene, settings), warnings
+    return harness.specula_live(scene, SPECULA_SAMPLES)
 
 
-def agreement(result, runs):
-    return compare.compare(result.combined[..., :3], result.variance, runs,
-                           specula_dof=result.dof)
+agreement = harness.compare_live
 
 
 @pytest.fixture(scope="module")

@@ -405,7 +405,7 @@ MARKERS = {"HAS_GLASS": "sample_dielectric", "HAS_ROUGH": "ggx_visible_normal",
            "HAS_COATS": "coat_layering", "HAS_TRANSPARENCY": "pass_through",
            "HAS_SHEEN": "sheen_ltc", "HAS_LIGHT_PATH": "set_light_path",
            "HAS_OREN_NAYAR": "oren_nayar_ratio", "HAS_ANISOTROPY": "anisotropic_alphas",
-           "HAS_TRANSPARENT_GLASS": "clear_glass"}
+           "HAS_TRANSPARENT_GLASS": "clear_glass", "HAS_THIN_FILM": "thin_film_f82"}
 
 
 def _ir(kernel):
