@@ -174,7 +174,7 @@ def _is_medium(medium):
 PROGRAM_KEYS = ("colour_program", "emission_program", "normal_program", "fac_program",
                 "roughness_program", "height_program", "tint_program",
                 "diffuse_roughness_program", "anisotropy_program", "tangent_program",
-                "specular_ior_program")
+                "specular_ior_program", "thin_film_program")
 # The MaterialSpec keywords of an anisotropic GGX lobe (scene.Material.with_anisotropy).
 ANISOTROPY_KEYS = ("specular_anisotropy", "anisotropic_rotation", "tangent_program",
                    "anisotropy_program")
@@ -1417,23 +1417,21 @@ class _Reader:
 
     def thin_film(self, node):
         """A Principled or Metallic BSDF's Thin Film as keywords of its lobes: thickness
-        (nm) and IOR, constants (the means where they vary, warned); none at thickness 0."""
+        (nm) and IOR, constants, or a program of both where either varies over the surface
+        (the constants then stand for their means); none at thickness 0."""
         if "Thin Film Thickness" not in node.inputs:
             return {}
-        film = []
-        for name, default in (("Thin Film Thickness", 0.0), ("Thin Film IOR", 1.33)):
-            value, program = self.textured_colour(node, name, (default,) * 3)
-            if program is not None:
-                self.warn(f"node '{node.name}' input '{name}' varies over the surface, which "
-                          f"Specula does not support; rendered with its mean {value[0]:.4g}")
-            film.append(float(value[0]))
-        if film[0] <= 0.0:
+        d, n, program = self.textured_pair(
+            node, "Thin Film Thickness", "Thin Film IOR", 1.33,
+            lambda: (self.number(node, "Thin Film Thickness", 0.0),
+                     self.number(node, "Thin Film IOR", 1.33)))
+        if program is None and d <= 0.0:
             return {}
         rec709 = core.load().spectrum.XYZ_TO_REC709
         if not np.allclose(shader_nodes.xyz_to_scene_linear(), rec709.ravel(), atol=1e-3):
             self.warn(f"node '{node.name}' Thin Film: its colours are computed for linear "
                       f"Rec.709, not this file's working space")
-        return {"thin_film": tuple(film)}
+        return {"thin_film": (d, n), **_with(program, "thin_film_program")}
 
     def principled_ignored(self, node):
         self.normal(node)

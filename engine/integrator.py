@@ -741,23 +741,30 @@ def rough_lobe(x, k, c, sc, paths):
     roughness its program gives here where it has one (anisotropic where it is), under its
     thin film where it has one; empty for others."""
     film_d = film_n = 0.0
-    if HAS_THIN_FILM and sc.materials.thin_film[x.mat, 0] > 0.0:
-        film_d, film_n = sc.materials.thin_film[x.mat, 0], film_ior_at(x, k, sc)
+    if HAS_THIN_FILM:
+        film_d, film_n = film_at(x, k, sc, paths)
     lobe = lobe_at(x, k, c, sc, paths, film_d, film_n)
     if film_d > 0.0 and k != PRINCIPLED:  # (the Principled layer's estimate reads its film)
         return bsdf.filmed_layer(lobe, film_d, film_n)
     return lobe
 
 
-def film_ior_at(x, k, sc):
-    """The IOR of vertex x's thin film relative to the side wo sees: its own, or on a
-    glass's back face over the glass's IOR (Cycles' adjust_thin_film_ior_at_backface: the
-    stack glass | film | air reflects as air | film / glass | 1 / glass does)."""
+def film_at(x, k, sc, paths):
+    """Vertex x's thin film: its thickness (nm; 0: none, below fresnel.THIN_FILM_MIN) and
+    IOR relative to the side wo sees, its program's where it varies. On a glass's back
+    face the IOR is over the glass's (Cycles' adjust_thin_film_ior_at_backface: the stack
+    glass | film | air reflects as air | film / glass | 1 / glass does)."""
     mt = sc.materials
-    n = mt.thin_film[x.mat, 1]
+    d, n = mt.thin_film[x.mat, 0], mt.thin_film[x.mat, 1]
+    if HAS_TEXTURES and mt.programs.thin_film[x.mat, 0] >= 0:
+        d, n = shading.thin_film_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
+                                    paths.svm, d, n)
+        n = max(n, fresnel.MIN_IOR)
+    if not d > fresnel.THIN_FILM_MIN:
+        return 0.0, 1.0
     if (k == GLASS or k == ROUGH_GLASS) and not x.front:
-        return n / mt.ior[x.mat]
-    return n
+        return d, n / mt.ior[x.mat]
+    return d, n
 
 
 def lobe_at(x, k, c, sc, paths, film_d, film_n):
@@ -1217,7 +1224,7 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
         tints = glass_tints_at(x, c, HAS_TEXTURES and mt.programs.colour[x.mat, 0] >= 0, sc)
         film_d = film_n = 0.0
         if HAS_THIN_FILM:
-            film_d, film_n = mt.thin_film[x.mat, 0], film_ior_at(x, k, sc)
+            film_d, film_n = film_at(x, k, sc, paths)
         wx, wy, wz, f0, f1, f2, ok = bsdf.sample_dielectric(
             x.wox, x.woy, x.woz, x.mx, x.my, x.mz, eta, tints[:3], tints[3:],
             specular_tint_at(x, sc, paths), u, sc.exact_fresnel, mt.fresnel[x.mat], film_d,
@@ -1230,8 +1237,8 @@ def sample_bsdf(row, depth, x, lobe, c, sc, paths, rev_sample):
     wx, wy, wz, cos_o = bsdf.reflect(x.wox, x.woy, x.woz, x.mx, x.my, x.mz)
     if HAS_METAL and k == METAL:  # the reflection tint is its Specular Tint (F82)
         edge = metal_edge_at(x, sc, paths)
-        if HAS_THIN_FILM and mt.thin_film[x.mat, 0] > 0.0:
-            d, n = mt.thin_film[x.mat, 0], mt.thin_film[x.mat, 1]
+        d, n = film_at(x, k, sc, paths) if HAS_THIN_FILM else (0.0, 1.0)
+        if d > 0.0:
             return (wx, wy, wz,
                     fresnel.thin_film_f82(cos_o, c[0], bsdf.f82_tint_b(c[0], edge[0]), n, d, 0),
                     fresnel.thin_film_f82(cos_o, c[1], bsdf.f82_tint_b(c[1], edge[1]), n, d, 1),
@@ -1796,7 +1803,7 @@ STAGES = {f.__name__: (f, INLINE) for f in (
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,
     surface_colour, rough_lobe, anisotropy_at, glass_tints_at, specular_eta_at,
-    specular_tint_at, metal_edge_at, lobe_at, film_ior_at,
+    specular_tint_at, metal_edge_at, lobe_at, film_at,
     handle_emission, caustic_weight,
     continuation_probability, russian_roulette, emitter_pmf,
     lit_side, textured_emitter,

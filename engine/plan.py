@@ -270,7 +270,8 @@ def make_plan(scene: Scene, settings: RenderSettings) -> Plan:
     scattering = any(medium[top, SIGMA_S:SIGMA_S + 3].max() > 0 for top in entered)
     assert all(k in KIND_NAMES for k in kinds)
     light_path, oren_nayar = _light_path(scene, used), _oren_nayar(scene, used)
-    thin_film = m.thin_film is not None and bool(np.any(m.thin_film[used, 0] > 0))
+    thin_film = (m.thin_film is not None and bool(np.any(m.thin_film[used, 0] > 0))) or (
+        scene.programs is not None and bool(np.any(scene.programs.thin_film[used, 0] >= 0)))
     plan = Plan(
         diffuse=DIFFUSE in kinds, mirror=MIRROR in kinds, metal=METAL in kinds,
         glass=GLASS in kinds, principled=PRINCIPLED in kinds, glossy=GLOSSY in kinds,

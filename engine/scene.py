@@ -21,7 +21,7 @@ import numpy as np
 from .fresnel import MIN_IOR, THIN_FILM_MIN, specular_eta
 from .jit import ALLOCATING, JIT, njit
 from .media import medium_table
-from .shading import VIEW_MAPS, Program, ProgramTable, absent_map_value, map_label, pack
+from .shading import SLOTS, VIEW_MAPS, Program, ProgramTable, absent_map_value, map_label, pack
 
 # BSDF kinds of the materials table (`Materials.kind`).
 (NONE, DIFFUSE, MIRROR, METAL, GLASS, PRINCIPLED, GLOSSY, ROUGH_GLASS, ROUGH_METAL, MIX,
@@ -47,6 +47,8 @@ ANISOTROPIC_KINDS = ("principled", "glossy", "rough_metal")
 # The kinds with a Specular Tint that may vary (Material.tint_program); a coat's mix has its
 # Coat Tint there.
 TINTED_KINDS = ("principled", "metal", "rough_metal", "glass", "rough_glass")
+# The kinds a Principled BSDF's Thin Film lies on (Material.thin_film, thin_film_program).
+FILMED_KINDS = TINTED_KINDS
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
 # Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
@@ -282,6 +284,9 @@ class Material:
     # glass and metal kinds): (thickness in nm, the film's IOR); no film below
     # fresnel.THIN_FILM_MIN nm (fresnel.thin_film_dielectric, thin_film_f82).
     thin_film: tuple = (0.0, 1.33)
+    # Where either varies: a Program whose result's first two channels are the film's
+    # thickness and IOR at each hit (`thin_film` then stands for their means).
+    thin_film_program: Program | None = field(default=None, compare=False)
 
     @classmethod
     def mix(cls, name, first, second, fac, scale=1.0, fac_program=None):
@@ -352,7 +357,8 @@ class Material:
     @classmethod
     def metal(cls, name, base_colour, emission=(0, 0, 0), colour_program=None,
               emission_program=None, roughness=0.0, multiscatter=True, roughness_program=None,
-              specular_tint=(1.0, 1.0, 1.0), tint_program=None, thin_film=(0.0, 1.33)):
+              specular_tint=(1.0, 1.0, 1.0), tint_program=None, thin_film=(0.0, 1.33),
+              thin_film_program=None):
         """Principled metallic: smooth at Cycles' delta roughness, else rough; its Specular
         Tint (or its program's result) above 1 is 1, as Cycles takes it."""
         rough = roughness > DELTA_ROUGHNESS or roughness_program is not None
@@ -361,7 +367,8 @@ class Material:
                    reflection_tint=edge, emission=tuple(emission), roughness=float(roughness),
                    multiscatter=bool(multiscatter), colour_program=colour_program,
                    emission_program=emission_program, roughness_program=roughness_program,
-                   tint_program=tint_program, thin_film=_thin_film(name, thin_film))
+                   tint_program=tint_program, thin_film=_thin_film(name, thin_film),
+                   thin_film_program=thin_film_program)
 
     @classmethod
     def glass(cls, name, colour=(1, 1, 1), ior=1.45, emission=(0, 0, 0),
@@ -394,14 +401,15 @@ class Material:
                          emission_program=None, roughness=0.0, multiscatter=True,
                          roughness_program=None, colour_program=None,
                          specular_tint=(1.0, 1.0, 1.0), tint_program=None,
-                         thin_film=(0.0, 1.33)):
+                         thin_film=(0.0, 1.33), thin_film_program=None):
         """Principled BSDF at Transmission 1: untinted reflection, sqrt(base) transmission,
         its Fresnel under the Specular Tint and its Thin Film."""
         return cls._glass(name, "principled", base_colour, ior, roughness, roughness_program,
                           emission=tuple(emission), emission_program=emission_program,
                           multiscatter=bool(multiscatter), colour_program=colour_program,
                           specular_tint=tuple(specular_tint), tint_program=tint_program,
-                          thin_film=_thin_film(name, thin_film))
+                          thin_film=_thin_film(name, thin_film),
+                          thin_film_program=thin_film_program)
 
     @classmethod
     def principled(cls, name, base_colour=(0.8, 0.8, 0.8), roughness=0.5, ior=1.5,
@@ -409,7 +417,7 @@ class Material:
                    emission_program=None, roughness_program=None, multiscatter=True,
                    specular_tint=(1.0, 1.0, 1.0), tint_program=None, diffuse_roughness=0.0,
                    diffuse_roughness_program=None, specular_ior_program=None,
-                   thin_film=(0.0, 1.33)):
+                   thin_film=(0.0, 1.33), thin_film_program=None):
         """Principled BSDF (metallic 0, transmission 0): a Lambert base (Oren-Nayar at a
         Diffuse Roughness > 0, clamped to 1 as Cycles does) under a GGX dielectric
         specular layer. Specular IOR Level rescales F0 as Cycles does (0.5 keeps the IOR);
@@ -426,7 +434,7 @@ class Material:
                    diffuse_roughness=min(max(float(diffuse_roughness), 0.0), 1.0),
                    diffuse_roughness_program=diffuse_roughness_program,
                    specular_ior_program=specular_ior_program,
-                   thin_film=_thin_film(name, thin_film))
+                   thin_film=_thin_film(name, thin_film), thin_film_program=thin_film_program)
 
     @classmethod
     def glossy(cls, name, colour=(1, 1, 1), roughness=0.0, emission=(0, 0, 0),
@@ -664,6 +672,7 @@ class Materials:
     diffuse_roughness: np.ndarray | None = None  # (k,), Material.diffuse_roughness
     diffuse_roughness_programs: list | None = None  # per row its Program or None
     specular_ior_programs: list | None = None  # per row Material.specular_ior_program or None
+    thin_film_programs: list | None = None  # per row Material.thin_film_program or None
     # (k,) Material.specular_anisotropy and .anisotropic_rotation, and per row the
     # anisotropy and tangent Programs or None.
     specular_anisotropy: np.ndarray | None = None
@@ -763,17 +772,13 @@ class Materials:
                             for m in materials]))
         for m in materials:
             _check_varying(m)
-        lists = (programs, emission_programs, normal_programs,
-                 [m.fac_program for m in materials], [m.roughness_program for m in materials],
-                 [m.height_program for m in materials], [m.tint_program for m in materials],
-                 [m.diffuse_roughness_program for m in materials],
-                 [m.anisotropy_program for m in materials],
-                 [m.tangent_program for m in materials],
-                 [m.specular_ior_program for m in materials])
+        lists = (programs, emission_programs, normal_programs,  # then Material.<slot>_program
+                 *([getattr(m, f"{slot}_program") for m in materials] for slot in SLOTS[3:]))
         textured = any(p is not None for progs in lists for p in progs)
         (programs, emission_programs, normal_programs, fac_programs, roughness_programs,
          height_programs, tint_programs, diffuse_roughness_programs, anisotropy_programs,
-         tangent_programs, specular_ior_programs) = lists if textured else (None,) * len(lists)
+         tangent_programs, specular_ior_programs, thin_film_programs) = \
+            lists if textured else (None,) * len(lists)
         return cls(np.array(k, np.int32), np.array(c), np.array(i), np.array(rt), np.array(tt),
                    np.array(e), [m.name for m in materials],
                    np.array([float(m.roughness) for m in materials]),
@@ -795,7 +800,8 @@ class Materials:
                    glass_tints=np.array([GLASS_TINTS.index(m.glass_tints) for m in materials],
                                         np.int64),
                    specular_tint=np.array([_specular_tint(m) for m in materials]),
-                   thin_film=np.array([m.thin_film for m in materials], np.float64))
+                   thin_film=np.array([m.thin_film for m in materials], np.float64),
+                   thin_film_programs=thin_film_programs)
 
     @property
     def medium(self) -> np.ndarray | None:
@@ -811,12 +817,13 @@ class Materials:
 
     def program_lists(self) -> tuple:
         """The materials' programs per shading.SLOTS (colour, emission, normal, fac,
-        roughness, height, tint, diffuse roughness, anisotropy, tangent, specular IOR),
-        each a list with one Program or None per row."""
+        roughness, height, tint, diffuse roughness, anisotropy, tangent, specular IOR, thin
+        film), each a list with one Program or None per row."""
         return (self.colour_programs, self.emission_programs, self.normal_programs,
                 self.fac_programs, self.roughness_programs, self.height_programs,
                 self.tint_programs, self.diffuse_roughness_programs,
-                self.anisotropy_programs, self.tangent_programs, self.specular_ior_programs)
+                self.anisotropy_programs, self.tangent_programs, self.specular_ior_programs,
+                self.thin_film_programs)
 
     def varying_ior(self) -> np.ndarray:
         """(k,) bool: the rows whose dielectric layer's IOR varies over the surface (a
@@ -1412,6 +1419,9 @@ def _check_varying(m: Material) -> None:
     if m.specular_ior_program is not None and m.kind != "principled":
         raise ValueError(f"material '{m.name}': only a Principled BSDF's dielectric layer "
                          f"has an IOR that may vary")
+    if m.thin_film_program is not None and m.kind not in FILMED_KINDS:
+        raise ValueError(f"material '{m.name}': a {m.kind} material has no thin film to vary "
+                         f"(thin films: {', '.join(FILMED_KINDS)})")
     if (m.specular_anisotropy != 0.0 or m.anisotropy_program is not None) and \
             (m.kind not in ANISOTROPIC_KINDS or m.tangent_program is None):
         raise ValueError(f"material '{m.name}': anisotropy needs a tangent program and "

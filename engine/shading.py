@@ -421,9 +421,10 @@ def radial_tangent(axis: str = "Z") -> Program:
 #   Principled BSDF's Specular Tint, or on a coat's mix its Coat Tint; diffuse_roughness:
 #   the Principled BSDF's Diffuse Roughness; anisotropy: a GGX lobe's anisotropy and its
 #   rotation (two registers); tangent: its Tangent input (a vector); specular_ior: the
-#   Principled BSDF's IOR and Specular IOR Level (two registers).
+#   Principled BSDF's IOR and Specular IOR Level (two registers); thin_film: its Thin Film
+#   Thickness and IOR (two registers).
 SLOTS = ("colour", "emission", "normal", "fac", "roughness", "height", "tint",
-         "diffuse_roughness", "anisotropy", "tangent", "specular_ior")
+         "diffuse_roughness", "anisotropy", "tangent", "specular_ior", "thin_film")
 ProgramTable = namedtuple("ProgramTable", "code params texels textures " + " ".join(SLOTS))
 
 
@@ -434,17 +435,18 @@ def pack(colour_programs: list, emission_programs: list | None, uv_index,
          diffuse_roughness_programs: list | None = None,
          anisotropy_programs: list | None = None,
          tangent_programs: list | None = None,
-         specular_ior_programs: list | None = None) -> ProgramTable:
+         specular_ior_programs: list | None = None,
+         thin_film_programs: list | None = None) -> ProgramTable:
     """Pack the materials' colour, emission, normal-map, mix-factor, roughness, bump
-    height, tint, diffuse roughness, anisotropy, tangent and specular IOR programs (one per
-    material, or None) into a ProgramTable; each program's UV map names become scene-wide
-    map indices through `uv_index(name)`."""
+    height, tint, diffuse roughness, anisotropy, tangent, specular IOR and thin film
+    programs (one per material, or None) into a ProgramTable; each program's UV map names
+    become scene-wide map indices through `uv_index(name)`."""
     k = len(colour_programs)
     slots = [p or [None] * k for p in (colour_programs, emission_programs, normal_programs,
                                        fac_programs, roughness_programs, height_programs,
                                        tint_programs, diffuse_roughness_programs,
                                        anisotropy_programs, tangent_programs,
-                                       specular_ior_programs)]
+                                       specular_ior_programs, thin_film_programs)]
     code, params, texels, tex_rows = [], [], [], []
     rows = np.full((len(SLOTS), k, 3), -1, np.int64)
     n_code = n_params = n_texels = 0
@@ -1683,6 +1685,16 @@ def specular_ior_at(mat, f, u, v, pt, uv, reg, ior, level):
         return ior, level
     i, s, _ = raw_result_at(pt.specular_ior, mat, f, u, v, pt, uv, reg)
     return i, s
+
+
+@njit(**INLINE)
+def thin_film_at(mat, f, u, v, pt, uv, reg, thickness, ior):
+    """Material mat's Thin Film Thickness (nm) and IOR at the hit: its thin film program's
+    first two channels, or the constants."""
+    if pt.thin_film[mat, 0] < 0:
+        return thickness, ior
+    d, n, _ = raw_result_at(pt.thin_film, mat, f, u, v, pt, uv, reg)
+    return d, n
 
 
 @njit(**INLINE)

@@ -243,7 +243,8 @@ def test_a_varying_ior_or_specular_ior_level_is_a_program_of_both(fresh, core):
 def test_a_thin_film_reaches_the_dielectric_glass_and_metal_lobes(fresh, core):
     """The Principled BSDF's Thin Film (thickness, IOR) goes on its dielectric, glass and
     metal lobes (not its coat or sheen), without a warning; a thickness of 0 is no film;
-    a textured thickness is its mean, warned with the node's name."""
+    a textured thickness is a program of both (the constants their means); a chain that
+    does not compile is warned, naming the node, and the constants stand in."""
     mat, node = node_material("Soap", "ShaderNodeBsdfPrincipled", Metallic=0.5,
                               **{"Transmission Weight": 0.5, "Thin Film Thickness": 350.0,
                                  "Thin Film IOR": 1.4, "Coat Weight": 0.5})
@@ -263,10 +264,18 @@ def test_a_thin_film_reaches_the_dielectric_glass_and_metal_lobes(fresh, core):
     checker.inputs["Color2"].default_value = (200.0, 200.0, 200.0, 1.0)
     mat.node_tree.links.new(checker.outputs["Color"], node.inputs["Thin Film Thickness"])
     spec, warnings = convert(mat)
-    assert len(warnings) == 1 and f"node '{node.name}'" in warnings[0] and \
-        "'Thin Film Thickness'" in warnings[0] and "mean 300" in warnings[0], warnings
-    assert [round(leaf.kwargs["thin_film"][0], 4) for leaf in spec.leaves()
-            if "thin_film" in leaf.kwargs] == [300.0] * 3
+    assert warnings == []
+    for leaf in (leaf for leaf in spec.leaves() if leaf.ctor != "coat_lobe"):
+        m = leaf.to_core(core)
+        assert m.thin_film == pytest.approx((300.0, 1.4)) and m.thin_film_program is not None
+        values = {tuple(np.round(_program_at(m.thin_film_program, p)[:2], 4))
+                  for p in [(0.05, 0.05, 0.05), (0.3, 0.05, 0.05)]}
+        assert values == {(400.0, 1.4), (200.0, 1.4)}
+    bevel = mat.node_tree.nodes.new("ShaderNodeBevel")  # not evaluated per point
+    mat.node_tree.links.new(bevel.outputs["Normal"], node.inputs["Thin Film IOR"])
+    spec, warnings = convert(mat)
+    assert all(leaf.kwargs.get("thin_film_program") is None for leaf in spec.leaves())
+    assert any("Thin Film" in w and node.name in w for w in warnings), warnings
 
 
 @pytest.mark.parametrize("distribution, multiscatter, warned", [

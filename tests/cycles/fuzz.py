@@ -431,6 +431,14 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if m["kind"] in ("principled", "metal", "principled_glass") and \
                 not m.get("metallic_bsdf") and films.random() < 0.2:
             m["thin_film"] = [_r(films.uniform(50.0, 1200.0), 1), _r(films.uniform(1.1, 2.2), 3)]
+    # Some of those films' thickness from a Checker Texture (shading.thin_film_at), from a
+    # stream of their own.
+    varied = np.random.default_rng([seed, 0x7f12])
+    for o in params["objects"]:
+        m = o["material"]
+        if m.get("thin_film") and varied.random() < 0.4:
+            m["film_checker"] = [_r(varied.uniform(0.0, 600.0), 1),
+                                 _r(varied.uniform(600.0, 1500.0), 1)]
     # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
     # Cycles' object holdout), from a stream of their own.
     held = np.random.default_rng([seed, 0x401d])
@@ -473,6 +481,7 @@ def features(params) -> list[str]:
                  + (":rough_tex" if m.get("roughness_checker") else "")
                  + (":specular_tex" if m.get("specular_checker") else "")
                  + (f":film={m['thin_film'][0]}" if m.get("thin_film") else "")
+                 + (":film_tex" if m.get("film_checker") else "")
                  + (f":oren_nayar={m['diffuse_roughness']}" if m.get("diffuse_roughness")
                     else "")
                  + (f":anisotropy={m['anisotropy']['value']}" if m.get("anisotropy")
@@ -700,7 +709,11 @@ def _simpler_material(m):
         out.append(("untextured Specular IOR Level",
                     {k: v for k, v in m.items() if k != "specular_checker"}))
     if m.get("thin_film"):
-        out.append(("no thin film", {k: v for k, v in m.items() if k != "thin_film"}))
+        out.append(("no thin film", {k: v for k, v in m.items()
+                                     if k not in ("thin_film", "film_checker")}))
+    if m.get("film_checker"):
+        out.append(("untextured thin film",
+                    {k: v for k, v in m.items() if k != "film_checker"}))
     if m.get("coat"):
         out.append(("no coat", {k: v for k, v in m.items() if k != "coat"}))
     if m.get("bump"):
@@ -901,6 +914,8 @@ def _bpy_surface(name, m):
         _roughness_checker(mat, m["roughness_checker"])
     if m.get("specular_checker"):
         _roughness_checker(mat, m["specular_checker"], "Specular IOR Level")
+    if m.get("film_checker"):
+        _roughness_checker(mat, m["film_checker"], "Thin Film Thickness")
     if m.get("colour_texture"):
         _colour_texture(mat, m["colour_texture"])
     if m.get("bump"):

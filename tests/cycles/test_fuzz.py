@@ -79,6 +79,8 @@ def _all_features(seeds, avoid_known=False):
         found.update("textured specular" for o in p["objects"]
                      if o["material"].get("specular_checker"))
         found.update("thin film" for o in p["objects"] if o["material"].get("thin_film"))
+        found.update("textured thin film" for o in p["objects"]
+                     if o["material"].get("film_checker"))
         found.update(f"factor:{o['material']['mix']['factor']['kind']}" for o in p["objects"]
                      if o["material"].get("mix", {}).get("factor"))
         found.update("vector transform" for o in p["objects"]
@@ -98,7 +100,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
-              "textured specular", "thin film",
+              "textured specular", "thin film", "textured thin film",
               "factor:fresnel", "factor:layer_fresnel", "factor:layer_facing", "translucent mix",
               "coat", "refraction", "bump", "specular tint", "sheen", "vector transform",
               "displacement",

@@ -3,17 +3,19 @@
 Rendered live (a small scene, four Cycles seeds) under a sun and a blue world over a grey
 floor: a film on each lobe it changes (fresnel.thin_film_dielectric, thin_film_f82):
 
-- "Oil": a dark dielectric, roughness 0.2 (the layered specular of bsdf.eval_layered);
+- "Oil": a dark dielectric, roughness 0.2 (the layered specular of bsdf.eval_layered),
+  its film 150 or 900 nm thick in the squares of a Checker Texture (through Map Range: a
+  program of the film, shading.thin_film_at);
 - "Lacquer": the same smooth (Cycles' delta roughness) over red, a thicker film;
 - "Anodised": metallic, roughness 0.15 (bsdf.eval_rough_conductor, the complex phase of
   the metal under the film);
 - "Chrome": metallic, smooth (the smooth metal's F82 under the film);
 - "Bubble": Transmission 1, smooth (bsdf.sample_dielectric; its back faces read the film
-  relative to the glass, integrator.film_ior_at);
+  relative to the glass, integrator.film_at);
 - "Frost": Transmission 1, roughness 0.25, under a Specular Tint (fresnel.film_tinted).
 
 Deliberately wrong renders disagree: the films left out (what Specula rendered before),
-and every film 20 % thicker (its colours shift).
+every film 20 % thicker (its colours shift), and Oil's film its mean thickness.
 """
 
 import numpy as np
@@ -31,7 +33,7 @@ PRINCIPLED = "ShaderNodeBsdfPrincipled"
 # name: (inputs, centre, radius)
 SPHERES = {
     "Oil": ({"Base Color": (0.05, 0.05, 0.05, 1.0), "Roughness": 0.2,
-             "Thin Film Thickness": 420.0, "Thin Film IOR": 1.45}, (-2.0, 0.4, 0.1), 0.6),
+             "Thin Film Thickness": 420.0, "Thin Film IOR": 2.2}, (-2.0, 0.4, 0.1), 0.6),
     "Lacquer": ({"Base Color": (0.5, 0.05, 0.05, 1.0), "Roughness": 0.0,
                  "Thin Film Thickness": 900.0, "Thin Film IOR": 1.8}, (-0.7, 0.4, 0.1), 0.6),
     "Anodised": ({"Base Color": (0.9, 0.6, 0.3, 1.0), "Metallic": 1.0, "Roughness": 0.15,
@@ -48,6 +50,8 @@ SPHERES = {
 
 
 def build():
+    import bpy
+
     from blend_scenes import build_scenes as bs
     scene = renderers.sky_and_sun_scene(RESOLUTION, 0.2)
     coll = scene.collection
@@ -55,16 +59,44 @@ def build():
             bs.diffuse("Grey", (0.5, 0.5, 0.5)), coll)
     for name, (inputs, centre, radius) in SPHERES.items():
         bs.uv_sphere(name, centre, radius, bs.material(name, PRINCIPLED, **inputs), coll)
+    tree = bpy.data.materials["Oil"].node_tree
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 3.0
+    ramp = tree.nodes.new("ShaderNodeMapRange")
+    ramp.name = "Thickness"
+    ramp.inputs["To Min"].default_value, ramp.inputs["To Max"].default_value = OIL
+    tree.links.new(checker.outputs["Fac"], ramp.inputs["Value"])
+    tree.links.new(ramp.outputs["Result"], _node("Oil").inputs["Thin Film Thickness"])
     return scene
 
 
-def set_thickness(scale):
-    """Every film's thickness times `scale` (0: no films)."""
+# Oil's film thicknesses (nm), the checker's two.
+OIL = (150.0, 900.0)
+
+
+def _node(name, kind=PRINCIPLED):
+    import bpy
+    return next(n for n in bpy.data.materials[name].node_tree.nodes if n.bl_idname == kind)
+
+
+def set_thickness(scale, oil_mean=False):
+    """Every film's thickness times `scale` (0: no films); `oil_mean`: Oil's film its mean
+    thickness, not its texture's."""
     import bpy
     for name, (inputs, _, _) in SPHERES.items():
-        node = next(n for n in bpy.data.materials[name].node_tree.nodes
-                    if n.bl_idname == PRINCIPLED)
-        node.inputs["Thin Film Thickness"].default_value = inputs["Thin Film Thickness"] * scale
+        _node(name).inputs["Thin Film Thickness"].default_value = \
+            inputs["Thin Film Thickness"] * scale
+    tree = bpy.data.materials["Oil"].node_tree
+    ramp = tree.nodes["Thickness"]
+    ramp.inputs["To Min"].default_value = OIL[0] * scale
+    ramp.inputs["To Max"].default_value = OIL[1] * scale
+    socket = _node("Oil").inputs["Thin Film Thickness"]
+    if oil_mean:
+        for link in list(socket.links):
+            tree.links.remove(link)
+        socket.default_value = 0.5 * (OIL[0] + OIL[1]) * scale
+    elif not socket.is_linked:
+        tree.links.new(ramp.outputs["Result"], socket)
 
 
 def render_cycles(scene):
@@ -72,9 +104,9 @@ def render_cycles(scene):
     return harness.cycles_runs(scene, SAMPLES, SEEDS)
 
 
-def render_specula(scene, scale=1.0, samples=SPECULA_SAMPLES):
+def render_specula(scene, scale=1.0, samples=SPECULA_SAMPLES, oil_mean=False):
     """Specula's RenderResult and the exporter's warnings, films `scale` times as thick."""
-    set_thickness(scale)
+    set_thickness(scale, oil_mean)
     return harness.specula_live(scene, samples)
 
 
@@ -95,7 +127,9 @@ def test_thin_films_agree_with_cycles(scene):
     print(f"thin films: {c.describe()}")
     harness.save_diagnostics("thin_film", result, runs, c)
     assert c.agree, c.describe()
-    for scale, what in ((0.0, "left out"), (1.2, "20 % thicker")):
-        wrong = agreement(render_specula(scene, scale, SPECULA_SAMPLES // 4)[0], runs)
+    for scale, oil_mean, what in ((0.0, False, "left out"), (1.2, False, "20 % thicker"),
+                                  (1.0, True, "textured as its mean")):
+        wrong = agreement(render_specula(scene, scale, SPECULA_SAMPLES // 4, oil_mean)[0],
+                          runs)
         print(f"films {what}: {wrong.describe()}")
         assert not wrong.agree and wrong.max_z > 2 * wrong.z_threshold, wrong.describe()

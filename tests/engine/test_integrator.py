@@ -104,10 +104,11 @@ def test_a_refraction_sphere_passes_its_colour_twice():
 
 
 def eta_squared_dielectric(wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact,
-                           fresnel_on):
+                           fresnel_on, film_d=0.0, film_n=1.0):
     """bsdf.sample_dielectric with refracted radiance scaled by 1/eta^2."""
     wx, wy, wz, f0, f1, f2, ok = original_sample_dielectric(  # noqa: F821
-        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact, fresnel_on)
+        wox, woy, woz, nx, ny, nz, eta, r_tint, t_tint, st, u, exact, fresnel_on, film_d,
+        film_n)
     if wx * nx + wy * ny + wz * nz < 0.0:  # transmitted
         k = 1.0 / (eta * eta)
         f0, f1, f2 = f0 * k, f1 * k, f2 * k
