@@ -688,10 +688,11 @@ def world_lighting(world, warn, texture_cache):
     express (Background and Emission under Mix and Add Shaders; textures, Mapping, Math,
     Color Ramp, Gradient, Noise ... on the direction) is baked into a map
     (environment.bake) that the kernel looks up and importance-samples as such a map; a
-    tree that does not vary is its constant. A Light Path node's Is Camera Ray bakes a
-    second map, the one camera rays see (core.World's camera_environment). Trees that
-    cannot be baked (the Light Path's other outputs, a Sky Texture ...) warn, naming the
-    node, and render the viewport colour."""
+    tree that does not vary is its constant. A Light Path node's Is ... Ray outputs bake a
+    map for each kind of ray they tell from light samples (core.World's ray_environments,
+    environment.bake_rays: Is Camera Ray, a camera background of its own). Trees that
+    cannot be baked (the Light Path's Ray Length and depths, a Sky Texture ...) warn,
+    naming the node, and render the viewport colour."""
     if world is None:
         return (0.0, 0.0, 0.0), None
     flat = tuple(float(c) for c in world.color[:3])
@@ -713,7 +714,7 @@ def world_lighting(world, warn, texture_cache):
         warn(f"world '{world.name}' cannot be rendered from its node tree ({why}); rendering "
              f"its viewport colour instead")
         return flat, None
-    sh, bake = core.load().shading, core.load().environment.bake
+    sh, environment = core.load().shading, core.load().environment
     varies = program.uv_maps or program.textures or any(ins[0] in sh.GEOMETRY_OPS
                                                         for ins in program.code)
     two_sided = any(ins[0] == sh.OP_LIGHT_PATH for ins in program.code)
@@ -722,9 +723,10 @@ def world_lighting(world, warn, texture_cache):
         return tuple(max(float(v), 0.0) for v in values[program.out:program.out + 3]), None
     width = min(max([WORLD_BAKE_WIDTH] + [2 * t.texels.shape[1] for t in program.textures]),
                 4096) if varies else 8
-    env = dict(environment=bake(program, width, width // 2), texture_from_world=np.eye(3))
-    if two_sided:  # Is Camera Ray: the others' map (flags 0) and the camera rays'
-        env["camera_environment"] = bake(program, width, width // 2, sh.RAY_CAMERA)
+    env = dict(environment=environment.bake(program, width, width // 2),
+               texture_from_world=np.eye(3))
+    if two_sided:  # the light samples' map (flags 0), and those of the rays told apart
+        env["ray_environments"] = environment.bake_rays(program, width, width // 2)
     return flat, env
 
 

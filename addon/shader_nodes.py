@@ -1089,9 +1089,9 @@ def _n_light_path(c, node, out):
         return c.program.const([0.0]), "VALUE"
     if out.name not in sh.LIGHT_PATH_OUTPUTS:
         raise Unsupported(f"light path '{node.name}' output {out.name}")
-    if c.world and out.name != "Is Camera Ray":
+    if c.world and sh.LIGHT_PATH_OUTPUTS.index(out.name) >= sh.RAY_FLAG_COUNT:
         raise Unsupported(f"light path '{node.name}' output {out.name} in a world (its maps "
-                          f"tell camera rays from the others only)")
+                          f"tell kinds of ray apart, not lengths or depths)")
     return c.program.emit(sh.OP_LIGHT_PATH, 1,
                           d=sh.LIGHT_PATH_OUTPUTS.index(out.name)), "VALUE"
 
@@ -1313,9 +1313,10 @@ def compile_world(surface, texture_cache):
     """(program or None, why not): the radiance a World Output's Surface input gives each
     direction (engine.environment.bake runs it over the sphere): Background and Emission
     (Color x Strength), Mix Shader (any factor, clamped) and Add Shader of them. A Light
-    Path node's Is Camera Ray is read (the world is then baked twice); its other outputs,
-    and the camera's or a UV map's coordinates, have no meaning in maps that serve every
-    other ray alike, and are refused."""
+    Path node's Is ... Ray outputs are read (the world is then baked once per kind of ray
+    they tell apart, environment.bake_rays); its lengths and depths, and the camera's or a
+    UV map's coordinates, have no meaning in maps that serve many rays alike, and are
+    refused."""
     def build():
         c = Compiler(texture_cache)
         c.world = True

@@ -371,10 +371,10 @@ def clear_glass(k, alpha, cos_n, threshold):
 
 
 def handle_escaped(i, row, depth, sc, paths, mis):
-    """Escaped rays take the world: the environment map, MIS-weighted against its light
-    sampling, or a constant colour (found by BSDF sampling only, as in Cycles). A camera
-    ray (depth 0: straight from the lens or on through transparent surfaces, which keep it
-    one) sees the map's camera image. With a transparent film a camera ray (and one
+    """Escaped rays take the world: the environment map (the one of their kind of ray,
+    world_image), MIS-weighted against its light sampling, or a constant colour (found by
+    BSDF sampling only, as in Cycles). With a transparent film a camera ray (depth 0:
+    straight from the lens or on through transparent surfaces, which keep it one; and one
     through clear glass, transparent_background) sees no world: it leaves the pixel
     transparent by its throughput's average (Cycles' integrate_background; the world
     still lights the scene)."""
@@ -386,7 +386,7 @@ def handle_escaped(i, row, depth, sc, paths, mis):
         env = sc.emitters.environment
         dx, dy, dz = paths.d64[i, 0], paths.d64[i, 1], paths.d64[i, 2]
         u_e, v_e = environment.to_uv(dx, dy, dz, env.texture_from_world)
-        l0, l1, l2 = environment.lookup(u_e, v_e, env.camera_image if depth == 0 else env.image)
+        l0, l1, l2 = environment.lookup(u_e, v_e, world_image(i, depth, env, paths))
         w = 1.0
         if mis:
             pdf_l = emitter_pmf(paths.o64[i, 0], paths.o64[i, 1], paths.o64[i, 2],
@@ -399,6 +399,15 @@ def handle_escaped(i, row, depth, sc, paths, mis):
     if DEBUG:
         _debug_mark(paths, row, 3, paths.radiance[row, 0], paths.radiance[row, 1],
                     paths.radiance[row, 2])
+
+
+def world_image(i, depth, env, paths):
+    """The map escaping path i sees: the one of its path flags where the world tells rays
+    apart (a camera ray's at depth 0, which transparent surfaces keep; the others' flags
+    are kept where the plan has the Light Path), else the one light samples see."""
+    flags = shading.RAY_CAMERA if depth == 0 else (paths.flags[i] if HAS_LIGHT_PATH else 0)
+    j = env.image_of_flags[flags]
+    return env.image if j < 0 else env.ray_images[j]
 
 
 def choose_closure(u, f, bu, bv, dx, dy, dz, mat, sc, paths):
@@ -757,8 +766,8 @@ def film_at(x, k, sc, paths):
     mt = sc.materials
     d, n = mt.thin_film[x.mat, 0], mt.thin_film[x.mat, 1]
     if HAS_TEXTURES and mt.programs.thin_film[x.mat, 0] >= 0:
-        d, n = shading.thin_film_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
-                                    paths.svm, d, n)
+        d, n = shading.pair_at(mt.programs.thin_film, x.mat, x.f, x.u, x.v, mt.programs,
+                               sc.geometry.uv, paths.svm, d, n)
         n = max(n, fresnel.MIN_IOR)
     if not d > fresnel.THIN_FILM_MIN:
         return 0.0, 1.0
@@ -820,8 +829,9 @@ def anisotropy_at(x, k, roughness, sc, paths):
     if mt.programs.tangent[x.mat, 0] < 0:
         return 0.0, 0.0, 0.0, 0.0, 0.0
     principled = k != GLOSSY
-    a, rotation = shading.anisotropy_at(x.mat, x.f, x.u, x.v, mt.programs, sc.geometry.uv,
-                                        paths.svm, mt.anisotropy[x.mat], mt.rotation[x.mat])
+    a, rotation = shading.pair_at(mt.programs.anisotropy, x.mat, x.f, x.u, x.v, mt.programs,
+                                  sc.geometry.uv, paths.svm, mt.anisotropy[x.mat],
+                                  mt.rotation[x.mat])
     if not bsdf.is_anisotropic(a, principled):
         return 0.0, 0.0, 0.0, 0.0, 0.0
     r = roughness if roughness >= 0.0 else mt.roughness[x.mat]
@@ -842,8 +852,8 @@ def specular_eta_at(x, sc, paths):
     material's constant."""
     mt = sc.materials
     if HAS_TEXTURES and mt.programs.specular_ior[x.mat, 0] >= 0:
-        ior, level = shading.specular_ior_at(x.mat, x.f, x.u, x.v, mt.programs,
-                                             sc.geometry.uv, paths.svm, 1.5, 0.5)
+        ior, level = shading.pair_at(mt.programs.specular_ior, x.mat, x.f, x.u, x.v,
+                                     mt.programs, sc.geometry.uv, paths.svm, 1.5, 0.5)
         return specular_eta(ior, level)
     return mt.ior[x.mat]
 
@@ -1798,7 +1808,7 @@ def all_finite(radiance, depth, normal):
 # (without reference counting: jit.JIT).
 STAGES = {f.__name__: (f, INLINE) for f in (
     ray_offset, offset_scale, _debug_mark, _add, handle_light_hits, leave_transparent,
-    transparent_background, handle_escaped, choose_closure, surface_ends,
+    transparent_background, handle_escaped, world_image, choose_closure, surface_ends,
     coat_layer, coat_weights, sheen_layer, sheen_weight, sheen_normal,
     surface_interaction, surface_normal, shading_normal,
     mapped_normal, bumped_normal,

@@ -31,7 +31,7 @@ from .jit import INLINE
 from .lights import BOUND_COLUMNS, COLUMNS, Emitters
 from .media import MEDIA_STACK, VOLUME_BOUNDS_MAX, enclosing
 from .plan import entered_media
-from .environment import Environment
+from .environment import RAY_FLAGS, Environment
 from .sampling import cross_rows, replicate_seed, reverse_bits
 from .shading import (CAMERA, CAMERA_AXES, CAMERA_ORIGIN, MAX_REGISTERS, POSITION, SLOTS,
                       TRUE_NORMAL, VIEW_MAPS, WINDOW, ProgramTable)
@@ -356,7 +356,8 @@ def _generic_emitters(em, num_triangles: int) -> Emitters:
     z3, z = np.zeros((0, 3)), np.zeros(0)
     stand_in_image = np.zeros((1, 1, 3), F32)
     stand_in_env = Environment(stand_in_image, np.eye(3), np.eye(3), np.ones(1), np.ones(1),
-                               stand_in_image)
+                               np.zeros((0, 1, 1, 3), F32),
+                               np.full(RAY_FLAGS, -1, np.int64))
     if em is None:
         return Emitters(z, z, 0, np.zeros(3), np.ones(3), np.zeros((1, 0)), z,
                         np.zeros(1, np.bool_), np.full(num_triangles, -1, np.int64),

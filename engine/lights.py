@@ -575,7 +575,7 @@ class LightSampler:
         self.objects = LightObjects(scene.lights, scene.origin, radius)
         env = scene.world.environment
         self.environment = None if env is None else EnvironmentMap(
-            env, scene.world.texture_from_world, scene.world.camera_environment)
+            env, scene.world.texture_from_world, scene.world.ray_environments)
         # The world's flux through the scene's cross-section, to weigh it against lights.
         env_power = [] if self.environment is None else \
             [np.pi * self.environment.mean_radiance * np.pi * radius**2]

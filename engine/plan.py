@@ -34,7 +34,7 @@ from .scene import (
     RenderSettings,
     Scene,
 )
-from .shading import OP_LIGHT_PATH, SLOTS
+from .shading import OP_LIGHT_PATH, RAY_CAMERA, SLOTS
 
 
 @dataclass(frozen=True)
@@ -219,7 +219,11 @@ def entered_media(scene: Scene, medium=None) -> list:
 
 
 def _light_path(scene: Scene, used) -> bool:
-    """Whether a program of a material used reads the path's state (Light Path)."""
+    """Whether a program of a material used reads the path's state (Light Path), or the
+    world has a map for rays of some kind but camera rays (which depth 0 tells apart:
+    integrator.world_image)."""
+    if any(flags != RAY_CAMERA for flags in (scene.world.ray_environments or {})):
+        return True
     programs = scene.programs
     return programs is not None and any(
         (programs.code[first:end, 0] == OP_LIGHT_PATH).any()

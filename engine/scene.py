@@ -977,8 +977,10 @@ class World:
     """Background: escaped rays take radiance `colour` (colour x strength in Blender), or,
     with `environment` (H, W, 3) float radiance (strength applied, row 0 at the bottom),
     an equirectangular map looked up in the frame `texture_from_world` (3, 3), which is
-    importance-sampled as a light; `camera_environment`, an image of its own for the camera
-    rays (a world that tells them apart with a Light Path node), or None: the same map.
+    importance-sampled as a light; `ray_environments`, {path flags (shading.RAY_*): an
+    image of the same size} the maps rays leaving the scene with those flags see instead
+    (a world that tells them apart with a Light Path node, environment.bake_rays), or
+    None: the same map for every ray.
     `volume`: the world's Volume, a homogeneous medium
     filling all space (Material.boundary's medium keywords: absorption, scattering,
     anisotropy, volume_emission), or None; every path starts in it, as in Cycles, where it
@@ -988,7 +990,7 @@ class World:
     environment: np.ndarray | None = None
     texture_from_world: np.ndarray | None = None
     volume: dict | None = None
-    camera_environment: np.ndarray | None = None
+    ray_environments: dict | None = None
 
     def medium(self) -> Material | None:
         """The world's volume as a material row (none around it), or None."""
@@ -1003,17 +1005,26 @@ class World:
         _colour(self.colour, "world colour")
         if self.volume:
             Materials.from_list([self.medium() or Material("world")])  # its values
-        if self.camera_environment is not None and self.environment is None:
-            raise ValueError("world camera_environment needs an environment")
-        for name in ("environment", "camera_environment"):
-            env = getattr(self, name)
+        rays = self.ray_environments or {}
+        if rays and self.environment is None:
+            raise ValueError("world ray_environments need an environment")
+        images = [("environment", self.environment)] + [
+            (f"ray_environments[{flags!r}]", env) for flags, env in rays.items()]
+        for name, env in images:
             if env is None:
                 continue
             env = np.asarray(env)
             if env.ndim != 3 or env.shape[2] != 3 or env.shape[0] < 1 or env.shape[1] < 1:
                 raise ValueError(f"world {name} must be an (H, W, 3) image, got {env.shape}")
+            if env.shape != np.shape(self.environment):
+                raise ValueError(f"world {name} must be the environment's size "
+                                 f"{np.shape(self.environment)}, got {env.shape}")
             if not np.all(np.isfinite(env)) or env.min() < 0:
                 raise ValueError(f"world {name} must be finite and non-negative")
+        for flags in rays:
+            if not (isinstance(flags, (int, np.integer)) and 0 < flags < 256):
+                raise ValueError(f"world ray_environments: path flags must be an int in "
+                                 f"1..255, got {flags!r}")
         if self.texture_from_world is not None:
             m = np.asarray(self.texture_from_world, np.float64)
             if m.shape != (3, 3) or not np.all(np.isfinite(m)) or abs(np.linalg.det(m)) < 1e-12:

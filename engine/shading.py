@@ -1678,34 +1678,15 @@ def diffuse_roughness_at(mat, f, u, v, pt, uv, reg, r):
 
 
 @njit(**INLINE)
-def specular_ior_at(mat, f, u, v, pt, uv, reg, ior, level):
-    """Material mat's IOR and Specular IOR Level at the hit: its specular IOR program's
-    first two channels, or the constants."""
-    if pt.specular_ior[mat, 0] < 0:
-        return ior, level
-    i, s, _ = raw_result_at(pt.specular_ior, mat, f, u, v, pt, uv, reg)
-    return i, s
-
-
-@njit(**INLINE)
-def thin_film_at(mat, f, u, v, pt, uv, reg, thickness, ior):
-    """Material mat's Thin Film Thickness (nm) and IOR at the hit: its thin film program's
-    first two channels, or the constants."""
-    if pt.thin_film[mat, 0] < 0:
-        return thickness, ior
-    d, n, _ = raw_result_at(pt.thin_film, mat, f, u, v, pt, uv, reg)
-    return d, n
-
-
-@njit(**INLINE)
-def anisotropy_at(mat, f, u, v, pt, uv, reg, anisotropy, rotation):
-    """Material mat's anisotropy and its rotation at the hit: its anisotropy program's
-    first two channels (negative ones kept: the Glossy BSDF's anisotropy may be), or the
-    constants."""
-    if pt.anisotropy[mat, 0] < 0:
-        return anisotropy, rotation
-    a, r, _ = raw_result_at(pt.anisotropy, mat, f, u, v, pt, uv, reg)
-    return a, r
+def pair_at(slot, mat, f, u, v, pt, uv, reg, a, b):
+    """A pair of material mat's inputs at the hit, e.g. its IOR and Specular IOR Level, its
+    Thin Film Thickness and IOR, its anisotropy and rotation: the first two channels of its
+    program in slot (one of pt's, e.g. pt.thin_film; negative values kept), or the
+    constants (a, b) where it has none."""
+    if slot[mat, 0] < 0:
+        return a, b
+    x, y, _ = raw_result_at(slot, mat, f, u, v, pt, uv, reg)
+    return x, y
 
 
 @njit(**INLINE)

@@ -602,7 +602,7 @@ def test_a_world_tree_that_does_not_vary_is_its_constant(fresh):
     np.testing.assert_allclose(exp.world_colour, (0.6, 1.2, 1.8), rtol=1e-6)
 
 
-def test_is_camera_ray_bakes_the_world_camera_rays_see(fresh):
+def test_is_camera_ray_bakes_the_world_camera_rays_see(fresh, core):
     """A Mix Shader by Light Path's Is Camera Ray: camera rays see its second shader, every
     other ray its first (constant here: two small maps of one colour each)."""
     cube_object()
@@ -619,19 +619,59 @@ def test_is_camera_ray_bakes_the_world_camera_rays_see(fresh):
     exp = export(fresh)
     assert not any("Nodes" in w for w in exp.warnings), exp.warnings
     assert np.allclose(exp.environment["environment"], (1.0, 0.8, 0.6))
-    assert np.allclose(exp.environment["camera_environment"], (0.1, 0.2, 0.3))
+    camera = core.shading.RAY_CAMERA
+    assert list(exp.environment["ray_environments"]) == [camera]
+    assert np.allclose(exp.environment["ray_environments"][camera], (0.1, 0.2, 0.3))
+
+
+def test_is_glossy_or_diffuse_ray_bakes_a_map_for_each_kind_of_ray_they_tell_apart(fresh, core):
+    """A world lit by one colour, reflected in glossy surfaces as another and seen by
+    diffuse bounces as a third (Is Glossy Ray, Is Diffuse Ray): light samples see the
+    first map; each escaping kind of ray the map its flags read, the glossy and singular
+    reflections and transmissions sharing one; camera and volume rays read neither
+    output, so they see the light samples' map (no entry)."""
+    cube_object()
+    world, nt, out = _node_world()
+    path = nt.nodes.new("ShaderNodeLightPath")
+    glossy, diffuse = nt.nodes.new("ShaderNodeMixShader"), nt.nodes.new("ShaderNodeMixShader")
+    colours = {}
+    for name, rgb in (("lit", (1.0, 0.8, 0.6)), ("mirrored", (0.1, 0.2, 0.3)),
+                      ("bounced", (0.0, 0.5, 0.0))):
+        colours[name] = nt.nodes.new("ShaderNodeBackground")
+        colours[name].inputs["Color"].default_value = rgb + (1.0,)
+    nt.links.new(path.outputs["Is Diffuse Ray"], diffuse.inputs["Fac"])
+    nt.links.new(colours["lit"].outputs[0], diffuse.inputs[1])
+    nt.links.new(colours["bounced"].outputs[0], diffuse.inputs[2])
+    nt.links.new(path.outputs["Is Glossy Ray"], glossy.inputs["Fac"])
+    nt.links.new(diffuse.outputs[0], glossy.inputs[1])
+    nt.links.new(colours["mirrored"].outputs[0], glossy.inputs[2])
+    nt.links.new(glossy.outputs["Shader"], out.inputs["Surface"])
+    fresh.world = world
+    exp = export(fresh)
+    assert not any("Nodes" in w for w in exp.warnings), exp.warnings
+    sh = core.shading
+    maps = exp.environment["ray_environments"]
+    assert np.allclose(exp.environment["environment"], (1.0, 0.8, 0.6))
+    glossy_rays = [sh.RAY_GLOSSY | s | side for s in (0, sh.RAY_SINGULAR)
+                   for side in (sh.RAY_REFLECT, sh.RAY_TRANSMIT)]
+    diffuse_rays = [sh.RAY_DIFFUSE | side for side in (sh.RAY_REFLECT, sh.RAY_TRANSMIT)]
+    assert sorted(maps) == sorted(glossy_rays + diffuse_rays)
+    for flags in glossy_rays:
+        assert np.allclose(maps[flags], (0.1, 0.2, 0.3)) and maps[flags] is maps[glossy_rays[0]]
+    for flags in diffuse_rays:
+        assert np.allclose(maps[flags], (0.0, 0.5, 0.0))
 
 
 @pytest.mark.parametrize("node", ["ShaderNodeLightPath", "ShaderNodeTexSky"])
 def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
-    """A Light Path node's Is Glossy Ray (the maps tell only camera rays apart) or a node
-    without an instruction: a warning naming the world and the node, and the world's
+    """A Light Path node's Ray Depth (the maps tell kinds of ray apart, not depths) or a
+    node without an instruction: a warning naming the world and the node, and the world's
     viewport colour."""
     cube_object()
     world, nt, out = _node_world()
     src, bg = nt.nodes.new(node), nt.nodes.new("ShaderNodeBackground")
     src.name = "Culprit"
-    nt.links.new(src.outputs["Is Glossy Ray"] if node == "ShaderNodeLightPath"
+    nt.links.new(src.outputs["Ray Depth"] if node == "ShaderNodeLightPath"
                  else src.outputs[0],
                  bg.inputs["Strength"] if node == "ShaderNodeLightPath" else bg.inputs["Color"])
     nt.links.new(bg.outputs["Background"], out.inputs["Surface"])

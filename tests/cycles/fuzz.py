@@ -60,7 +60,15 @@ KNOWN = {
          "not at all)",
     "e": "an emission inside a mix whose factor is view-dependent (Fresnel, Layer Weight): "
          "Specula mixes it by the factor's mean (warned)",
+    "f": "a world that shows bounces another world than light samples (a Light Path flag) "
+         "beside other emitters: the MIS weights of the two, which set the image, follow "
+         "Specula's light choice, not Cycles' light tree (about 1 %: seeds 6 and 40 at 512 "
+         "samples and more)",
 }
+# The Light Path flags that tell bounces from light samples in a world (known difference f;
+# camera rays are never weighed against light samples, and no escaping ray is a shadow ray).
+BOUNCE_FLAGS = ("Is Diffuse Ray", "Is Glossy Ray", "Is Singular Ray", "Is Reflection Ray",
+                "Is Transmission Ray")
 # Roughness between Cycles' delta threshold and this is known difference (d).
 TINY_ROUGHNESS = 0.02
 
@@ -431,7 +439,7 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if m["kind"] in ("principled", "metal", "principled_glass") and \
                 not m.get("metallic_bsdf") and films.random() < 0.2:
             m["thin_film"] = [_r(films.uniform(50.0, 1200.0), 1), _r(films.uniform(1.1, 2.2), 3)]
-    # Some of those films' thickness from a Checker Texture (shading.thin_film_at), from a
+    # Some of those films' thickness from a Checker Texture (shading.pair_at), from a
     # stream of their own.
     varied = np.random.default_rng([seed, 0x7f12])
     for o in params["objects"]:
@@ -439,6 +447,13 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if m.get("thin_film") and varied.random() < 0.4:
             m["film_checker"] = [_r(varied.uniform(0.0, 600.0), 1),
                                  _r(varied.uniform(600.0, 1500.0), 1)]
+    # Some worlds (colour or map) that show one kind of ray (a Light Path flag) another
+    # colour through a Mix Shader (environment.bake_rays), from a stream of their own.
+    kinds = np.random.default_rng([seed, 0x7f13])
+    if params["world"]["kind"] != "black" and kinds.random() < 0.3:
+        params["world"]["light_path"] = {"flag": str(kinds.choice(LIGHT_PATH_FLAGS)),
+                                         "colour": _colour(kinds, 0.0),
+                                         "strength": _r(kinds.uniform(0.2, 2.0))}
     # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
     # Cycles' object holdout), from a stream of their own.
     held = np.random.default_rng([seed, 0x401d])
@@ -446,7 +461,7 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         if held.random() < 0.1:
             o["holdout"] = True
     if avoid_known:
-        params = without_known(params, ("d", "e"))
+        params = without_known(params, ("d", "e", "f"))
     if not params["ceiling_emitter"] and not params["lights"] and \
             params["world"]["kind"] == "black":
         params["ceiling_emitter"] = True  # something must light the scene
@@ -456,6 +471,8 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
 def features(params) -> list[str]:
     """The features a scene uses, as short names (for reports and the shrinker's record)."""
     f = [f"max_bounces={params['max_bounces']}", f"world:{params['world']['kind']}"]
+    if params["world"].get("light_path"):
+        f.append(f"world:{params['world']['light_path']['flag']}")
     if params["ceiling_emitter"]:
         f.append("ceiling_emitter")
     cam = params["camera"]
@@ -527,7 +544,18 @@ def known_issue_features(params) -> list[str]:
         keys.append("d")
     if any(_emission_under_varying_mix(o["material"]) for o in params["objects"]):
         keys.append("e")
+    if _world_bounces_apart(params):
+        keys.append("f")
     return keys
+
+
+def _world_bounces_apart(params) -> bool:
+    """Whether the scene has known difference (f)."""
+    lp = params["world"].get("light_path")
+    return bool(lp and lp["flag"] in BOUNCE_FLAGS and (
+        params["ceiling_emitter"] or params["lights"]
+        or any(o["material"].get("emission_strength") or o["material"]["kind"] == "emission"
+               for o in params["objects"])))
 
 
 def _emission_under_varying_mix(m) -> bool:
@@ -547,7 +575,7 @@ def without_known(params, keys=tuple(KNOWN)) -> dict:
     """The scene with the features of the known differences `keys` neutralised as
     `avoid_known` would have drawn them: rough Glossy white (a), spot radius 0 (b), Cycles'
     terminator offset 0 (c), a tiny roughness 0 (d), a constant mix factor under an
-    emission (e)."""
+    emission (e), a world without its Light Path (f)."""
     p = copy.deepcopy(params)
     for o in p["objects"]:
         m = o["material"]
@@ -563,6 +591,8 @@ def without_known(params, keys=tuple(KNOWN)) -> dict:
     for light in p["lights"]:
         if "b" in keys and light["type"] == "SPOT":
             light["radius"] = 0.0
+    if "f" in keys and _world_bounces_apart(p):
+        del p["world"]["light_path"]
     return p
 
 
@@ -770,6 +800,8 @@ def simplifications(params) -> list[tuple[str, dict]]:
             world={"kind": "colour", "colour": [0.3, 0.3, 0.3], "strength": 1.0}))
     if params["world"]["kind"] != "black":
         variant("world -> black", lambda p: p.update(world={"kind": "black"}))
+    if params["world"].get("light_path"):
+        variant("world without its Light Path", lambda p: p["world"].pop("light_path"))
     cam = params["camera"]
     if cam["dof"]:
         variant("dof off", lambda p: p["camera"].update(dof=None))
@@ -1036,6 +1068,22 @@ def _world_map(scene, w):
     background.inputs["Strength"].default_value = w["strength"]
 
 
+def _world_light_path(scene, lp):
+    """The world's Background mixed with another by a Light Path flag: rays of that kind
+    see the other."""
+    nt = scene.world.node_tree
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    background = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeBackground")
+    other, mix = nt.nodes.new("ShaderNodeBackground"), nt.nodes.new("ShaderNodeMixShader")
+    other.inputs["Color"].default_value = (*lp["colour"], 1.0)
+    other.inputs["Strength"].default_value = lp["strength"]
+    path = nt.nodes.new("ShaderNodeLightPath")
+    nt.links.new(path.outputs[lp["flag"]], mix.inputs["Fac"])
+    nt.links.new(background.outputs["Background"], mix.inputs[1])
+    nt.links.new(other.outputs["Background"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+
+
 def build(params):
     """Build the scene of `params` in bpy as the current scene (resolution included)."""
     import bpy
@@ -1076,6 +1124,8 @@ def build(params):
         scene.world.color = w["colour"]
     elif w["kind"] == "map":
         _world_map(scene, w)
+    if w.get("light_path"):
+        _world_light_path(scene, w["light_path"])
     for o in params["objects"]:
         obj = _mesh_object(o["shape"], o["id"])
         obj.location, obj.rotation_euler, obj.scale = o["location"], o["rotation"], o["scale"]

@@ -45,6 +45,8 @@ def _all_features(seeds, avoid_known=False):
         found.update("visible light" for light in p["lights"] if light["visible_camera"])
         found.update("hard falloff" for light in p["lights"] if light.get("soft_falloff") is False)
         found.update(f"world:{p['world']['kind']}" for _ in [0])
+        found.update(f"world:{p['world']['light_path']['flag']}" for _ in [0]
+                     if p["world"].get("light_path"))
         cam = p["camera"]
         found.update({cam["type"], cam["sensor_fit"], f"bounces:{p['max_bounces']}"})
         found.update({"shift"} if any(cam["shift"]) else set())
@@ -96,7 +98,8 @@ def _all_features(seeds, avoid_known=False):
 EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "RECTANGLE",
               "DISK", "ELLIPSE", "radius>0:POINT", "radius>0:SPOT", "scaled:SPOT", "scaled:AREA",
               "sun angle", "spread", "visible light", "hard falloff", "world:black",
-              "world:colour", "world:map", "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
+              "world:colour", "world:map", *(f"world:{flag}" for flag in fuzz.LIGHT_PATH_FLAGS),
+              "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",
               "absorbing glass", "mixed shader", "alpha", "textured roughness",
@@ -105,7 +108,7 @@ EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "
               "coat", "refraction", "bump", "specular tint", "sheen", "vector transform",
               "displacement",
               "bounces:0", "bounces:12", "known:a", "known:b", "known:c", "known:d",
-              "known:e"}
+              "known:e", "known:f"}
 
 
 def test_generator_covers_every_supported_feature():

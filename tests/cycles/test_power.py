@@ -676,10 +676,32 @@ def _world_mapping_only_rotates():
 
 def _camera_map_for_every_ray(scene, settings):
     """The backdrop camera rays see taken as the world every ray sees (no Light Path)."""
+    from engine.shading import RAY_CAMERA
     world = scene.world
-    scene.world = dataclasses.replace(world, environment=world.camera_environment,
-                                      camera_environment=None)
+    scene.world = dataclasses.replace(world, environment=world.ray_environments[RAY_CAMERA],
+                                      ray_environments=None)
     return scene, settings
+
+
+def _light_map_for_every_ray(scene, settings):
+    """Every kind of ray sees the light samples' world (what Specula rendered before it
+    baked a map per kind of ray: a world with Is Glossy Ray was its viewport colour)."""
+    scene.world = dataclasses.replace(scene.world, ray_environments=None)
+    return scene, settings
+
+
+@contextmanager
+def _world_sampled_by_luminance():
+    """The world's map sampled by luminance rather than Cycles' average of RGB: the MIS
+    weights of light samples and bounces, which see different worlds, are then not
+    Cycles'."""
+    from engine import environment
+    from engine.scene import LUMINANCE
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(environment, "pixel_weights",
+                   lambda image: image.astype(np.float64) @ LUMINANCE)
+        yield
 
 
 def _wireframe_size_scaled(factor):
@@ -1640,6 +1662,8 @@ INJECTIONS = {
                                    _world_mapping_only_rotates),
     "world_camera_map_for_every_ray": ("world_camera_backdrop", _camera_map_for_every_ray,
                                        None),
+    "world_light_map_for_every_ray": ("world_ray_kinds", _light_map_for_every_ray, None),
+    "world_sampled_by_luminance": ("world_ray_kinds", None, _world_sampled_by_luminance),
 }
 
 

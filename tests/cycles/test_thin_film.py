@@ -5,7 +5,7 @@ floor: a film on each lobe it changes (fresnel.thin_film_dielectric, thin_film_f
 
 - "Oil": a dark dielectric, roughness 0.2 (the layered specular of bsdf.eval_layered),
   its film 150 or 900 nm thick in the squares of a Checker Texture (through Map Range: a
-  program of the film, shading.thin_film_at);
+  program of the film, shading.pair_at);
 - "Lacquer": the same smooth (Cycles' delta roughness) over red, a thicker film;
 - "Anodised": metallic, roughness 0.15 (bsdf.eval_rough_conductor, the complex phase of
   the metal under the film);

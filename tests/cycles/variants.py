@@ -602,6 +602,51 @@ def world_camera_backdrop():
     nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
 
 
+def _gradient(nt, horizon, sky_rgb, ground_rgb, strength=1.0):
+    """A Mix Shader of a ground and a sky Background by `horizon` (a Map Range's Result, 0
+    below the horizon): its Shader output."""
+    sky, ground = (nt.nodes.new("ShaderNodeBackground") for _ in range(2))
+    sky.inputs["Color"].default_value = tuple(sky_rgb) + (1.0,)
+    ground.inputs["Color"].default_value = tuple(ground_rgb) + (1.0,)
+    sky.inputs["Strength"].default_value = ground.inputs["Strength"].default_value = strength
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(horizon.outputs["Result"], mix.inputs["Fac"])
+    nt.links.new(ground.outputs["Background"], mix.inputs[1])
+    nt.links.new(sky.outputs["Background"], mix.inputs[2])
+    return mix.outputs["Shader"]
+
+
+def world_ray_kinds():
+    """A world that tells kinds of ray apart by the Light Path's Is Glossy Ray and Is
+    Diffuse Ray (issue 14): light samples and camera rays see a blue sky over a brown
+    ground, glossy rays (the mirror ball's, a glass ball's, the plastic's highlights) a warm
+    one, diffuse bounces a green one. Light samples and bounces are weighed by MIS in both
+    engines, each by its own map's pdf, which differ little on a world this smooth (no
+    sun)."""
+    nt = _world_stage()
+    bs.uv_sphere("Glass", (-0.15, -0.4, 0.18), 0.18,
+                 bs.material("Glass", "ShaderNodeBsdfGlass", Color=(1, 1, 1, 1), Roughness=0.0,
+                             IOR=1.45), bpy.context.scene.collection)
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    coords, xyz = nt.nodes.new("ShaderNodeTexCoord"), nt.nodes.new("ShaderNodeSeparateXYZ")
+    nt.links.new(coords.outputs["Generated"], xyz.inputs["Vector"])
+    horizon = nt.nodes.new("ShaderNodeMapRange")
+    horizon.inputs["From Min"].default_value, horizon.inputs["From Max"].default_value = -0.05, 0.4
+    nt.links.new(xyz.outputs["Z"], horizon.inputs["Value"])
+    path = nt.nodes.new("ShaderNodeLightPath")
+    diffuse, glossy = nt.nodes.new("ShaderNodeMixShader"), nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(path.outputs["Is Diffuse Ray"], diffuse.inputs["Fac"])
+    nt.links.new(_gradient(nt, horizon, (0.25, 0.45, 0.9), (0.35, 0.25, 0.15)),
+                 diffuse.inputs[1])
+    nt.links.new(_gradient(nt, horizon, (0.2, 0.9, 0.3), (0.1, 0.3, 0.1), 1.5),
+                 diffuse.inputs[2])
+    nt.links.new(path.outputs["Is Glossy Ray"], glossy.inputs["Fac"])
+    nt.links.new(diffuse.outputs["Shader"], glossy.inputs[1])
+    nt.links.new(_gradient(nt, horizon, (1.0, 0.6, 0.2), (0.5, 0.1, 0.3), 2.0),
+                 glossy.inputs[2])
+    nt.links.new(glossy.outputs["Shader"], out.inputs["Surface"])
+
+
 def world_environment_mapped():
     """An Environment Texture the core's map cannot look up directly, so baked (issue 14):
     world_environment's procedural sky through a Mapping that rotates, moves and scales
@@ -3589,7 +3634,7 @@ for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light
                light_sun_angle, light_area_square, light_area_rectangle_scaled,
                light_area_disk_visible, light_area_ellipse_spread, light_through_glass,
                world_environment, world_nodes_sky, world_environment_mapped,
-               world_camera_backdrop):
+               world_camera_backdrop, world_ray_kinds):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):

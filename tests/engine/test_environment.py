@@ -167,10 +167,16 @@ def test_environment_projections_follow_cycles(rng):
     assert shading.projection(2, 0.0, 0.0, 0.0) == (0.0, 0.0)
 
 
-def test_a_camera_image_needs_a_map_and_is_checked_as_one():
-    World(environment=np.ones((2, 4, 3)), camera_environment=np.ones((1, 2, 3))).validate()
-    with pytest.raises(ValueError, match="needs an environment"):
-        World(camera_environment=np.ones((2, 4, 3))).validate()
-    with pytest.raises(ValueError, match="camera_environment must be finite"):
+def test_the_maps_of_kinds_of_ray_need_a_map_and_are_checked_as_one():
+    World(environment=np.ones((2, 4, 3)),
+          ray_environments={shading.RAY_CAMERA: np.ones((2, 4, 3))}).validate()
+    with pytest.raises(ValueError, match="need an environment"):
+        World(ray_environments={shading.RAY_CAMERA: np.ones((2, 4, 3))}).validate()
+    with pytest.raises(ValueError, match=r"ray_environments\[1\] must be finite"):
         World(environment=np.ones((2, 4, 3)),
-              camera_environment=np.full((2, 4, 3), np.nan)).validate()
+              ray_environments={shading.RAY_CAMERA: np.full((2, 4, 3), np.nan)}).validate()
+    with pytest.raises(ValueError, match="the environment's size"):
+        World(environment=np.ones((2, 4, 3)),
+              ray_environments={shading.RAY_CAMERA: np.ones((1, 2, 3))}).validate()
+    with pytest.raises(ValueError, match="path flags must be an int"):
+        World(environment=np.ones((2, 4, 3)), ray_environments={0: np.ones((2, 4, 3))}).validate()
