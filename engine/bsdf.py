@@ -733,11 +733,7 @@ def no_layer():
 def anisotropic_layer(lobe, ax, ay, tx, ty, tz):
     """`lobe` made anisotropic: alpha_x ax along tangent t, alpha_y across it (Cycles
     keeps the compensation the tables give at its isotropic roughness)."""
-    return Layer(lobe.dw0, lobe.dw1, lobe.dw2, lobe.tint0, lobe.tint1, lobe.tint2, lobe.alpha,
-                 lobe.eta, lobe.fresnel_on, lobe.comp0, lobe.comp1, lobe.comp2, lobe.p_spec,
-                 lobe.tt0, lobe.tt1, lobe.tt2, lobe.b0, lobe.b1, lobe.b2, lobe.st0, lobe.st1,
-                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, ax, ay, tx, ty, tz,
-                 lobe.film_d, lobe.film_n)
+    return retailed_layer(lobe, ax, ay, tx, ty, tz, lobe.film_d, lobe.film_n)
 
 
 @njit(**INLINE)
@@ -745,11 +741,19 @@ def filmed_layer(lobe, thickness, film_ior):
     """`lobe` under a thin film of `thickness` (nm) and IOR `film_ior` relative to the side
     of wo: its Fresnel of a single scattering becomes the film's (filmed_fresnel); its
     compensation and its share of the layering keep their film-free values, as Cycles'."""
+    return retailed_layer(lobe, lobe.ax, lobe.ay, lobe.tx, lobe.ty, lobe.tz, thickness,
+                          film_ior)
+
+
+@njit(**INLINE)
+def retailed_layer(lobe, ax, ay, tx, ty, tz, film_d, film_n):
+    """`lobe` with the fields a lobe gains after its tables are read replaced: its
+    anisotropy (alpha_x, alpha_y, tangent) and its thin film (thickness, IOR)."""
     return Layer(lobe.dw0, lobe.dw1, lobe.dw2, lobe.tint0, lobe.tint1, lobe.tint2, lobe.alpha,
                  lobe.eta, lobe.fresnel_on, lobe.comp0, lobe.comp1, lobe.comp2, lobe.p_spec,
                  lobe.tt0, lobe.tt1, lobe.tt2, lobe.b0, lobe.b1, lobe.b2, lobe.st0, lobe.st1,
-                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, lobe.ax, lobe.ay,
-                 lobe.tx, lobe.ty, lobe.tz, thickness, film_ior)
+                 lobe.st2, lobe.sigma, lobe.base0, lobe.base1, lobe.base2, ax, ay, tx, ty, tz,
+                 film_d, film_n)
 
 
 @njit(**JIT)
