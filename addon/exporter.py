@@ -717,15 +717,15 @@ def world_lighting(world, warn, texture_cache):
     sh, environment = core.load().shading, core.load().environment
     varies = program.uv_maps or program.textures or any(ins[0] in sh.GEOMETRY_OPS
                                                         for ins in program.code)
-    two_sided = any(ins[0] == sh.OP_LIGHT_PATH for ins in program.code)
-    if not varies and not two_sided:
+    reads_path = any(ins[0] == sh.OP_LIGHT_PATH for ins in program.code)
+    if not varies and not reads_path:
         values = sh.evaluate(program)
         return tuple(max(float(v), 0.0) for v in values[program.out:program.out + 3]), None
     width = min(max([WORLD_BAKE_WIDTH] + [2 * t.texels.shape[1] for t in program.textures]),
                 4096) if varies else 8
     env = dict(environment=environment.bake(program, width, width // 2),
                texture_from_world=np.eye(3))
-    if two_sided:  # the light samples' map (flags 0), and those of the rays told apart
+    if reads_path:  # the light samples' map (flags 0), and those of the rays told apart
         env["ray_environments"] = environment.bake_rays(program, width, width // 2)
     return flat, env
 

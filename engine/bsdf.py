@@ -1218,11 +1218,11 @@ def eval_rough_dielectric(wox, woy, woz, wix, wiy, wiz, mx, my, mz, lobe):
         return 0.0, 0.0, 0.0, 0.0
     hx, hy, hz = hx / length, hy / length, hz / length
     cos_ho = hx * wox + hy * woy + hz * woz
-    fr = glass_fresnel(cos_ho, eta, True, lobe.fresnel_on)[0]
     if lobe.film_d > 0.0:
         f0, f1, f2 = filmed_fresnel(cos_ho, eta, lobe.film_d, lobe.film_n, lobe.st0, lobe.st1,
                                     lobe.st2)
     else:
+        fr = glass_fresnel(cos_ho, eta, True, lobe.fresnel_on)[0]
         f0, f1, f2 = (tinted_fresnel(fr, eta, lobe.st0), tinted_fresnel(fr, eta, lobe.st1),
                       tinted_fresnel(fr, eta, lobe.st2))
     r0, r1, r2 = f0 * lobe.tint0, f1 * lobe.tint1, f2 * lobe.tint2

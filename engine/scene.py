@@ -51,7 +51,7 @@ TINTED_KINDS = ("principled", "metal", "rough_metal", "glass", "rough_glass")
 FILMED_KINDS = TINTED_KINDS
 FRESNEL_MODELS = ("exact", "schlick")
 FILTER_TYPES = ("BLACKMAN_HARRIS", "BOX", "GAUSSIAN")
-# Rec.709 luminance of linear RGB (the error estimate, the environment map's sampling).
+# Rec.709 luminance of linear RGB (the error estimate, the world's share among the lights).
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 KERNELS = ("auto", "generic", "specialised")
 # Independent replicates of the sample sequence per render (RenderSettings.replicates): the
