@@ -431,8 +431,9 @@ class _Exporter:
                 self.warn(f"object '{obj.name}' ({UNSUPPORTED_TYPES[obj.type]}) not supported "
                           f"yet, skipped")
         self.out.camera = camera_settings(self.scene, self.depsgraph, self.warn)
-        self.out.world_colour, self.out.environment = world_lighting(
+        self.out.world_colour, self.out.environment, suns = world_lighting(
             self.scene.world, self.warn, self._image_means)
+        self.out.lights.extend(suns)
         volume, notes = materials.world_volume(self.scene.world, self._image_means)
         self.out.world_volume = volume
         for note in notes:
@@ -677,10 +678,11 @@ WORLD_BAKE_WIDTH = 2048
 
 
 def world_lighting(world, warn, texture_cache):
-    """(colour, environment) of the core's World: the background radiance (colour x strength
-    of a plain Background; black without a world, or with its Surface unlinked, as in
-    Cycles), and the keywords of an equirectangular map (core.World's environment and
-    texture_from_world) where the world varies with direction, or None.
+    """(colour, environment, suns) of the core's World: the background radiance (colour x
+    strength of a plain Background; black without a world, or with its Surface unlinked, as
+    in Cycles), the keywords of an equirectangular map (core.World's environment and
+    texture_from_world) where the world varies with direction, or None, and the core Light
+    keywords of its Sky Textures' sun discs (`sky_suns`).
 
     A Background whose Color is an Environment Texture (Equirectangular, Linear), its Vector
     unlinked, a Texture Coordinate's Generated or a rotating Mapping, is the image itself,
@@ -691,43 +693,76 @@ def world_lighting(world, warn, texture_cache):
     tree that does not vary is its constant. A Light Path node's Is ... Ray outputs bake a
     map for each kind of ray they tell from light samples (core.World's ray_environments,
     environment.bake_rays: Is Camera Ray, a camera background of its own). Trees that
-    cannot be baked (the Light Path's Ray Length and depths, a Sky Texture ...) warn,
-    naming the node, and render the viewport colour."""
+    cannot be baked (the Light Path's Ray Length and depths, a Preetham or Hosek-Wilkie Sky
+    Texture ...) warn, naming the node, and render the viewport colour."""
     if world is None:
-        return (0.0, 0.0, 0.0), None
+        return (0.0, 0.0, 0.0), None, []
     flat = tuple(float(c) for c in world.color[:3])
     if not _uses_nodes(world):
-        return flat, None
+        return flat, None, []
     out = world.node_tree.get_output_node('CYCLES')
     if out is None:
         warn(f"world '{world.name}': no active World Output node for Cycles; using its "
              f"viewport colour")
-        return flat, None
+        return flat, None, []
     surface = out.inputs.get("Surface")
     if surface is None or shader_nodes.live_link(surface) is None:
-        return (0.0, 0.0, 0.0), None  # Cycles renders an unlinked world black too
+        return (0.0, 0.0, 0.0), None, []  # Cycles renders an unlinked world black too
     plain = _plain_environment(world, shader_nodes.live_link(surface).from_node, warn)
     if plain is not None:
-        return flat, plain or None  # {}: the plain map could not be read (warned)
+        return flat, plain or None, []  # {}: the plain map could not be read (warned)
     program, why = shader_nodes.compile_world(surface, texture_cache)
     if program is None:
         warn(f"world '{world.name}' cannot be rendered from its node tree ({why}); rendering "
              f"its viewport colour instead")
-        return flat, None
+        return flat, None, []
     sh, environment = core.load().shading, core.load().environment
     varies = program.uv_maps or program.textures or any(ins[0] in sh.GEOMETRY_OPS
                                                         for ins in program.code)
     reads_path = any(ins[0] == sh.OP_LIGHT_PATH for ins in program.code)
     if not varies and not reads_path:
         values = sh.evaluate(program)
-        return tuple(max(float(v), 0.0) for v in values[program.out:program.out + 3]), None
+        return tuple(max(float(v), 0.0) for v in values[program.out:program.out + 3]), None, []
     width = min(max([WORLD_BAKE_WIDTH] + [2 * t.texels.shape[1] for t in program.textures]),
                 4096) if varies else 8
     env = dict(environment=environment.bake(program, width, width // 2),
                texture_from_world=np.eye(3))
     if reads_path:  # the light samples' map (flags 0), and those of the rays told apart
         env["ray_environments"] = environment.bake_rays(program, width, width // 2)
-    return flat, env
+    return flat, env, sky_suns(world, program, reads_path, warn)
+
+
+def sky_suns(world, program, reads_path, warn) -> list:
+    """Core Light keywords of a world program's Sky Texture sun discs, which its map
+    leaves out (a 2048-texel-wide map would hold the default 0.545-degree disc in about 7
+    texels, its power off by tens of %): each a sun light of the disc's angle and
+    irradiance (environment.disc_irradiance), seen by camera rays as the world is. A
+    world that shows the disc to some kind of ray otherwise than to light samples (a Light
+    Path node: Cycles' bounces then see it otherwise) is warned: every ray sees it as light
+    samples do."""
+    environment = core.load().environment
+    lights = []
+    for name, direction, diameter in program.suns:
+        direction = np.asarray(direction, np.float64)
+        irradiance = environment.disc_irradiance(program, direction, diameter)
+        if reads_path and any(not np.allclose(environment.disc_irradiance(
+                program, direction, diameter, flags), irradiance, rtol=1e-6, atol=0.0)
+                for flags in environment.ESCAPING_RAYS):
+            warn(f"world '{world.name}': the sun disc of node '{name}' is seen differently "
+                 f"by some kinds of ray (a Light Path node); every ray sees it as light "
+                 f"samples do")
+        if not np.any(irradiance > 0.0):
+            continue  # below the horizon, or of no intensity
+        frame = np.eye(4)
+        frame[:3, 2] = direction  # a sun shines along its local -Z
+        frame[:3, 0] = np.cross((0.0, 1.0, 0.0) if abs(direction[1]) < 0.9 else (1.0, 0, 0),
+                                direction)
+        frame[:3, 0] /= np.linalg.norm(frame[:3, 0])
+        frame[:3, 1] = np.cross(direction, frame[:3, 0])
+        lights.append(dict(name=f"{world.name}: sun of '{name}'", type="SUN",
+                           power=tuple(float(v) for v in irradiance), matrix=frame,
+                           angle=float(diameter), visible_camera=True, use_mis=True))
+    return lights
 
 
 def _plain_environment(world, node, warn):

@@ -451,6 +451,36 @@ def _n_environment(c, node, out):
     return (reg + 3, "VALUE") if out.name == "Alpha" else (reg, "RGBA")
 
 
+def _n_sky(c, node, out):
+    """Sky Texture of type Multiple or Single Scattering (engine/sky.py; Preetham and
+    Hosek-Wilkie are refused): the sky texture Cycles precomputes for the node, read at
+    the Generated coordinate (in a world, the ray's direction), plus the sun's disc. Its
+    Vector input is unavailable in Blender 5.0 (greyed out, not read). In a world the disc
+    becomes a sun light (Program.suns, exporter.sky_suns)."""
+    sh, p, sky = c.sh, c.program, core.load().sky
+    if node.sky_type not in sky.MODELS:
+        raise Unsupported(f"Sky Texture '{node.name}' of type {node.sky_type} (only "
+                          f"Multiple and Single Scattering are supported)")
+    elevation, rotation = sky.sun_position(node.sun_elevation, node.sun_rotation)
+    atmosphere = (float(node.air_density), float(node.aerosol_density),
+                  float(node.ozone_density))
+    size = max(float(node.sun_size), sky.MIN_SUN_SIZE)
+    if c.world and node.sun_disc:
+        p.suns.append((node.name, sky.sun_direction(elevation, rotation), size))
+    bottom, top = sky.sun_pixels(node.sky_type, elevation, size, node.altitude, *atmosphere)
+    params = sky.disc_params(elevation, rotation, size if node.sun_disc else -1.0,
+                             float(node.sun_intensity), float(node.altitude), bottom, top)
+    key = ("sky", node.sky_type, elevation, float(node.altitude), atmosphere)
+    if key not in c.textures:
+        xyz = sky.texture(node.sky_type, elevation, node.altitude, *atmosphere)
+        texels = np.concatenate([xyz, np.ones(xyz.shape[:2] + (1,))], axis=2)
+        c.textures[key] = sh.Texture(f"sky of '{node.name}'", texels, "Linear", "EXTEND")
+    lookup = p.emit(sh.OP_SKY, 6, a=p.uv(sh.GENERATED), d=0, params=params)
+    xyz = p.image(c.textures[key], lookup, False)
+    return p.emit(sh.OP_SKY, 3, a=xyz, b=lookup + 3, d=1,
+                  params=xyz_to_scene_linear()), "RGBA"
+
+
 def world_to_object(matrix_world) -> np.ndarray:
     """An object's world-to-object matrix (4, 4), or those of a stack (k, 4, 4): the
     pseudo-inverse, so that a flattened object's zero axis stays zero rather than NaN."""
@@ -1158,6 +1188,7 @@ def _n_layer_weight(c, node, out):
 NODES = {
     "ShaderNodeTexImage": _n_image,
     "ShaderNodeTexEnvironment": _n_environment,
+    "ShaderNodeTexSky": _n_sky,
     "ShaderNodeTexCoord": _n_tex_coord,
     "ShaderNodeUVMap": _n_uv_map,
     "ShaderNodeVertexColor": _n_color_attribute,

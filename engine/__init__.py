@@ -6,7 +6,7 @@ The core never imports bpy. Callers build a `Scene` with `SceneBuilder`, then ca
 
 from . import (  # noqa: F401
     bsdf, camera, environment, fresnel, integrator, kernels, mesh_attributes, noise, shading,
-    spectrum)
+    sky, spectrum)
 from .plan import Plan, make_plan  # noqa: F401
 from .film import Pass  # noqa: F401
 from .renderer import RenderResult, render, warm_up  # noqa: F401

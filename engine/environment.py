@@ -28,8 +28,8 @@ from .scene import LUMINANCE
 from .shading import (GENERATED, LIGHT_PATH_OUTPUTS, MAX_REGISTERS, NORMAL, OBJECT,
                       OP_LIGHT_PATH, POSITION, RAY_CAMERA, RAY_DIFFUSE, RAY_FLAG_COUNT,
                       RAY_GLOSSY, RAY_REFLECT, RAY_SINGULAR, RAY_TRANSMIT, RAY_VOLUME_SCATTER,
-                      TRUE_NORMAL, WIDTH, equirectangular, equirectangular_direction, pack, run,
-                      set_geometry, set_light_path)
+                      SKY_WITHOUT_SUN, TRUE_NORMAL, WIDTH, equirectangular,
+                      equirectangular_direction, pack, run, set_geometry, set_light_path)
 
 # The map as the kernel reads it: image (H, W, 3) float32, texture_from_world and
 # world_from_texture (3, 3), pmf and cdf (H W,) of its pixel distribution, and the images
@@ -112,15 +112,49 @@ def bake(program, width: int, height: int, flags: int = 0) -> np.ndarray:
     direction as -D, the Light Path node a ray of `flags` (shading.RAY_*) of unbounded
     length. Negative results are 0, as an emission's are, and so are NaN and
     infinite ones and those beyond float32 (an Exponent node overflows), which the map
-    would hold as inf."""
+    would hold as inf. Sky Textures' sun discs are left out (`disc_irradiance`)."""
+    image = np.empty((height, width, 3), np.float32)
+    _bake(*_packed(program), program.out, flags, image)
+    return image
+
+
+def _packed(program):
+    """(ProgramTable, signs of its maps) of a world's program (bake)."""
     unknown = [name for name in program.uv_maps if name not in WORLD_MAPS]
     if unknown:
         raise ValueError(f"a world's program cannot read the maps {unknown}")
     signs = np.array([WORLD_MAPS[name] for name in program.uv_maps] or [0.0])
-    pt = pack([program], None, program.uv_maps.index)
-    image = np.empty((height, width, 3), np.float32)
-    _bake(pt, signs, program.out, flags, image)
-    return image
+    return pack([program], None, program.uv_maps.index), signs
+
+
+def disc_irradiance(program, direction, diameter: float, flags: int = 0, rings: int = 128,
+                    sectors: int = 8) -> np.ndarray:
+    """(3,) the irradiance a world's sun disc (a Sky Texture's, which `bake` leaves out)
+    of angular `diameter` centred on unit `direction` gives a surface facing it, as rays of
+    path `flags` see the world (0: light samples): the world's radiance with the disc less
+    that without it, times the cosine to the centre, integrated over the disc's cone
+    (`rings` equal solid-angle rings of `sectors` points). A sun light of that irradiance
+    and angle carries the disc's power; it is uniform where the disc darkens toward its
+    limb."""
+    d = np.asarray(direction, np.float64)
+    d = d / np.linalg.norm(d)
+    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    t = np.cross(d, helper)
+    t /= np.linalg.norm(t)
+    b = np.cross(d, t)
+    one_minus = 1.0 - math.cos(0.5 * diameter)
+    cos = 1.0 - one_minus * (np.arange(rings) + 0.5) / rings
+    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+    phi = 2.0 * math.pi * (np.arange(sectors) + 0.5) / sectors
+    dirs = (cos[:, None, None] * d + (sin[:, None] * np.cos(phi))[..., None] * t
+            + (sin[:, None] * np.sin(phi))[..., None] * b).reshape(-1, 3)
+    pt, signs = _packed(program)
+    shaded = np.empty((2, len(dirs), 3))
+    for k, without_sun in enumerate((0.0, 1.0)):
+        _shade(pt, signs, program.out, flags, without_sun, np.ascontiguousarray(dirs),
+               shaded[k])
+    disc = (shaded[0] - shaded[1]).reshape(rings, sectors, 3) * cos[:, None, None]
+    return 2.0 * math.pi * one_minus * disc.mean(axis=(0, 1))
 
 
 def bake_rays(program, width: int, height: int) -> dict:
@@ -148,25 +182,53 @@ def bake_rays(program, width: int, height: int) -> dict:
 
 @njit(**ALLOCATING)
 def _bake(pt, signs, out, flags, image):
-    """Each texel's direction into the maps (one "triangle" whose corners all hold it),
-    then the program run there."""
+    """The program run in each texel's direction, without sun discs."""
     h, w = image.shape[0], image.shape[1]
     corners = np.zeros((len(signs), 1, 3, 3), np.float32)
     reg = np.zeros(MAX_REGISTERS)
     set_light_path(reg, flags, np.inf, 0, 0, 0, 0, 0)
+    reg[SKY_WITHOUT_SUN] = 1.0
     for i in range(h):
         for j in range(w):
             x, y, z = equirectangular_direction((j + 0.5) / w, (i + 0.5) / h)
-            for m in range(len(signs)):
-                for c in range(3):
-                    corners[m, 0, c, 0] = signs[m] * x
-                    corners[m, 0, c, 1] = signs[m] * y
-                    corners[m, 0, c, 2] = signs[m] * z
-            set_geometry(reg, -x, -y, -z, -x, -y, -z, False)
-            run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
+            _shade_direction(pt, signs, corners, reg, x, y, z)
             for c in range(3):
-                v = reg[out + c]
-                image[i, j, c] = v if 0.0 < v < FLOAT32_MAX else 0.0
+                image[i, j, c] = _radiance(reg[out + c])
+
+
+@njit(**ALLOCATING)
+def _shade(pt, signs, out, flags, without_sun, directions, result):
+    """The program (as rays of path `flags` see it) run in each of `directions` (N, 3)
+    into result (N, 3), with sun discs or without."""
+    corners = np.zeros((len(signs), 1, 3, 3), np.float32)
+    reg = np.zeros(MAX_REGISTERS)
+    set_light_path(reg, flags, np.inf, 0, 0, 0, 0, 0)
+    reg[SKY_WITHOUT_SUN] = without_sun
+    for k in range(len(directions)):
+        _shade_direction(pt, signs, corners, reg, directions[k, 0], directions[k, 1],
+                         directions[k, 2])
+        for c in range(3):
+            result[k, c] = _radiance(reg[out + c])
+
+
+@njit(**JIT)
+def _shade_direction(pt, signs, corners, reg, x, y, z):
+    """The direction into the maps (one "triangle" whose corners all hold it), then the
+    program run there."""
+    for m in range(len(signs)):
+        for c in range(3):
+            corners[m, 0, c, 0] = signs[m] * x
+            corners[m, 0, c, 1] = signs[m] * y
+            corners[m, 0, c, 2] = signs[m] * z
+    set_geometry(reg, -x, -y, -z, -x, -y, -z, False)
+    run(0, len(pt.code), pt, corners, 0, 0.0, 0.0, reg)
+
+
+@njit(**JIT)
+def _radiance(v):
+    """A program's radiance as a map holds it: negative, NaN and float32-overflowing
+    values are 0."""
+    return v if 0.0 < v < FLOAT32_MAX else 0.0
 
 
 @njit(**JIT)

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import noise, voronoi
+from . import noise, sky, voronoi
 from .fresnel import fresnel_dielectric
 from .jit import ALLOCATING, INLINE, JIT, njit
 from .spectrum import CIE_COLOUR_MATCH
@@ -121,6 +121,12 @@ OP_PROJECTION = 41  # reg[out:out+3] = (u, v, 0) of reg[a:a+3] in projection d (
 #                     Equirectangular or Mirror Ball
 OP_WIREFRAME = 42   # reg[out] = the Wireframe node's Fac: 1 where the hit lies within reg[b] / 2
 #                     of an edge of its triangle, whose corners map a holds (POSITION)
+OP_SKY = 43         # the Sky Texture (engine/sky.py): d = 0, reg[out:out+3] = (u, v, 0) of
+#                     direction reg[a:a+3] in the sky's texture, reg[out+3:out+6] the XYZ of
+#                     its sun's disc there (params[p:p+sky.DISC_PARAMS]; 0 while
+#                     reg[SKY_WITHOUT_SUN] is set); d = 1, reg[out:out+3] = the XYZ
+#                     reg[a:a+3] + reg[b:b+3] in the scene's linear RGB (params[p:p+9],
+#                     row-major), negative channels 0 (Cycles' xyz_to_rgb_clamped)
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -320,6 +326,9 @@ LIGHT_PATH_OUTPUTS = ("Is Camera Ray", "Is Shadow Ray", "Is Diffuse Ray", "Is Gl
                       "Is Volume Scatter Ray", "Ray Length", "Ray Depth", "Diffuse Depth",
                       "Glossy Depth", "Transparent Depth", "Transmission Depth")
 LIGHT_PATH = GEOMETRY - len(LIGHT_PATH_OUTPUTS)
+# Before them, 1 while a world's map is baked: Sky Textures leave their sun's disc out of
+# it (the exporter makes the disc a sun light of its own, which a map would blur), else 0.
+SKY_WITHOUT_SUN = LIGHT_PATH - 1
 # The path flags (bit j: output j), as the integrator keeps them per path.
 RAY_CAMERA, RAY_SHADOW, RAY_DIFFUSE, RAY_GLOSSY, RAY_SINGULAR, RAY_REFLECT, RAY_TRANSMIT, \
     RAY_VOLUME_SCATTER = (1 << j for j in range(8))
@@ -366,12 +375,15 @@ class Program:
     uv_maps: list = field(default_factory=list)
     registers: int = 0
     out: int = -1
+    # A world's Sky Texture sun discs (which its map leaves out): (node name, the unit
+    # direction toward the sun, its angular diameter).
+    suns: list = field(default_factory=list)
 
     def register(self, width: int) -> int:
         r = self.registers
         self.registers += width
-        if self.registers > LIGHT_PATH:
-            raise ValueError(f"the node chain needs more than {LIGHT_PATH} registers")
+        if self.registers > SKY_WITHOUT_SUN:
+            raise ValueError(f"the node chain needs more than {SKY_WITHOUT_SUN} registers")
         return r
 
     def emit(self, op, width, a=0, b=0, c=0, d=0, e=0, params=()) -> int:
@@ -1498,8 +1510,28 @@ def node_colour_ops(ins, reg):
 # The opcodes of the procedural textures, of the converters and of the nodes reading the
 # hit's geometry: each group one function of its own (node_texture, node_converter,
 # node_view_coordinates), keeping the interpreter short.
+@njit(**JIT)
+def node_sky(ins, reg, params):
+    """The Sky Texture's two steps (OP_SKY): the texture's coordinates and the sun's disc
+    at the direction, then XYZ to RGB (the texture is read by OP_IMAGE between them)."""
+    out, a, p = ins[1], ins[2], ins[7]
+    if ins[5] == 0:
+        x, y, z = reg[a], reg[a + 1], reg[a + 2]
+        reg[out], reg[out + 1] = sky.texture_coordinates(x, y, z, params[p + 1])
+        reg[out + 2] = 0.0
+        disc = (0.0, 0.0, 0.0) if reg[SKY_WITHOUT_SUN] != 0.0 else sky.sun_disc(
+            x, y, z, params, p)
+        reg[out + 3], reg[out + 4], reg[out + 5] = disc
+        return
+    b = ins[3]
+    cx, cy, cz = reg[a] + reg[b], reg[a + 1] + reg[b + 1], reg[a + 2] + reg[b + 2]
+    for j in range(3):
+        reg[out + j] = max(params[p + 3 * j] * cx + params[p + 3 * j + 1] * cy
+                           + params[p + 3 * j + 2] * cz, 0.0)
+
+
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
-               OP_VORONOI)
+               OP_VORONOI, OP_SKY)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
                  OP_BLACKBODY, OP_WAVELENGTH, OP_TRANSFORM, OP_BOX, OP_PROJECTION)
 GEOMETRY_OPS = (OP_GEOMETRY, OP_REFLECTION, OP_FACING, OP_PROJECT)
@@ -1535,6 +1567,8 @@ def node_texture(ins, reg, params):
         reg[out], reg[out + 1], reg[out + 2], reg[out + 3] = r, g, b, r
     elif op == OP_VORONOI:
         node_voronoi(ins, reg, params)
+    elif op == OP_SKY:
+        node_sky(ins, reg, params)
     else:
         node_brick(ins, reg, params)
 

@@ -671,6 +671,8 @@ def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
     world, nt, out = _node_world()
     src, bg = nt.nodes.new(node), nt.nodes.new("ShaderNodeBackground")
     src.name = "Culprit"
+    if node == "ShaderNodeTexSky":
+        src.sky_type = "PREETHAM"  # (Multiple Scattering is baked)
     nt.links.new(src.outputs["Ray Depth"] if node == "ShaderNodeLightPath"
                  else src.outputs[0],
                  bg.inputs["Strength"] if node == "ShaderNodeLightPath" else bg.inputs["Color"])
@@ -681,6 +683,72 @@ def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
     assert np.allclose(exp.world_colour, (0.1, 0.2, 0.3))
     said = [w for w in exp.warnings if "world 'Nodes'" in w]
     assert said and "'Culprit'" in said[0], exp.warnings
+
+
+def _sky_world(sky_type, elevation=30.0, rotation=50.0, strength=0.1):
+    world, nt, out = _node_world()
+    sky, bg = nt.nodes.new("ShaderNodeTexSky"), nt.nodes.new("ShaderNodeBackground")
+    sky.name = "Daylight"
+    sky.sky_type = sky_type
+    sky.sun_elevation, sky.sun_rotation = math.radians(elevation), math.radians(rotation)
+    bg.inputs["Strength"].default_value = strength
+    nt.links.new(sky.outputs["Color"], bg.inputs["Color"])
+    nt.links.new(bg.outputs["Background"], out.inputs["Surface"])
+    return world, sky
+
+
+@pytest.mark.parametrize("sky_type", ["MULTIPLE_SCATTERING", "SINGLE_SCATTERING"])
+def test_a_sky_texture_is_baked_and_its_sun_disc_becomes_a_sun_light(fresh, core, sky_type):
+    """A Multiple or Single Scattering sky: a map of the sky without its sun (its brightest
+    texel far below the disc's radiance), and one sun light toward the sun, of the disc's
+    angle, whose irradiance is the disc's (environment.disc_irradiance) at the Background's
+    strength; camera rays see it, as they see the world."""
+    cube_object()
+    fresh.world, node = _sky_world(sky_type)
+    exp = export(fresh)
+    assert exp.warnings == []
+    env = exp.environment["environment"]
+    assert env.shape[1] == exporter.WORLD_BAKE_WIDTH and np.all(np.isfinite(env))
+    suns = [light for light in exp.lights if light["type"] == "SUN"]
+    assert len(suns) == 1 and "'Daylight'" in suns[0]["name"]
+    sun = suns[0]
+    e, r = core.sky.sun_position(node.sun_elevation, node.sun_rotation)
+    toward = np.asarray(sun["matrix"])[:3, 2]  # a sun shines along its local -Z
+    assert np.allclose(toward, core.sky.sun_direction(e, r))
+    assert toward[2] == pytest.approx(math.sin(math.radians(30.0)))
+    assert sun["angle"] == pytest.approx(node.sun_size) and sun["visible_camera"]
+    radiance = np.array(sun["power"]) / (math.pi * math.sin(node.sun_size / 2) ** 2)
+    assert np.all(radiance > 1e3 * env.max())  # the disc is not in the map
+    core.scene.Light(**sun).validate()
+    # Twice the strength, twice the power; Sun Disc off, or the sun set, no light.
+    fresh.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.2
+    assert np.allclose(next(li for li in export(fresh).lights if li["type"] == "SUN")["power"],
+                       2 * np.array(sun["power"]))
+    node.sun_disc = False
+    assert not export(fresh).lights
+    node.sun_disc, node.sun_elevation = True, math.radians(-5.0)
+    assert not export(fresh).lights
+
+
+def test_a_sun_disc_some_rays_see_otherwise_warns(fresh):
+    """A Light Path's Is Glossy Ray mixing the sky with a grey: Cycles' glossy bounces see
+    no disc, Specula's one sun light is seen by every ray (warned, naming the node)."""
+    cube_object()
+    fresh.world, node = _sky_world("MULTIPLE_SCATTERING")
+    nt = fresh.world.node_tree
+    out = nt.nodes["World Output"]
+    path, mix = nt.nodes.new("ShaderNodeLightPath"), nt.nodes.new("ShaderNodeMixShader")
+    grey = nt.nodes.new("ShaderNodeBackground")
+    nt.links.new(path.outputs["Is Glossy Ray"], mix.inputs["Fac"])
+    nt.links.new(nt.nodes["Background"].outputs["Background"], mix.inputs[1])
+    nt.links.new(grey.outputs["Background"], mix.inputs[2])
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    exp = export(fresh)
+    assert len(exp.lights) == 1
+    assert any("'Daylight'" in w and "kinds of ray" in w for w in exp.warnings), exp.warnings
+    nt.links.remove(path.outputs["Is Glossy Ray"].links[0])  # (Fac 0.5: all alike)
+    nt.links.new(nt.nodes.new("ShaderNodeValue").outputs[0], mix.inputs["Fac"])
+    assert not export(fresh).warnings
 
 
 def test_a_mapping_that_moves_or_scales_the_environment_is_baked(fresh, rng):

@@ -245,6 +245,25 @@ def _world(rng):
             "rotation_z": _r(rng.uniform(-math.pi, math.pi))}
 
 
+def _sky(rng):
+    """A Sky Texture world: its type, the sun's elevation (down to below the horizon) and
+    rotation in degrees, altitude (m), the atmosphere's densities, the disc's diameter in
+    degrees (or none), its intensity, and
+    the Background's strength (the sky is bright: its zenith is about 1 at strength 1)."""
+    return {"kind": "sky", "type": str(rng.choice(["MULTIPLE_SCATTERING", "SINGLE_SCATTERING"])),
+            "elevation": _r(rng.uniform(-5.0, 75.0), 3),
+            "rotation": _r(rng.uniform(-180.0, 180.0), 3),
+            # (Not below 10 m: within a few metres of the ground Cycles' float32
+            # precompute quantises the height, and the ground's faint haze below the
+            # horizon, 1e-4 of the sky, differs by 5-10 %: seed 51 drew 0 m.)
+            "altitude": _r(rng.uniform(10.0, 3000.0), 1),
+            "densities": [_r(rng.uniform(0.2, 3.0)), _r(rng.uniform(0.0, 5.0)),
+                          _r(rng.uniform(0.0, 3.0))],
+            "sun_size": _r(rng.uniform(0.3, 3.0), 3) if rng.random() < 0.85 else None,
+            "sun_intensity": _r(rng.uniform(0.3, 1.5)),
+            "strength": _r(rng.uniform(0.02, 0.15), 3)}
+
+
 def random_scene(seed: int, avoid_known: bool = False) -> dict:
     """The scene of `seed`, as JSON-serialisable parameters (a pure function of its
     arguments). `avoid_known` leaves out what the known differences (KNOWN) need."""
@@ -455,6 +474,15 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
         params["world"]["light_path"] = {"flag": str(kinds.choice(LIGHT_PATH_FLAGS)),
                                          "colour": _colour(kinds, 0.0),
                                          "strength": _r(kinds.uniform(0.2, 2.0))}
+    # Some colour worlds become a Sky Texture (engine/sky.py: Multiple or Single
+    # Scattering, a random sun, atmosphere and disc), from a stream of their own; drawn
+    # after the Light Path, which then mixes with a sky without a disc (a disc that kinds
+    # of ray see differently is not supported: exporter.sky_suns warns).
+    skies = np.random.default_rng([seed, 0x5c1e])
+    if params["world"]["kind"] == "colour" and skies.random() < 0.35:
+        sky, path = _sky(skies), params["world"].get("light_path")
+        params["world"] = {**sky, **({"light_path": path}
+                                     if path and sky["sun_size"] is None else {})}
     # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
     # Cycles' object holdout), from a stream of their own.
     held = np.random.default_rng([seed, 0x401d])
@@ -796,9 +824,11 @@ def simplifications(params) -> list[tuple[str, dict]]:
         variant(f"remove {light['id']}", lambda p, i=i: p["lights"].pop(i))
     if params["ceiling_emitter"]:
         variant("remove ceiling emitter", lambda p: p.update(ceiling_emitter=False))
-    if params["world"]["kind"] == "map":
-        variant("world map -> colour", lambda p: p.update(
+    if params["world"]["kind"] in ("map", "sky"):
+        variant(f"world {params['world']['kind']} -> colour", lambda p: p.update(
             world={"kind": "colour", "colour": [0.3, 0.3, 0.3], "strength": 1.0}))
+    if params["world"]["kind"] == "sky" and params["world"]["sun_size"] is not None:
+        variant("sky without its sun disc", lambda p: p["world"].update(sun_size=None))
     if params["world"]["kind"] != "black":
         variant("world -> black", lambda p: p.update(world={"kind": "black"}))
     if params["world"].get("light_path"):
@@ -1069,6 +1099,24 @@ def _world_map(scene, w):
     background.inputs["Strength"].default_value = w["strength"]
 
 
+def _world_sky(scene, w):
+    """A Sky Texture into the world's Background."""
+    nt = scene.world.node_tree
+    background = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeBackground")
+    sky = nt.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = w["type"]
+    sky.sun_elevation, sky.sun_rotation = (math.radians(w["elevation"]),
+                                           math.radians(w["rotation"]))
+    sky.altitude = w["altitude"]
+    sky.air_density, sky.aerosol_density, sky.ozone_density = w["densities"]
+    sky.sun_disc = w["sun_size"] is not None
+    if w["sun_size"] is not None:
+        sky.sun_size = math.radians(w["sun_size"])
+    sky.sun_intensity = w["sun_intensity"]
+    nt.links.new(sky.outputs["Color"], background.inputs["Color"])
+    background.inputs["Strength"].default_value = w["strength"]
+
+
 def _world_light_path(scene, lp):
     """The world's Background mixed with another by a Light Path flag: rays of that kind
     see the other."""
@@ -1125,6 +1173,8 @@ def build(params):
         scene.world.color = w["colour"]
     elif w["kind"] == "map":
         _world_map(scene, w)
+    elif w["kind"] == "sky":
+        _world_sky(scene, w)
     if w.get("light_path"):
         _world_light_path(scene, w["light_path"])
     for o in params["objects"]:

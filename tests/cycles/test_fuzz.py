@@ -45,6 +45,7 @@ def _all_features(seeds, avoid_known=False):
         found.update("visible light" for light in p["lights"] if light["visible_camera"])
         found.update("hard falloff" for light in p["lights"] if light.get("soft_falloff") is False)
         found.update(f"world:{p['world']['kind']}" for _ in [0])
+        found.update(f"sky:{p['world']['type']}" for _ in [0] if p["world"]["kind"] == "sky")
         found.update(f"world:{p['world']['light_path']['flag']}" for _ in [0]
                      if p["world"].get("light_path"))
         cam = p["camera"]
@@ -98,7 +99,8 @@ def _all_features(seeds, avoid_known=False):
 EVERYTHING = {*fuzz.MATERIAL_KINDS, *fuzz.SHAPES, *fuzz.LIGHT_TYPES, "SQUARE", "RECTANGLE",
               "DISK", "ELLIPSE", "radius>0:POINT", "radius>0:SPOT", "scaled:SPOT", "scaled:AREA",
               "sun angle", "spread", "visible light", "hard falloff", "world:black",
-              "world:colour", "world:map", *(f"world:{flag}" for flag in fuzz.LIGHT_PATH_FLAGS),
+              "world:colour", "world:map", "world:sky", "sky:MULTIPLE_SCATTERING",
+              "sky:SINGLE_SCATTERING", *(f"world:{flag}" for flag in fuzz.LIGHT_PATH_FLAGS),
               "PERSP", "ORTHO", "AUTO", "HORIZONTAL", "VERTICAL",
               "shift", "clip", "dof blades", "dof disk", "dof ratio", "focus object",
               "principled emission", "rough glossy", "rough glass", "rough metal", "smooth monkey",

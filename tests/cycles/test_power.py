@@ -704,6 +704,31 @@ def _world_sampled_by_luminance():
         yield
 
 
+@contextmanager
+def _sky_rotation_not_reversed():
+    """The Sky Texture's Sun Rotation taken as it is rather than reversed (Cycles turns
+    it into 2 pi - rotation): the sun, its shadows and the sky's bright side turn the
+    other way round."""
+    from engine import sky
+
+    position = sky.sun_position
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sky, "sun_position", lambda elevation, rotation: (
+            position(elevation, rotation)[0], 2.0 * math.pi - position(elevation, rotation)[1]))
+        yield
+
+
+@contextmanager
+def _sky_black_below_the_horizon():
+    """The Single Scattering sky black below the horizon (an older intern/sky's texture)
+    rather than its horizon's colour fading out, as Blender 5.0 fills it."""
+    from engine import sky
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sky, "horizon_fade", lambda z: np.zeros(np.shape(z)))
+        yield
+
+
 def _wireframe_size_scaled(factor):
     """Every Wireframe node's Size (unlinked) times `factor`."""
     from types import SimpleNamespace
@@ -1664,6 +1689,11 @@ INJECTIONS = {
                                        None),
     "world_light_map_for_every_ray": ("world_ray_kinds", _light_map_for_every_ray, None),
     "world_sampled_by_luminance": ("world_ray_kinds", None, _world_sampled_by_luminance),
+    # The Sky Texture (issue 14): its sun disc's power, and Cycles' sense of its rotation.
+    "sky_sun_power_plus_5_percent": ("world_sky_texture", _light_power_plus_5_percent, None),
+    "sky_rotation_not_reversed": ("world_sky_texture", None, _sky_rotation_not_reversed),
+    "sky_black_below_the_horizon": ("world_sky_single_scattering", None,
+                                    _sky_black_below_the_horizon),
 }
 
 

@@ -616,6 +616,45 @@ def _gradient(nt, horizon, sky_rgb, ground_rgb, strength=1.0):
     return mix.outputs["Shader"]
 
 
+def world_sky_texture():
+    """Blender 5's default sky (issue 14): a Sky Texture of type Multiple Scattering, its
+    sun 25 degrees up behind the camera to the right, lighting the stage alone at strength
+    0.05. The sky (Cycles' precomputed texture, baked into the map) is seen above the
+    horizon and in the metal ball; its sun disc (a sun light of the disc's power here, the
+    disc itself in Cycles) casts the balls' shadows. The metal ball is slightly rough: a
+    smooth one throws the 0.5-degree sun onto the floor as a caustic that Cycles' paths
+    find only by chance (at 2 x 256 samples its floor there was 1-3 % darker than
+    Specula's light tracing makes it)."""
+    _sky_stage("MULTIPLE_SCATTERING")
+
+
+def world_sky_single_scattering():
+    """The Sky Texture's Single Scattering (Blender 2.90-4.5's Nishita sky, which older
+    files open as): a low sun (12 degrees) seen from 500 m through a denser, hazier
+    atmosphere, a larger (2 degrees), dimmer (0.7) disc, below the horizon the horizon's
+    colour fading out; otherwise world_sky_texture's stage."""
+    sky = _sky_stage("SINGLE_SCATTERING", elevation=12.0, rotation=150.0)
+    sky.altitude, sky.air_density, sky.aerosol_density = 500.0, 1.5, 2.0
+    sky.sun_size, sky.sun_intensity = math.radians(2.0), 0.7
+
+
+def _sky_stage(sky_type, elevation=25.0, rotation=120.0):
+    """_world_stage lit by a Sky Texture of `sky_type` alone at strength 0.05, its metal
+    ball slightly rough (world_sky_texture). Returns the Sky Texture node."""
+    nt = _world_stage()
+    metal = next(n for n in bpy.data.objects["Mirror"].active_material.node_tree.nodes
+                 if n.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"))
+    metal.inputs["Roughness"].default_value = 0.2
+    out = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeOutputWorld")
+    sky, background = nt.nodes.new("ShaderNodeTexSky"), nt.nodes.new("ShaderNodeBackground")
+    sky.sky_type = sky_type
+    sky.sun_elevation, sky.sun_rotation = math.radians(elevation), math.radians(rotation)
+    background.inputs["Strength"].default_value = 0.05
+    nt.links.new(sky.outputs["Color"], background.inputs["Color"])
+    nt.links.new(background.outputs["Background"], out.inputs["Surface"])
+    return sky
+
+
 def world_ray_kinds():
     """A world that tells kinds of ray apart by the Light Path's Is Glossy Ray and Is
     Diffuse Ray (issue 14): light samples and camera rays see a blue sky over a brown
@@ -3634,7 +3673,8 @@ for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light
                light_sun_angle, light_area_square, light_area_rectangle_scaled,
                light_area_disk_visible, light_area_ellipse_spread, light_through_glass,
                world_environment, world_nodes_sky, world_environment_mapped,
-               world_camera_backdrop, world_ray_kinds):
+               world_camera_backdrop, world_ray_kinds, world_sky_texture,
+               world_sky_single_scattering):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):

@@ -7,7 +7,7 @@ import os
 ENGINE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(
     __file__)))), "engine")
 # Bottom to top: a module may import only modules listed before it.
-LAYERS = ["jit", "spectrum", "specialise", "fresnel", "noise", "mesh_attributes", "voronoi",
+LAYERS = ["jit", "spectrum", "specialise", "fresnel", "noise", "sky", "mesh_attributes", "voronoi",
           "sheen_table", "sampling", "media", "shading", "scene",
           "bsdf", "terminator", "environment", "camera", "film", "accel", "lights", "caustics",
           "plan", "integrator", "light_tracing", "kernels", "renderer", "__init__"]
