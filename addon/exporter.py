@@ -693,8 +693,8 @@ def world_lighting(world, warn, texture_cache):
     tree that does not vary is its constant. A Light Path node's Is ... Ray outputs bake a
     map for each kind of ray they tell from light samples (core.World's ray_environments,
     environment.bake_rays: Is Camera Ray, a camera background of its own). Trees that
-    cannot be baked (the Light Path's Ray Length and depths, a Preetham or Hosek-Wilkie Sky
-    Texture ...) warn, naming the node, and render the viewport colour."""
+    cannot be baked (the Light Path's Ray Length and depths, a Hosek-Wilkie Sky Texture
+    ...) warn, naming the node, and render the viewport colour."""
     if world is None:
         return (0.0, 0.0, 0.0), None, []
     flat = tuple(float(c) for c in world.color[:3])

@@ -452,15 +452,21 @@ def _n_environment(c, node, out):
 
 
 def _n_sky(c, node, out):
-    """Sky Texture of type Multiple or Single Scattering (engine/sky.py; Preetham and
-    Hosek-Wilkie are refused): the sky texture Cycles precomputes for the node, read at
-    the Generated coordinate (in a world, the ray's direction), plus the sun's disc. Its
-    Vector input is unavailable in Blender 5.0 (greyed out, not read). In a world the disc
-    becomes a sun light (Program.suns, exporter.sky_suns)."""
+    """Sky Texture of type Multiple or Single Scattering (engine/sky.py): the sky texture
+    Cycles precomputes for the node, read at the Generated coordinate (in a world, the
+    ray's direction), plus the sun's disc; in a world the disc becomes a sun light
+    (Program.suns, exporter.sky_suns). Preetham: the analytic sky of its Sun Direction and
+    Turbidity. Hosek-Wilkie is refused. Its Vector input is unavailable in Blender 5.0
+    (greyed out, not read)."""
     sh, p, sky = c.sh, c.program, core.load().sky
+    if node.sky_type == "PREETHAM":
+        xyz = p.emit(sh.OP_SKY, 3, a=p.uv(sh.GENERATED), d=2, params=sky.preetham_params(
+            node.sun_direction, node.turbidity))
+        return p.emit(sh.OP_SKY, 3, a=xyz, b=p.const([0.0, 0.0, 0.0]), d=1,
+                      params=xyz_to_scene_linear()), "RGBA"
     if node.sky_type not in sky.MODELS:
         raise Unsupported(f"Sky Texture '{node.name}' of type {node.sky_type} (only "
-                          f"Multiple and Single Scattering are supported)")
+                          f"Multiple and Single Scattering and Preetham are supported)")
     elevation, rotation = sky.sun_position(node.sun_elevation, node.sun_rotation)
     atmosphere = (float(node.air_density), float(node.aerosol_density),
                   float(node.ozone_density))

@@ -126,7 +126,9 @@ OP_SKY = 43         # the Sky Texture (engine/sky.py): d = 0, reg[out:out+3] = (
 #                     its sun's disc there (params[p:p+sky.DISC_PARAMS]; 0 while
 #                     reg[SKY_WITHOUT_SUN] is set); d = 1, reg[out:out+3] = the XYZ
 #                     reg[a:a+3] + reg[b:b+3] in the scene's linear RGB (params[p:p+9],
-#                     row-major), negative channels 0 (Cycles' xyz_to_rgb_clamped)
+#                     row-major), negative channels 0 (Cycles' xyz_to_rgb_clamped); d = 2,
+#                     reg[out:out+3] = the XYZ of the Preetham sky at direction reg[a:a+3]
+#                     (params[p:p+sky.PREETHAM_PARAMS])
 OP_VECTOR_ROTATE = 34  # reg[out:out+3] = Vector Rotate of reg[a:a+3] about centre reg[b:b+3]:
 #                     type d (ROTATIONS) by axis reg[c:c+3] and angle reg[e], or Euler
 #                     angles reg[params[p+1]:]; params[p]: invert
@@ -1512,9 +1514,14 @@ def node_colour_ops(ins, reg):
 # node_view_coordinates), keeping the interpreter short.
 @njit(**JIT)
 def node_sky(ins, reg, params):
-    """The Sky Texture's two steps (OP_SKY): the texture's coordinates and the sun's disc
-    at the direction, then XYZ to RGB (the texture is read by OP_IMAGE between them)."""
+    """The Sky Texture's steps (OP_SKY): the texture's coordinates and the sun's disc at
+    the direction, then XYZ to RGB (the texture is read by OP_IMAGE between them); or the
+    Preetham sky's XYZ."""
     out, a, p = ins[1], ins[2], ins[7]
+    if ins[5] == 2:
+        reg[out], reg[out + 1], reg[out + 2] = sky.preetham_xyz(reg[a], reg[a + 1],
+                                                                reg[a + 2], params, p)
+        return
     if ins[5] == 0:
         x, y, z = reg[a], reg[a + 1], reg[a + 2]
         reg[out], reg[out + 1] = sky.texture_coordinates(x, y, z, params[p + 1])

@@ -415,6 +415,80 @@ def _single_scattering_sun(elevation, angular_diameter, altitude, densities):
     return tuple(pixels)
 
 
+# ----------------------------------------------------------------- Preetham
+# Preetham, Shirley and Smits' analytic daylight (1999), Cycles' Preetham type: the zenith's
+# CIE xyY from the turbidity T and the sun's zenith angle, spread over the sky by Perez'
+# function of the direction's zenith angle and its angle to the sun, with coefficients
+# linear in T. No sun disc; the Sun Direction, Turbidity inputs only.
+PREETHAM_PARAMS = 20  # (preetham_params)
+_PEREZ = {  # per quantity (Y, x, y): five coefficients, each (slope in T, constant)
+    "Y": ((0.1787, -1.4630), (-0.3554, 0.4275), (-0.0227, 5.3251), (0.1206, -2.5771),
+          (-0.0670, 0.3703)),
+    "x": ((-0.0193, -0.2592), (-0.0665, 0.0008), (-0.0004, 0.2125), (-0.0641, -0.8989),
+          (-0.0033, 0.0452)),
+    "y": ((-0.0167, -0.2608), (-0.0950, 0.0092), (-0.0079, 0.2102), (-0.0441, -1.6537),
+          (-0.0109, 0.0529))}
+
+
+def perez(coefficients, theta, gamma):
+    """Perez' sky luminance distribution at zenith angle theta and angle gamma to the sun."""
+    a, b, c, d, e = coefficients
+    return (1.0 + a * math.exp(b / math.cos(theta))) * (
+        1.0 + c * math.exp(d * gamma) + e * math.cos(gamma) ** 2)
+
+
+def preetham_params(sun_direction, turbidity: float) -> list:
+    """The PREETHAM_PARAMS floats `preetham_xyz` reads: the sun's zenith angle and azimuth
+    (Cycles' sky_spherical_coordinates, atan2(x, y)), the zenith's Y, x and y over Perez'
+    function toward the zenith (so that the zenith reads them), and the three quantities'
+    five Perez coefficients."""
+    x, y, z = (float(v) for v in sun_direction)
+    theta, phi = math.acos(z), math.atan2(x, y)
+    t, t2 = float(turbidity), float(turbidity) ** 2
+    th2, th3 = theta * theta, theta ** 3
+    chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * theta)
+    zenith = {
+        "Y": 0.06 * ((4.0453 * t - 4.9710) * math.tan(chi) - 0.2155 * t + 2.4192),
+        "x": ((0.00166 * th3 - 0.00375 * th2 + 0.00209 * theta) * t2
+              + (-0.02903 * th3 + 0.06377 * th2 - 0.03202 * theta + 0.00394) * t
+              + (0.11693 * th3 - 0.21196 * th2 + 0.06052 * theta + 0.25886)),
+        "y": ((0.00275 * th3 - 0.00610 * th2 + 0.00317 * theta) * t2
+              + (-0.04214 * th3 + 0.08970 * th2 - 0.04153 * theta + 0.00516) * t
+              + (0.15346 * th3 - 0.26756 * th2 + 0.06670 * theta + 0.26688))}
+    out = [theta, phi]
+    config = {q: [slope * t + constant for slope, constant in _PEREZ[q]] for q in "Yxy"}
+    out += [zenith[q] / perez(config[q], 0.0, theta) for q in "Yxy"]
+    for q in "Yxy":
+        out += config[q]
+    return out
+
+
+@njit(**JIT)
+def _perez(params, p, theta, gamma):
+    return (1.0 + params[p] * math.exp(params[p + 1] / math.cos(theta))) * (
+        1.0 + params[p + 2] * math.exp(params[p + 3] * gamma)
+        + params[p + 4] * math.cos(gamma) ** 2)
+
+
+@njit(**JIT)
+def preetham_xyz(x, y, z, params, p):
+    """(X, Y, Z) of the Preetham sky in direction (x, y, z) (sky_radiance_preetham), from
+    the PREETHAM_PARAMS floats at params[p:]."""
+    theta = math.acos(min(max(z, -1.0), 1.0))
+    phi = -math.atan2(y, x) + math.pi / 2
+    sun_theta, sun_phi = params[p], params[p + 1]
+    cos_gamma = (math.sin(theta) * math.sin(sun_theta) * math.cos(sun_phi - phi)
+                 + math.cos(theta) * math.cos(sun_theta))
+    gamma = math.acos(min(max(cos_gamma, -1.0), 1.0))
+    theta = min(theta, math.pi / 2 - 0.001)  # the horizon's colour below it
+    luminance = params[p + 2] * _perez(params, p + 5, theta, gamma)
+    cx = params[p + 3] * _perez(params, p + 10, theta, gamma)
+    cy = params[p + 4] * _perez(params, p + 15, theta, gamma)
+    if cy == 0.0:
+        return 0.0, luminance, 0.0
+    return cx / cy * luminance, luminance, (1.0 - cx - cy) / cy * luminance
+
+
 def disc_params(elevation, rotation, angular_diameter, intensity, altitude, bottom, top):
     """The DISC_PARAMS floats `sun_disc` reads (angular_diameter < 0: no disc)."""
     return [elevation, rotation, angular_diameter, intensity, horizon_elevation(altitude),

@@ -9,7 +9,7 @@ import pytest
 from addon_helpers import camera_object, cube_object, depsgraph, link, node_material, sphere_object
 from mathutils import Matrix, Vector
 
-from addon import exporter, materials
+from addon import exporter, materials, shader_nodes
 
 
 def export(scene):
@@ -672,7 +672,7 @@ def test_a_world_tree_that_cannot_be_baked_warns_naming_its_node(fresh, node):
     src, bg = nt.nodes.new(node), nt.nodes.new("ShaderNodeBackground")
     src.name = "Culprit"
     if node == "ShaderNodeTexSky":
-        src.sky_type = "PREETHAM"  # (Multiple Scattering is baked)
+        src.sky_type = "HOSEK_WILKIE"  # (the other types are baked)
     nt.links.new(src.outputs["Ray Depth"] if node == "ShaderNodeLightPath"
                  else src.outputs[0],
                  bg.inputs["Strength"] if node == "ShaderNodeLightPath" else bg.inputs["Color"])
@@ -728,6 +728,24 @@ def test_a_sky_texture_is_baked_and_its_sun_disc_becomes_a_sun_light(fresh, core
     assert not export(fresh).lights
     node.sun_disc, node.sun_elevation = True, math.radians(-5.0)
     assert not export(fresh).lights
+
+
+def test_a_preetham_sky_is_baked_without_a_sun_light(fresh, core):
+    """Preetham's analytic sky: baked (its zenith the zenith's luminance times the
+    strength, in the scene's RGB), no disc and so no light; Hosek-Wilkie is warned."""
+    cube_object()
+    fresh.world, node = _sky_world("PREETHAM", strength=2.0)
+    node.sun_direction, node.turbidity = (0.0, 0.6, 0.8), 3.0
+    exp = export(fresh)
+    assert exp.warnings == [] and not exp.lights
+    env = exp.environment["environment"]
+    params = core.sky.preetham_params(node.sun_direction, node.turbidity)
+    xyz = np.array(core.sky.preetham_xyz(0.0, 0.0, 1.0, np.array(params), 0))
+    m = np.array(shader_nodes.xyz_to_scene_linear()).reshape(3, 3)
+    assert np.allclose(env[-1].mean(axis=0), 2.0 * m @ xyz, rtol=2e-3)
+    node.sky_type = "HOSEK_WILKIE"
+    exp = export(fresh)
+    assert exp.environment is None and any("'Daylight'" in w for w in exp.warnings)
 
 
 def test_a_sun_disc_some_rays_see_otherwise_warns(fresh):

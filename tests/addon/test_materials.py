@@ -1422,7 +1422,7 @@ def test_bump_nodes_are_compiled(fresh, core, shader):
     spec, warnings = convert(mat)
     assert warnings == [] and "height_program" not in spec.kwargs
     noise = mat.node_tree.nodes.new("ShaderNodeTexSky")
-    noise.sky_type = "PREETHAM"  # (not supported)
+    noise.sky_type = "HOSEK_WILKIE"  # (not supported)
     mat.node_tree.links.new(noise.outputs["Color"], bump.inputs["Height"])
     spec, warnings = convert(mat)
     assert "height_program" not in spec.kwargs

@@ -248,7 +248,7 @@ def _world(rng):
 def _sky(rng):
     """A Sky Texture world: its type, the sun's elevation (down to below the horizon) and
     rotation in degrees, altitude (m), the atmosphere's densities, the disc's diameter in
-    degrees (or none), its intensity, and
+    degrees (or none), its intensity (or, for Preetham, turbidity and sun direction), and
     the Background's strength (the sky is bright: its zenith is about 1 at strength 1)."""
     return {"kind": "sky", "type": str(rng.choice(["MULTIPLE_SCATTERING", "SINGLE_SCATTERING"])),
             "elevation": _r(rng.uniform(-5.0, 75.0), 3),
@@ -262,6 +262,16 @@ def _sky(rng):
             "sun_size": _r(rng.uniform(0.3, 3.0), 3) if rng.random() < 0.85 else None,
             "sun_intensity": _r(rng.uniform(0.3, 1.5)),
             "strength": _r(rng.uniform(0.02, 0.15), 3)}
+
+
+def _preetham(rng):
+    """A Sky Texture world of Preetham's analytic sky: turbidity, the sun's direction
+    (above the horizon), the Background's strength (its zenith is about 0.3 at 1)."""
+    up, azimuth = rng.uniform(0.05, 1.0), rng.uniform(-math.pi, math.pi)
+    flat = math.sqrt(1.0 - up * up)
+    return {"kind": "sky", "type": "PREETHAM", "turbidity": _r(rng.uniform(2.0, 6.0), 3),
+            "sun_direction": _r([flat * math.cos(azimuth), flat * math.sin(azimuth), up]),
+            "sun_size": None, "strength": _r(rng.uniform(0.2, 1.5), 3)}
 
 
 def random_scene(seed: int, avoid_known: bool = False) -> dict:
@@ -478,9 +488,16 @@ def random_scene(seed: int, avoid_known: bool = False) -> dict:
     # Scattering, a random sun, atmosphere and disc), from a stream of their own; drawn
     # after the Light Path, which then mixes with a sky without a disc (a disc that kinds
     # of ray see differently is not supported: exporter.sky_suns warns).
-    skies = np.random.default_rng([seed, 0x5c1e])
-    if params["world"]["kind"] == "colour" and skies.random() < 0.35:
-        sky, path = _sky(skies), params["world"].get("light_path")
+    # Some of the other colour worlds become Preetham's sky, from a stream of its own.
+    skies, preetham = (np.random.default_rng([seed, k]) for k in (0x5c1e, 0x5c1f))
+    sky = None
+    if params["world"]["kind"] == "colour":
+        if skies.random() < 0.35:
+            sky = _sky(skies)
+        elif preetham.random() < 0.15:
+            sky = _preetham(preetham)
+    if sky is not None:
+        path = params["world"].get("light_path")
         params["world"] = {**sky, **({"light_path": path}
                                      if path and sky["sun_size"] is None else {})}
     # Some objects marked Holdout (a hole to camera rays, their own material to the rest:
@@ -1105,6 +1122,11 @@ def _world_sky(scene, w):
     background = next(n for n in nt.nodes if n.bl_idname == "ShaderNodeBackground")
     sky = nt.nodes.new("ShaderNodeTexSky")
     sky.sky_type = w["type"]
+    background.inputs["Strength"].default_value = w["strength"]
+    nt.links.new(sky.outputs["Color"], background.inputs["Color"])
+    if w["type"] == "PREETHAM":
+        sky.turbidity, sky.sun_direction = w["turbidity"], w["sun_direction"]
+        return
     sky.sun_elevation, sky.sun_rotation = (math.radians(w["elevation"]),
                                            math.radians(w["rotation"]))
     sky.altitude = w["altitude"]
@@ -1113,8 +1135,6 @@ def _world_sky(scene, w):
     if w["sun_size"] is not None:
         sky.sun_size = math.radians(w["sun_size"])
     sky.sun_intensity = w["sun_intensity"]
-    nt.links.new(sky.outputs["Color"], background.inputs["Color"])
-    background.inputs["Strength"].default_value = w["strength"]
 
 
 def _world_light_path(scene, lp):

@@ -729,6 +729,18 @@ def _sky_black_below_the_horizon():
         yield
 
 
+@contextmanager
+def _preetham_sun_azimuth_from_x():
+    """The Preetham sky's sun azimuth taken as atan2(y, x), as directions are elsewhere,
+    rather than Cycles' atan2(x, y) for its Sun Direction: the bright side turns."""
+    from engine import sky
+
+    params = sky.preetham_params
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sky, "preetham_params", lambda d, t: params((d[1], d[0], d[2]), t))
+        yield
+
+
 def _wireframe_size_scaled(factor):
     """Every Wireframe node's Size (unlinked) times `factor`."""
     from types import SimpleNamespace
@@ -1694,6 +1706,7 @@ INJECTIONS = {
     "sky_rotation_not_reversed": ("world_sky_texture", None, _sky_rotation_not_reversed),
     "sky_black_below_the_horizon": ("world_sky_single_scattering", None,
                                     _sky_black_below_the_horizon),
+    "preetham_sun_azimuth_from_x": ("world_sky_preetham", None, _preetham_sun_azimuth_from_x),
 }
 
 

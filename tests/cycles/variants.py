@@ -638,9 +638,18 @@ def world_sky_single_scattering():
     sky.sun_size, sky.sun_intensity = math.radians(2.0), 0.7
 
 
-def _sky_stage(sky_type, elevation=25.0, rotation=120.0):
-    """_world_stage lit by a Sky Texture of `sky_type` alone at strength 0.05, its metal
-    ball slightly rough (world_sky_texture). Returns the Sky Texture node."""
+def world_sky_preetham():
+    """The Sky Texture's Preetham type (the analytic daylight of older files): turbidity 3,
+    the sun 40 degrees up to the back left, at strength 1 (the sky is about 0.3 there); no
+    disc."""
+    sky = _sky_stage("PREETHAM", strength=1.0)
+    sky.turbidity = 3.0
+    sky.sun_direction = mathutils.Vector((-0.55, 0.45, 0.64)).normalized()
+
+
+def _sky_stage(sky_type, elevation=25.0, rotation=120.0, strength=0.05):
+    """_world_stage lit by a Sky Texture of `sky_type` alone at `strength`, its metal ball
+    slightly rough (world_sky_texture). Returns the Sky Texture node."""
     nt = _world_stage()
     metal = next(n for n in bpy.data.objects["Mirror"].active_material.node_tree.nodes
                  if n.bl_idname in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"))
@@ -649,7 +658,7 @@ def _sky_stage(sky_type, elevation=25.0, rotation=120.0):
     sky, background = nt.nodes.new("ShaderNodeTexSky"), nt.nodes.new("ShaderNodeBackground")
     sky.sky_type = sky_type
     sky.sun_elevation, sky.sun_rotation = math.radians(elevation), math.radians(rotation)
-    background.inputs["Strength"].default_value = 0.05
+    background.inputs["Strength"].default_value = strength
     nt.links.new(sky.outputs["Color"], background.inputs["Color"])
     nt.links.new(background.outputs["Background"], out.inputs["Surface"])
     return sky
@@ -3674,7 +3683,7 @@ for _setup in (light_point, light_point_sphere, light_point_soft_coloured, light
                light_area_disk_visible, light_area_ellipse_spread, light_through_glass,
                world_environment, world_nodes_sky, world_environment_mapped,
                world_camera_backdrop, world_ray_kinds, world_sky_texture,
-               world_sky_single_scattering):
+               world_sky_single_scattering, world_sky_preetham):
     _add(Variant(_setup.__name__, _setup, max_bounces=8))
 for _setup in (dof_disk, dof_blades, dof_blades_5, dof_anamorphic, dof_vertical_fit, dof_shift,
                dof_focus_object):

@@ -103,6 +103,29 @@ def test_a_sun_below_the_horizon_shows_no_disc():
     assert sky.horizon_elevation(100.0) == pytest.approx(-math.sqrt(2 * 0.1 / 6371), rel=1e-3)
 
 
+def test_the_preetham_zenith_reads_its_zenith_values_and_the_sky_peaks_toward_the_sun():
+    sun = np.array([0.3, -0.5, 0.6])
+    sun /= np.linalg.norm(sun)
+    params = np.array(sky.preetham_params(sun, 2.5))
+    assert len(params) == sky.PREETHAM_PARAMS
+    # Cycles' sun azimuth: atan2(x, y); its zenith angle: acos(z).
+    assert params[0] == pytest.approx(math.acos(sun[2]))
+    assert params[1] == pytest.approx(math.atan2(sun[0], sun[1]))
+    # At the zenith Perez' function is its value at the zenith: the zenith's xyY.
+    zenith = [params[2] * sky.perez(params[5:10], 0.0, params[0]),
+              params[3] * sky.perez(params[10:15], 0.0, params[0]),
+              params[4] * sky.perez(params[15:20], 0.0, params[0])]
+    X, Y, Z = sky.preetham_xyz(0.0, 0.0, 1.0, params, 0)
+    assert Y == pytest.approx(zenith[0])
+    assert (X / (X + Y + Z), Y / (X + Y + Z)) == pytest.approx((zenith[1], zenith[2]))
+    # Brightest toward the sun (Cycles' phi = pi/2 - atan2: the sun's own direction).
+    d = np.array([math.sin(params[0]) * math.sin(params[1]),
+                  math.sin(params[0]) * math.cos(params[1]), math.cos(params[0])])
+    assert np.allclose(d, sun)
+    away = sky.preetham_xyz(*(-d[0], -d[1], d[2]), params, 0)[1]
+    assert sky.preetham_xyz(*d, params, 0)[1] > 3 * away
+
+
 def _sky_program(params):
     """A world program of the sky's steps as the exporter wires them (shader_nodes._n_sky),
     on a black texture: only the disc shines; XYZ taken as RGB."""
