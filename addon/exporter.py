@@ -754,11 +754,8 @@ def sky_suns(world, program, reads_path, warn) -> list:
         if not np.any(irradiance > 0.0):
             continue  # below the horizon, or of no intensity
         frame = np.eye(4)
+        frame[:3, 0], frame[:3, 1] = core.load().sampling.build_frame(*direction)
         frame[:3, 2] = direction  # a sun shines along its local -Z
-        frame[:3, 0] = np.cross((0.0, 1.0, 0.0) if abs(direction[1]) < 0.9 else (1.0, 0, 0),
-                                direction)
-        frame[:3, 0] /= np.linalg.norm(frame[:3, 0])
-        frame[:3, 1] = np.cross(direction, frame[:3, 0])
         lights.append(dict(name=f"{world.name}: sun of '{name}'", type="SUN",
                            power=tuple(float(v) for v in irradiance), matrix=frame,
                            angle=float(diameter), visible_camera=True, use_mis=True))

@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 
 from .jit import ALLOCATING, INLINE, JIT, njit
-from .sampling import Distribution1D, sample_cdf
+from .sampling import Distribution1D, sample_cdf, uniform_cone
 from .scene import LUMINANCE
 from .shading import (GENERATED, LIGHT_PATH_OUTPUTS, MAX_REGISTERS, NORMAL, OBJECT,
                       OP_LIGHT_PATH, POSITION, RAY_CAMERA, RAY_DIFFUSE, RAY_FLAG_COUNT,
@@ -138,23 +138,17 @@ def disc_irradiance(program, direction, diameter: float, flags: int = 0, rings: 
     limb."""
     d = np.asarray(direction, np.float64)
     d = d / np.linalg.norm(d)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    t = np.cross(d, helper)
-    t /= np.linalg.norm(t)
-    b = np.cross(d, t)
-    one_minus = 1.0 - math.cos(0.5 * diameter)
-    cos = 1.0 - one_minus * (np.arange(rings) + 0.5) / rings
-    sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
-    phi = 2.0 * math.pi * (np.arange(sectors) + 0.5) / sectors
-    dirs = (cos[:, None, None] * d + (sin[:, None] * np.cos(phi))[..., None] * t
-            + (sin[:, None] * np.sin(phi))[..., None] * b).reshape(-1, 3)
+    cos_max = math.cos(0.5 * diameter)
+    # Stratified points of sampling.uniform_cone: rings equal in solid angle.
+    cones = np.array([uniform_cone(d[0], d[1], d[2], cos_max, (i + 0.5) / rings,
+                                   (j + 0.5) / sectors)
+                      for i in range(rings) for j in range(sectors)])
     pt, signs = _packed(program)
-    shaded = np.empty((2, len(dirs), 3))
+    shaded = np.empty((2, len(cones), 3))
     for k, without_sun in enumerate((0.0, 1.0)):
-        _shade(pt, signs, program.out, flags, without_sun, np.ascontiguousarray(dirs),
-               shaded[k])
-    disc = (shaded[0] - shaded[1]).reshape(rings, sectors, 3) * cos[:, None, None]
-    return 2.0 * math.pi * one_minus * disc.mean(axis=(0, 1))
+        _shade(pt, signs, program.out, flags, without_sun,
+               np.ascontiguousarray(cones[:, :3]), shaded[k])
+    return (shaded[0] - shaded[1]).T @ cones[:, 3] / cones[0, 4] / len(cones)
 
 
 def bake_rays(program, width: int, height: int) -> dict:

@@ -1373,10 +1373,10 @@ def rgb_to_hsv(r, g, b):
 
 
 @njit(**JIT)
-def wavelength(nm, xyz_to_rgb):
+def wavelength(nm, to_rgb):
     """The Wavelength node (svm_node_wavelength): the colour-matching functions at nm
     (linear between Cycles' 5 nm entries; black outside 380 .. 775), to the scene's linear
-    RGB by `xyz_to_rgb` (9 floats, row-major), scaled by 1 / 2.52 so that no channel
+    RGB by `to_rgb` (9 floats, row-major: xyz_to_rgb), scaled by 1 / 2.52 so that no channel
     exceeds 1, negative channels 0."""
     ii = (nm - 380.0) / 5.0
     i = int(ii)  # (float_to_int truncates toward 0: -0.5 is entry 0, as in Cycles)
@@ -1385,9 +1385,15 @@ def wavelength(nm, xyz_to_rgb):
     t = ii - i
     lo, hi = CIE_COLOUR_MATCH[i], CIE_COLOUR_MATCH[i + 1]
     x, y, z = lo[0] + t * (hi[0] - lo[0]), lo[1] + t * (hi[1] - lo[1]), lo[2] + t * (hi[2] - lo[2])
-    return (max((xyz_to_rgb[0] * x + xyz_to_rgb[1] * y + xyz_to_rgb[2] * z) / 2.52, 0.0),
-            max((xyz_to_rgb[3] * x + xyz_to_rgb[4] * y + xyz_to_rgb[5] * z) / 2.52, 0.0),
-            max((xyz_to_rgb[6] * x + xyz_to_rgb[7] * y + xyz_to_rgb[8] * z) / 2.52, 0.0))
+    r, g, b = xyz_to_rgb(to_rgb, 0, x, y, z)
+    return max(r / 2.52, 0.0), max(g / 2.52, 0.0), max(b / 2.52, 0.0)
+
+
+@njit(**JIT)
+def xyz_to_rgb(m, p, x, y, z):
+    """CIE XYZ (x, y, z) in the scene's linear RGB by the matrix m[p:p+9] (row-major)."""
+    return (m[p] * x + m[p + 1] * y + m[p + 2] * z, m[p + 3] * x + m[p + 4] * y + m[p + 5] * z,
+            m[p + 6] * x + m[p + 7] * y + m[p + 8] * z)
 
 
 @njit(**JIT)
@@ -1509,9 +1515,6 @@ def node_colour_ops(ins, reg):
             reg[out + j] = max((1.0 + contrast) * reg[a + j] + reg[b] - contrast * 0.5, 0.0)
 
 
-# The opcodes of the procedural textures, of the converters and of the nodes reading the
-# hit's geometry: each group one function of its own (node_texture, node_converter,
-# node_view_coordinates), keeping the interpreter short.
 @njit(**JIT)
 def node_sky(ins, reg, params):
     """The Sky Texture's steps (OP_SKY): the texture's coordinates and the sun's disc at
@@ -1531,12 +1534,14 @@ def node_sky(ins, reg, params):
         reg[out + 3], reg[out + 4], reg[out + 5] = disc
         return
     b = ins[3]
-    cx, cy, cz = reg[a] + reg[b], reg[a + 1] + reg[b + 1], reg[a + 2] + reg[b + 2]
-    for j in range(3):
-        reg[out + j] = max(params[p + 3 * j] * cx + params[p + 3 * j + 1] * cy
-                           + params[p + 3 * j + 2] * cz, 0.0)
+    r, g, bl = xyz_to_rgb(params, p, reg[a] + reg[b], reg[a + 1] + reg[b + 1],
+                          reg[a + 2] + reg[b + 2])
+    reg[out], reg[out + 1], reg[out + 2] = max(r, 0.0), max(g, 0.0), max(bl, 0.0)
 
 
+# The opcodes of the procedural textures, of the converters and of the nodes reading the
+# hit's geometry: each group one function of its own (node_texture, node_converter,
+# node_view_coordinates), keeping the interpreter short.
 TEXTURE_OPS = (OP_CHECKER, OP_NOISE, OP_GRADIENT, OP_WAVE, OP_MAGIC, OP_WHITE_NOISE, OP_BRICK,
                OP_VORONOI, OP_SKY)
 CONVERTER_OPS = (OP_VECTOR_MAPPING, OP_VECTOR_ROTATE, OP_CURVES, OP_MAP_RANGE, OP_CLAMP,
